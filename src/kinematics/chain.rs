@@ -1,0 +1,355 @@
+//! Machine models as chains of elementary transforms (SPEC K7), with the presets of
+//! K2+K3 (AC double-swing head with C2 and sensor mount), K5 (AB head, mirror-milling support
+//! side) and K6 (AC cradle table).
+//!
+//! A chain `S1 · S2 · … · Sn` maps coordinates of the last link (sensor, tool, part) into the
+//! first (WCS). Each step is rigid or a mirror; angles and translations come from constants or
+//! from columns of the axis-position row of a pose.
+use crate::error::{Error, Result};
+use crate::geom::{mount_rotation, Axis};
+use nalgebra::{Matrix3, Matrix4, Vector3};
+use rayon::prelude::*;
+
+/// Where a rotation angle comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AngleSource {
+    Constant(f64),
+    /// Column of the pose row, in radians.
+    AxisColumn(usize),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// Constant translation, mm.
+    Translate([f64; 3]),
+    /// Translation by pose columns (None = 0), e.g. the linear axes X, Y, Z.
+    TranslateAxes([Option<usize>; 3]),
+    /// Rotation about a coordinate axis.
+    Rotate(Axis, AngleSource),
+    /// Constant rotation matrix (e.g. a sensor mount), must be orthonormal.
+    Rotation(Matrix3<f64>),
+    /// Mirror: diagonal of ±1 (paper 002's support side: (−1, 1, −1)).
+    Mirror([f64; 3]),
+}
+
+impl Step {
+    fn max_column(&self) -> Option<usize> {
+        match self {
+            Step::TranslateAxes(cols) => cols.iter().flatten().copied().max(),
+            Step::Rotate(_, AngleSource::AxisColumn(c)) => Some(*c),
+            _ => None,
+        }
+    }
+
+    fn matrix(&self, pose: &[f64]) -> Matrix4<f64> {
+        let mut m = Matrix4::identity();
+        match self {
+            Step::Translate(t) => {
+                m.fixed_view_mut::<3, 1>(0, 3).copy_from(&Vector3::from(*t));
+            }
+            Step::TranslateAxes(cols) => {
+                for (k, c) in cols.iter().enumerate() {
+                    if let Some(c) = c {
+                        m[(k, 3)] = pose[*c];
+                    }
+                }
+            }
+            Step::Rotate(axis, source) => {
+                let angle = match source {
+                    AngleSource::Constant(a) => *a,
+                    AngleSource::AxisColumn(c) => pose[*c],
+                };
+                m.fixed_view_mut::<3, 3>(0, 0).copy_from(&axis.rotation(angle));
+            }
+            Step::Rotation(r) => {
+                m.fixed_view_mut::<3, 3>(0, 0).copy_from(r);
+            }
+            Step::Mirror(d) => {
+                for k in 0..3 {
+                    m[(k, k)] = d[k];
+                }
+            }
+        }
+        m
+    }
+
+    fn describe(&self) -> String {
+        match self {
+            Step::Translate(t) => format!("translate({}, {}, {})", t[0], t[1], t[2]),
+            Step::TranslateAxes(c) => {
+                let s = |o: &Option<usize>| o.map_or("0".to_string(), |c| format!("axis[{c}]"));
+                format!("translate({}, {}, {})", s(&c[0]), s(&c[1]), s(&c[2]))
+            }
+            Step::Rotate(a, AngleSource::Constant(v)) => format!("rot_{}({v})", a.name()),
+            Step::Rotate(a, AngleSource::AxisColumn(c)) => format!("rot_{}(axis[{c}])", a.name()),
+            Step::Rotation(_) => "rotation(R)".to_string(),
+            Step::Mirror(d) => format!("mirror({}, {}, {})", d[0], d[1], d[2]),
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct KinematicChain {
+    steps: Vec<Step>,
+    n_axes: usize,
+    axis_names: Vec<String>,
+}
+
+impl KinematicChain {
+    /// A chain over poses with `n_axes` columns (named for messages).
+    pub fn new(steps: Vec<Step>, axis_names: Vec<String>) -> Result<Self> {
+        let n_axes = axis_names.len();
+        for (k, step) in steps.iter().enumerate() {
+            if let Some(c) = step.max_column() {
+                if c >= n_axes {
+                    return Err(Error::invalid(
+                        "steps",
+                        format!("step {k} ({}) uses axis column {c}, but the chain has {n_axes} axes", step.describe()),
+                    ));
+                }
+            }
+            if let Step::Mirror(d) = step {
+                if d.iter().any(|v| *v != 1.0 && *v != -1.0) {
+                    return Err(Error::invalid("steps", format!("step {k}: a mirror diagonal holds only ±1, got {d:?}")));
+                }
+            }
+            if let Step::Rotation(r) = step {
+                let e = (r.transpose() * r - Matrix3::identity()).abs().max();
+                if !(e < 1e-9) || r.determinant() < 0.0 {
+                    return Err(Error::invalid("steps", format!("step {k}: rotation matrix is not a proper rotation (‖RᵀR − I‖ = {e:e})")));
+                }
+            }
+            let finite = match step {
+                Step::Translate(t) => t.iter().all(|v| v.is_finite()),
+                Step::Rotate(_, AngleSource::Constant(a)) => a.is_finite(),
+                _ => true,
+            };
+            if !finite {
+                return Err(Error::invalid("steps", format!("step {k} ({}) must be finite", step.describe())));
+            }
+        }
+        Ok(KinematicChain { steps, n_axes, axis_names })
+    }
+
+    /// SPEC K2 + K3: gantry with AC double-swing head, sixth axis C2 and the sensor mount.
+    /// Pose columns X, Y, Z, A, C, C2 (mm, rad). `mount` = (θ, ψ, φ, Δx, Δy, Δz).
+    ///
+    /// `WCS_T_SCS = [Rz(C)·Rx(A), (X,Y,Z)] · [Rz(C2), L] · [Rz(φ)·Ry(θ)·Rx(ψ), Δ]`.
+    pub fn ac_head(c2_offset: [f64; 3], mount: [f64; 6]) -> Result<Self> {
+        KinematicChain::new(
+            vec![
+                Step::TranslateAxes([Some(0), Some(1), Some(2)]),
+                Step::Rotate(Axis::Z, AngleSource::AxisColumn(4)),
+                Step::Rotate(Axis::X, AngleSource::AxisColumn(3)),
+                Step::Translate(c2_offset),
+                Step::Rotate(Axis::Z, AngleSource::AxisColumn(5)),
+                Step::Translate([mount[3], mount[4], mount[5]]),
+                Step::Rotation(mount_rotation(mount[0], mount[1], mount[2])),
+            ],
+            ["X", "Y", "Z", "A", "C", "C2"].map(String::from).to_vec(),
+        )
+    }
+
+    /// SPEC K5 (paper 002 eq 1–6): AB double-swing head, support side of mirror milling.
+    /// Pose columns X, Y, Z, A, B. Maps tool-frame points to support-side workpiece points:
+    /// `mirror(−1,1,−1) · (X,Y,Z) · (−Lba−Lat) · Ry(B) · Lba · Rx(A) · Lat`.
+    pub fn ab_mirror_support(lat: [f64; 3], lba: [f64; 3]) -> Result<Self> {
+        let back = [-lba[0] - lat[0], -lba[1] - lat[1], -lba[2] - lat[2]];
+        KinematicChain::new(
+            vec![
+                Step::Mirror([-1.0, 1.0, -1.0]),
+                Step::TranslateAxes([Some(0), Some(1), Some(2)]),
+                Step::Translate(back),
+                Step::Rotate(Axis::Y, AngleSource::AxisColumn(4)),
+                Step::Translate(lba),
+                Step::Rotate(Axis::X, AngleSource::AxisColumn(3)),
+                Step::Translate(lat),
+            ],
+            ["X", "Y", "Z", "A", "B"].map(String::from).to_vec(),
+        )
+    }
+
+    /// SPEC K6 (paper 003 eq 1): AC cradle table turning about `center` (t = O'_w − O_w).
+    /// Pose columns A, C: `P' = Rx(A)·Rz(C)·(P − t) + t` (C turns first, then A).
+    pub fn ac_table(center: [f64; 3]) -> Result<Self> {
+        KinematicChain::new(
+            vec![
+                Step::Translate(center),
+                Step::Rotate(Axis::X, AngleSource::AxisColumn(0)),
+                Step::Rotate(Axis::Z, AngleSource::AxisColumn(1)),
+                Step::Translate([-center[0], -center[1], -center[2]]),
+            ],
+            ["A", "C"].map(String::from).to_vec(),
+        )
+    }
+
+    pub fn n_axes(&self) -> usize {
+        self.n_axes
+    }
+
+    pub fn axis_names(&self) -> &[String] {
+        &self.axis_names
+    }
+
+    pub fn steps(&self) -> &[Step] {
+        &self.steps
+    }
+
+    pub fn describe(&self) -> String {
+        self.steps.iter().map(Step::describe).collect::<Vec<_>>().join(" · ")
+    }
+
+    /// The 4×4 transform for one pose (`pose.len() == n_axes`, finite: checked by callers).
+    pub fn transform(&self, pose: &[f64]) -> Matrix4<f64> {
+        let mut t = Matrix4::identity();
+        for step in &self.steps {
+            t *= step.matrix(pose);
+        }
+        t
+    }
+
+    /// Checks a row-major `(F, n_axes)` pose array: shape and finiteness.
+    pub fn check_poses(&self, name: &str, poses: &[f64], rows: Option<usize>) -> Result<usize> {
+        let w = self.n_axes;
+        let names = self.axis_names.join(", ");
+        if w == 0 {
+            return Ok(rows.unwrap_or(0));
+        }
+        if poses.len() % w != 0 {
+            return Err(Error::shape(name, format!("(F, {w}) with columns {names}"), format!("{} values", poses.len())));
+        }
+        let f = poses.len() / w;
+        if let Some(r) = rows {
+            if r != f {
+                return Err(Error::shape(name, format!("({r}, {w}): one pose per row of the other input"), format!("({f}, {w})")));
+            }
+        }
+        crate::error::check_finite(name, poses, w)?;
+        Ok(f)
+    }
+
+    /// Transforms for every pose, row-major `(F, 4, 4)`, parallel over poses.
+    pub fn transforms(&self, poses: &[f64]) -> Result<Vec<f64>> {
+        let f = self.check_poses("axes", poses, None)?;
+        let w = self.n_axes.max(1);
+        let mut out = vec![0.0; f * 16];
+        out.par_chunks_mut(16).enumerate().for_each(|(k, o)| {
+            let pose = if self.n_axes == 0 { &[][..] } else { &poses[k * w..(k + 1) * w] };
+            let t = self.transform(pose);
+            for r in 0..4 {
+                for c in 0..4 {
+                    o[r * 4 + c] = t[(r, c)];
+                }
+            }
+        });
+        Ok(out)
+    }
+
+    /// Each point with its own pose: `points (N,3)`, `poses (N, n_axes)` → `(N,3)`.
+    /// With `vectors = true` the translation is ignored (directions, normals).
+    pub fn apply(&self, points: &[f64], poses: &[f64], vectors: bool) -> Result<Vec<f64>> {
+        let n = points.len() / 3;
+        self.check_poses("axes", poses, Some(n))?;
+        let w = self.n_axes;
+        let mut out = vec![0.0; n * 3];
+        out.par_chunks_mut(3).enumerate().for_each(|(k, o)| {
+            let t = self.transform(&poses[k * w..(k + 1) * w]);
+            let p = [points[3 * k], points[3 * k + 1], points[3 * k + 2]];
+            let q = if vectors { crate::geom::transform_vector(&t, p) } else { crate::geom::transform_point(&t, p) };
+            o.copy_from_slice(&q);
+        });
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{rot_x, rot_y, rot_z, transform_point};
+
+    /// Tiny deterministic generator so tests need no extra crate.
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
+    }
+
+    /// Paper 002 eq (6), printed closed form.
+    fn eq6(p: [f64; 3], ax: [f64; 5], lat: [f64; 3], lba: [f64; 3]) -> [f64; 3] {
+        let [xl, yl, zl] = p;
+        let [x, y, z, a, b] = ax;
+        let (sa, ca, sb, cb) = (a.sin(), a.cos(), b.sin(), b.cos());
+        let inner = lba[2] + sa * (yl + lat[1]) + ca * (zl + lat[2]);
+        [
+            -x - cb * (xl + lat[0] + lba[0]) - sb * inner + lba[0] + lat[0],
+            y + ca * (yl + lat[1]) - lat[1] - sa * (zl + lat[2]),
+            -z + sb * (xl + lat[0] + lba[0]) - cb * inner + lba[2] + lat[2],
+        ]
+    }
+
+    #[test]
+    fn ab_mirror_support_matches_paper_002_eq6() {
+        let mut s = 7u64;
+        let mut r = |lo: f64, hi: f64| lo + (hi - lo) * lcg(&mut s);
+        for _ in 0..1000 {
+            let lat = [r(-50.0, 50.0), r(-50.0, 50.0), r(50.0, 400.0)];
+            let lba = [r(-50.0, 50.0), r(-50.0, 50.0), r(50.0, 300.0)];
+            let chain = KinematicChain::ab_mirror_support(lat, lba).unwrap();
+            let p = [r(-20.0, 20.0), r(-20.0, 20.0), r(-20.0, 20.0)];
+            let ax = [r(-1000.0, 1000.0), r(-1000.0, 1000.0), r(-500.0, 500.0), r(-1.6, 1.6), r(-1.6, 1.6)];
+            let got = transform_point(&chain.transform(&ax), p);
+            let want = eq6(p, ax, lat, lba);
+            for k in 0..3 {
+                assert!((got[k] - want[k]).abs() < 1e-9, "{got:?} vs {want:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn ac_head_matches_spec_products() {
+        let c2 = [12.0, -3.0, 150.0];
+        let mount = [0.01, -0.02, 0.5, 30.0, 5.0, -80.0];
+        let chain = KinematicChain::ac_head(c2, mount).unwrap();
+        let pose = [100.0, -50.0, 20.0, 0.3, -0.8, 1.2];
+        let t = chain.transform(&pose);
+        let rt = rot_z(pose[4]) * rot_x(pose[3]);
+        let rm = rot_z(mount[2]) * rot_y(mount[0]) * rot_x(mount[1]);
+        let p = Vector3::new(2.5, 0.0, -0.3);
+        let want = rt * (rot_z(pose[5]) * (rm * p + Vector3::new(mount[3], mount[4], mount[5])) + Vector3::from(c2))
+            + Vector3::new(pose[0], pose[1], pose[2]);
+        let got = transform_point(&t, [p.x, p.y, p.z]);
+        for k in 0..3 {
+            assert!((got[k] - want[k]).abs() < 1e-12);
+        }
+        let r = t.fixed_view::<3, 3>(0, 0).into_owned();
+        assert!((r.transpose() * r - Matrix3::identity()).abs().max() < 1e-14);
+    }
+
+    #[test]
+    fn ac_table_matches_paper_003_eq1() {
+        let center = [10.0, 20.0, -30.0];
+        let chain = KinematicChain::ac_table(center).unwrap();
+        let (a, c) = (0.4, -2.0);
+        let t = chain.transform(&[a, c]);
+        let p = Vector3::new(1.0, 2.0, 3.0);
+        let tv = Vector3::from(center);
+        let want = rot_x(a) * rot_z(c) * (p - tv) + tv;
+        let got = transform_point(&t, [1.0, 2.0, 3.0]);
+        for k in 0..3 {
+            assert!((got[k] - want[k]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn rejects_bad_steps() {
+        assert!(KinematicChain::new(vec![Step::Rotate(Axis::X, AngleSource::AxisColumn(3))], vec!["A".into()]).is_err());
+        assert!(KinematicChain::new(vec![Step::Mirror([2.0, 1.0, 1.0])], vec![]).is_err());
+        assert!(KinematicChain::new(vec![Step::Rotation(Matrix3::identity() * 2.0)], vec![]).is_err());
+    }
+
+    #[test]
+    fn nan_pose_is_an_error() {
+        let chain = KinematicChain::ac_table([0.0; 3]).unwrap();
+        let e = chain.transforms(&[0.0, 0.0, f64::NAN, 1.0]).unwrap_err();
+        assert!(e.to_string().contains("row 1"), "{e}");
+    }
+}

@@ -1,0 +1,12 @@
+//! From profiler frames and machine axis positions to workpiece points (SPEC K1–K7).
+mod calibration;
+mod chain;
+mod profiler;
+mod scan;
+mod timing;
+
+pub use calibration::{calibrate_mount, MountCalibration};
+pub use chain::{AngleSource, KinematicChain, Step};
+pub use profiler::{profile_to_points, Profiler, ProfilePoints};
+pub use scan::{frames_to_points, ScanPoints};
+pub use timing::interpolate_poses;

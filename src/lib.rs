@@ -1,0 +1,10 @@
+//! machscan: on-machine measurement kernels for five-axis machining.
+//!
+//! The core modules are free of pyo3; `python` is the only place that talks to Python.
+pub mod error;
+pub mod geom;
+pub mod kinematics;
+pub mod optim;
+pub mod python;
+
+pub use error::{Error, Result};
