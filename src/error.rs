@@ -14,6 +14,9 @@ pub enum Error {
     /// An argument has an unusable value (NaN, out of range, inconsistent with another).
     #[error("{name}: {reason}")]
     Invalid { name: String, reason: String },
+    /// A file could not be read or written, or its content is not what it claims.
+    #[error("{path}: {reason}")]
+    File { path: String, reason: String },
 }
 
 impl Error {
@@ -28,6 +31,15 @@ impl Error {
     pub fn invalid(name: &str, reason: impl Into<String>) -> Self {
         Error::Invalid {
             name: name.to_string(),
+            reason: reason.into(),
+        }
+    }
+}
+
+impl Error {
+    pub fn file(path: &std::path::Path, reason: impl Into<String>) -> Self {
+        Error::File {
+            path: path.display().to_string(),
             reason: reason.into(),
         }
     }

@@ -1,0 +1,47 @@
+"""machscan — on-machine measurement for five-axis machining.
+
+From raw line-laser profiler frames and machine axis positions to workpiece points, and on to
+answers: groove width and depth, contour error, part positioning, allowance, toolpaths.
+Units are millimetres and radians throughout; points are ``(N, 3)`` float64 arrays and
+transforms ``(4, 4)`` homogeneous float64 matrices.
+"""
+
+from machscan._core import (
+    KinematicChain,
+    __version__,
+    ab_mirror_support_points,
+    ac_head_transforms,
+    ac_table_rotate,
+    interpolate_poses,
+    profile_to_points,
+    scan_to_wcs,
+)
+from machscan.kinematics import MountCalibration, calibrate_mount
+from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
+
+__all__ = [
+    "__version__",
+    "KinematicChain",
+    "MountCalibration",
+    "Profiler",
+    "Scan",
+    "ab_mirror_support_points",
+    "ac_head_transforms",
+    "ac_table_rotate",
+    "calibrate_mount",
+    "interpolate_poses",
+    "profile_to_points",
+    "read_scan_csv",
+    "scan_to_wcs",
+    "synth",
+    "write_scan_csv",
+]
+
+
+def __getattr__(name: str) -> object:
+    # `machscan.synth` is imported on first use: it is only needed for demos and tests.
+    if name == "synth":
+        import importlib
+
+        return importlib.import_module("machscan.synth")
+    raise AttributeError(f"module 'machscan' has no attribute {name!r}")

@@ -1,0 +1,149 @@
+"""Type stubs of the compiled core ``machscan._core`` (kept in step with ``src/python/``;
+checked by ``python -m mypy.stubtest machscan._core`` in the test command)."""
+
+from os import PathLike
+from typing import Any, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__version__: str
+
+def profile_to_points(
+    frames: ArrayLike,
+    pitch: float,
+    center: float | None = None,
+    valid_range: ArrayLike | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Profiler frames to points in the sensor coordinate system (SPEC K1, paper 000 eq 5).
+
+    Reading ``i`` of a frame becomes the SCS point ``((i - center) * pitch, 0, d_i)``: the laser
+    line runs along SCS x, ``d_i`` is a height along SCS z (out of the material). Invalid
+    readings (NaN, the vendor sentinel, anything outside ``valid_range``) are dropped.
+
+    Parameters
+    ----------
+    frames : array_like, shape (F, N)
+        Readings in mm, one frame per row.
+    pitch : float
+        Reading spacing along the line, mm.
+    center : float, optional
+        Index of the reading at SCS x = 0; default ``N / 2``.
+    valid_range : (float, float), optional
+        Measuring range ``(lo, hi)`` in mm; readings outside it are invalid.
+
+    Returns
+    -------
+    points : ndarray, shape (M, 3)
+        SCS points in mm, frame by frame, readings in order.
+    frame_index : ndarray of int64, shape (M,)
+        Frame of each point. ``frames.size - M`` readings were dropped.
+    """
+
+def scan_to_wcs(
+    frames: ArrayLike,
+    axes: ArrayLike,
+    pitch: float,
+    c2_offset: ArrayLike,
+    mount: ArrayLike,
+    center: float | None = None,
+    valid_range: ArrayLike | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Frames and AC-head poses to workpiece (WCS) points in one parallel call (SPEC K1–K3, K7).
+
+    Every valid reading of frame ``k`` is mapped by ``ac_head_transforms(axes)[k]``; the GIL is
+    released and the result is identical for any thread count. ``axes (F, 6)``: X, Y, Z (mm),
+    A, C, C2 (rad); ``c2_offset`` (Lx, Ly, Lz) mm; ``mount`` (theta, psi, phi, dx, dy, dz).
+    Returns ``(points (M, 3) WCS mm, frame_index (M,))``.
+    """
+
+def ac_head_transforms(axes: ArrayLike, c2_offset: ArrayLike, mount: ArrayLike) -> NDArray[np.float64]:
+    """WCS ← SCS transforms ``(F, 4, 4)`` of the AC double-swing head with C2 and sensor mount.
+
+    ``T = [Rz(C)·Rx(A), (X, Y, Z)] · [Rz(C2), (Lx, Ly, Lz)] · [Rz(phi)·Ry(theta)·Rx(psi), (dx, dy, dz)]``
+    (SPEC K2, K3; paper 000 prints eq 4 and eq 8 with sign errors). ``axes (F, 6)``: X, Y, Z, A, C, C2.
+    """
+
+def ab_mirror_support_points(
+    tool_points: ArrayLike, axes: ArrayLike, lat: ArrayLike, lba: ArrayLike
+) -> NDArray[np.float64]:
+    """Tool points ``(N, 3)`` to support-side workpiece points of mirror milling (paper 002 eq 6).
+
+    ``axes (N, 5)``: X, Y, Z (mm), A, B (rad) per point; ``lat``, ``lba``: tool→A and A→B offsets, mm.
+    """
+
+def ac_table_rotate(
+    points: ArrayLike, normals: ArrayLike | None, a: float, c: float, center: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """Turn points and normals with an AC cradle table (paper 003 eq 1).
+
+    ``P' = Rx(a)·Rz(c)·(P − center) + center``, ``n' = Rx(a)·Rz(c)·n``; angles in rad, mm.
+    """
+
+def interpolate_poses(
+    sample_times: ArrayLike,
+    samples: ArrayLike,
+    frame_times: ArrayLike,
+    rotary: Sequence[int] = ...,
+) -> NDArray[np.float64]:
+    """Axis positions ``(F, n_axes)`` at frame times from CNC samples on their own clock.
+
+    Linear; rotary columns (default 3, 4, 5) unwrapped first; no extrapolation (ValueError).
+    """
+
+def calibrate_mount(
+    scs_points: ArrayLike,
+    wcs_points: ArrayLike,
+    axes: ArrayLike | None = None,
+    c2_offset: ArrayLike | None = None,
+) -> dict[str, Any]:
+    """Sensor mount calibration (SPEC K4); ``machscan.calibrate_mount`` wraps the dict it returns."""
+
+def write_points(
+    path: str | PathLike[str],
+    points: ArrayLike,
+    normals: ArrayLike | None = None,
+    scalars: dict[str, ArrayLike] | None = None,
+    binary: bool = True,
+) -> None:
+    """Write points (mm), optional normals and named scalar properties to a ``.ply`` file."""
+
+class KinematicChain:
+    """A machine model: a chain of elementary transforms mapping the last link into the WCS.
+
+    Steps, composed left to right: ``("translate", (x, y, z))``, ``("translate_axes", (ix, iy, iz))``,
+    ``("rotate", "x"|"y"|"z", angle)``, ``("rotate_axis", "x"|"y"|"z", column)``,
+    ``("rotation", R)``, ``("mirror", (sx, sy, sz))``.
+    """
+
+    def __new__(cls, steps: list[Any], axis_names: Sequence[str]) -> KinematicChain: ...
+    @staticmethod
+    def ac_head(c2_offset: ArrayLike, mount: ArrayLike) -> KinematicChain:
+        """AC double-swing head with C2 and sensor mount (SPEC K2, K3); poses X, Y, Z, A, C, C2."""
+    @staticmethod
+    def ab_mirror_support(lat: ArrayLike, lba: ArrayLike) -> KinematicChain:
+        """AB head, support side of mirror milling (SPEC K5); poses X, Y, Z, A, B."""
+    @staticmethod
+    def ac_table(center: ArrayLike) -> KinematicChain:
+        """AC cradle table about ``center`` (SPEC K6); poses A, C."""
+    @property
+    def n_axes(self) -> int:
+        """Number of pose columns."""
+    @property
+    def axis_names(self) -> list[str]:
+        """Names of the pose columns."""
+    def transforms(self, axes: ArrayLike) -> NDArray[np.float64]:
+        """4×4 transforms for poses ``axes (F, n_axes)`` → ``(F, 4, 4)``."""
+    def transform_points(self, points: ArrayLike, axes: ArrayLike) -> NDArray[np.float64]:
+        """Points ``(N, 3)``, each with its own pose ``axes (N, n_axes)`` → ``(N, 3)``."""
+    def transform_vectors(self, vectors: ArrayLike, axes: ArrayLike) -> NDArray[np.float64]:
+        """Directions or normals ``(N, 3)`` with poses ``(N, n_axes)``: turned, not moved."""
+    def scan_points(
+        self,
+        frames: ArrayLike,
+        axes: ArrayLike,
+        pitch: float,
+        center: float | None = None,
+        valid_range: ArrayLike | None = None,
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Frames ``(F, N)`` and poses ``(F, n_axes)`` → ``(points (M, 3), frame_index (M,))``."""

@@ -1,0 +1,858 @@
+"""Raw line-laser scans: the profiler model, the scan container, and its file formats.
+
+A *scan* is what an on-machine measurement records (SPEC K1, K7; paper 000 §1-2): ``F``
+profiler frames of ``N`` readings each, the machine axis positions ``X, Y, Z, A, C, C2`` at
+every frame time, the C2 offset and the calibrated sensor mount, optionally the raw CNC axis
+samples at their own rate, and free-form metadata.
+
+Conventions (shared with the Rust core):
+
+* Units are millimetres, radians and seconds, float64.
+* Reading ``i`` of a frame is the SCS point ``((i - i0) * pitch, 0, d_i)``: the laser line runs
+  along SCS x, ``d_i`` is a *height* along SCS z, which points out of the material towards the
+  sensor, so an engraved groove appears as a dip (smaller ``d``).
+* A reading is invalid when it is NaN, equal to the profiler's sentinel, or outside
+  ``valid_range = (lo, hi)`` (bounds inclusive). Invalid readings never become points.
+
+This module is pure NumPy; the methods that compute points call the compiled core
+(``machscan.profile_to_points`` / ``machscan.scan_to_wcs``) and import it lazily.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+__all__ = [
+    "SENTINEL",
+    "Profiler",
+    "Scan",
+    "read_scan_csv",
+    "write_scan_csv",
+]
+
+#: Value a profiler returns for a reading it could not take (vendor-like "no data" code).
+SENTINEL = -99999.0
+
+#: Version of the ``.npz`` layout written by :meth:`Scan.save`.
+_NPZ_VERSION = 1
+
+_AXES = ("X", "Y", "Z", "A", "C", "C2")
+
+
+# --------------------------------------------------------------------------------------------
+# Profiler
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Profiler:
+    """A 2D line-laser profiler (SPEC K1).
+
+    Parameters
+    ----------
+    readings : int
+        Number of readings ``N`` per frame (points along the laser line).
+    pitch : float
+        Spacing of the readings along the line, mm (the x-resolution ``delta``).
+    center : float, optional
+        Index ``i0`` of the reading at SCS x = 0. ``None`` means ``N / 2`` (paper 000 eq (5)).
+    valid_range : (float, float), optional
+        Measuring range ``(lo, hi)`` in mm along SCS z; readings outside it (bounds inclusive)
+        are invalid. ``None``: every finite reading is valid.
+    sentinel : float, optional
+        The "no data" code the profiler writes for readings it could not take (for instance
+        :data:`SENTINEL`). ``None`` if it writes NaN. Readings equal to the sentinel are invalid
+        whether or not ``valid_range`` is set.
+    name : str
+        Model name, for reports.
+    noise : float, optional
+        One-sigma height noise of a reading, mm (a profiler fact, used by synthetic scans and
+        by fit diagnostics; not used by the kinematics).
+    frame_rate : float, optional
+        Maximum frame rate, frames per second.
+
+    Notes
+    -----
+    The laser line direction is fixed as SCS x and the measuring direction as SCS z
+    (:attr:`line_direction`, :attr:`measuring_direction`). A profiler whose line runs along
+    another axis (paper 002's sensor runs along the tool Y axis) is described by folding that
+    rotation into the mount.
+
+    Examples
+    --------
+    >>> p = Profiler.sr7140()
+    >>> p.readings, p.pitch, p.i0
+    (3200, 0.025, 1600.0)
+    >>> float(p.x[0]), float(p.x[-1])
+    (-40.0, 39.975)
+    """
+
+    readings: int
+    pitch: float
+    center: float | None = None
+    valid_range: tuple[float, float] | None = None
+    sentinel: float | None = None
+    name: str = "profiler"
+    noise: float | None = None
+    frame_rate: float | None = None
+
+    #: The laser line runs along SCS x (fixed).
+    line_direction = "x"
+    #: Heights are measured along SCS z, pointing towards the sensor (fixed).
+    measuring_direction = "z"
+
+    def __post_init__(self) -> None:
+        n = self.readings
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"readings: expected a positive integer, got {n!r}")
+        object.__setattr__(self, "readings", int(n))
+        pitch = _finite_float(self.pitch, "pitch")
+        if pitch <= 0.0:
+            raise ValueError(f"pitch: expected a positive spacing in mm, got {pitch!r}")
+        object.__setattr__(self, "pitch", pitch)
+        if self.center is not None:
+            object.__setattr__(self, "center", _finite_float(self.center, "center"))
+        if self.valid_range is not None:
+            vr = tuple(self.valid_range)
+            if len(vr) != 2:
+                raise ValueError(f"valid_range: expected (lo, hi), got {self.valid_range!r}")
+            lo, hi = _finite_float(vr[0], "valid_range"), _finite_float(vr[1], "valid_range")
+            if not lo < hi:
+                raise ValueError(f"valid_range: expected lo < hi, got ({lo!r}, {hi!r})")
+            object.__setattr__(self, "valid_range", (lo, hi))
+        if self.sentinel is not None:
+            s = float(self.sentinel)
+            object.__setattr__(self, "sentinel", None if math.isnan(s) else s)
+        for name in ("noise", "frame_rate"):
+            v = getattr(self, name)
+            if v is not None:
+                v = _finite_float(v, name)
+                if v < 0.0 or (name == "frame_rate" and v == 0.0):
+                    raise ValueError(f"{name}: expected a positive value, got {v!r}")
+                object.__setattr__(self, name, v)
+        object.__setattr__(self, "name", str(self.name))
+
+    @classmethod
+    def sr7140(cls, readings: int = 3200) -> "Profiler":
+        """An SR7140-like profiler, as used in paper 000 §3.
+
+        3200 readings at 0.025 mm pitch (an 80 mm line), Z accuracy +-0.024 mm in the paper,
+        modelled as Gaussian noise of sigma 0.008 mm (the +-0.024 mm read as a 3-sigma band,
+        which matches the paper's fit precision of 0.0081 mm), up to 2500 frames/s (paper 000
+        §2.2). The sentinel is :data:`SENTINEL`; the measuring range ``(-20, 20)`` mm around the
+        reference plane is an assumption (the paper does not give it).
+
+        Parameters
+        ----------
+        readings : int
+            Number of readings; fewer than 3200 models a cropped line (region of interest),
+            same pitch, centred.
+        """
+        return cls(
+            readings=readings,
+            pitch=0.025,
+            center=None,
+            valid_range=(-20.0, 20.0),
+            sentinel=SENTINEL,
+            name="SR7140",
+            noise=0.008,
+            frame_rate=2500.0,
+        )
+
+    @property
+    def i0(self) -> float:
+        """Centre index (reading at SCS x = 0): ``center`` or ``readings / 2``."""
+        return self.readings / 2.0 if self.center is None else float(self.center)
+
+    @property
+    def x(self) -> np.ndarray:
+        """SCS x of every reading, ``(i - i0) * pitch`` in mm, shape (N,)."""
+        return (np.arange(self.readings, dtype=np.float64) - self.i0) * self.pitch
+
+    @property
+    def line_length(self) -> float:
+        """Length covered by the readings, ``(N - 1) * pitch`` (mm)."""
+        return (self.readings - 1) * self.pitch
+
+    def valid_mask(self, frames) -> np.ndarray:
+        """Boolean mask of the valid readings of ``frames`` (any shape).
+
+        Valid means finite, not the sentinel, and inside ``valid_range`` (inclusive).
+        """
+        d = np.asarray(frames, dtype=np.float64)
+        mask = np.isfinite(d)
+        if self.sentinel is not None:
+            mask &= d != self.sentinel
+        if self.valid_range is not None:
+            lo, hi = self.valid_range
+            with np.errstate(invalid="ignore"):
+                mask &= (d >= lo) & (d <= hi)
+        return mask
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able description (inverse of :meth:`from_dict`)."""
+        return {
+            "readings": self.readings,
+            "pitch": self.pitch,
+            "center": self.center,
+            "valid_range": None if self.valid_range is None else list(self.valid_range),
+            "sentinel": self.sentinel,
+            "name": self.name,
+            "noise": self.noise,
+            "frame_rate": self.frame_rate,
+        }
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "Profiler":
+        """Profiler from :meth:`to_dict` output."""
+        vr = d.get("valid_range")
+        return cls(
+            readings=int(d["readings"]),
+            pitch=float(d["pitch"]),
+            center=d.get("center"),
+            valid_range=None if vr is None else (float(vr[0]), float(vr[1])),
+            sentinel=d.get("sentinel"),
+            name=d.get("name", "profiler"),
+            noise=d.get("noise"),
+            frame_rate=d.get("frame_rate"),
+        )
+
+    def __repr__(self) -> str:
+        parts = [f"{self.name!r}", f"{self.readings} readings x {self.pitch:g} mm"]
+        if self.center is not None:
+            parts.append(f"i0={self.center:g}")
+        if self.valid_range is not None:
+            parts.append(f"range=[{self.valid_range[0]:g}, {self.valid_range[1]:g}] mm")
+        if self.sentinel is not None:
+            parts.append(f"sentinel={self.sentinel:g}")
+        if self.noise is not None:
+            parts.append(f"noise={self.noise:g} mm")
+        if self.frame_rate is not None:
+            parts.append(f"{self.frame_rate:g} frames/s")
+        return "Profiler(" + ", ".join(parts) + ")"
+
+
+# --------------------------------------------------------------------------------------------
+# Scan
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Scan:
+    """Raw frames of a line-laser profiler plus the machine pose at every frame (SPEC K7).
+
+    Parameters
+    ----------
+    frames : array_like, shape (F, N)
+        Heights ``d_i`` in mm along SCS z; invalid readings are NaN, the profiler sentinel, or
+        outside its valid range. ``N`` must equal ``profiler.readings``.
+    poses : array_like, shape (F, 6)
+        Axis positions ``X, Y, Z`` (mm), ``A, C, C2`` (rad) at each frame time, for the AC
+        double-swing head with sixth axis C2 (SPEC K2, K3).
+    frame_times : array_like, shape (F,)
+        Frame timestamps in s, non-decreasing.
+    profiler : Profiler
+    c2_offset : array_like, shape (3,)
+        ``(Lx, Ly, Lz)``, origin of the C2 frame in the tool frame, mm.
+    mount : array_like, shape (6,)
+        ``(theta, psi, phi, dx, dy, dz)`` (rad, mm): the calibrated pose of the SCS in the C2
+        frame, rotation ``Rz(phi) Ry(theta) Rx(psi)``.
+    axis_times : array_like, shape (S,), optional
+        Timestamps (s, strictly increasing) of the raw CNC axis samples.
+    axis_samples : array_like, shape (S, 6), optional
+        Raw CNC axis positions ``X, Y, Z, A, C, C2`` at ``axis_times``; rotary axes may be
+        wrapped (``machscan.interpolate_poses`` unwraps them). Give both or neither.
+    metadata : dict, optional
+        Free-form JSON-able information (str keys), saved with the scan.
+
+    Notes
+    -----
+    Arrays are converted to C-contiguous float64 on construction (no copy when they already
+    are). The container is frozen: fields cannot be rebound, but the arrays are ordinary NumPy
+    arrays.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p = Profiler(readings=4, pitch=0.5)
+    >>> s = Scan(np.zeros((2, 4)), np.zeros((2, 6)), [0.0, 0.001], p, (0, 0, 100), np.zeros(6))
+    >>> s.n_frames, s.n_readings
+    (2, 4)
+    """
+
+    frames: np.ndarray
+    poses: np.ndarray
+    frame_times: np.ndarray
+    profiler: Profiler
+    c2_offset: np.ndarray
+    mount: np.ndarray
+    axis_times: np.ndarray | None = None
+    axis_samples: np.ndarray | None = None
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.profiler, Profiler):
+            raise ValueError(
+                f"profiler: expected a machscan.scan.Profiler, got {type(self.profiler).__name__}"
+            )
+        n = self.profiler.readings
+        frames = _as_f64(self.frames, "frames")
+        if frames.ndim != 2 or frames.shape[1] != n:
+            raise ValueError(
+                f"frames: expected shape (F, {n}) (F frames of profiler.readings = {n}), "
+                f"got {frames.shape}"
+            )
+        f = frames.shape[0]
+        poses = _as_f64(self.poses, "poses")
+        if poses.shape != (f, 6):
+            raise ValueError(
+                f"poses: expected shape (F, 6) with F = {f} frames, got {poses.shape}"
+            )
+        _check_finite_rows(poses, "poses", "X, Y, Z, A, C, C2")
+        times = _as_f64(self.frame_times, "frame_times")
+        if times.shape != (f,):
+            raise ValueError(
+                f"frame_times: expected shape (F,) with F = {f} frames, got {times.shape}"
+            )
+        _check_finite_rows(times, "frame_times", "time")
+        if f > 1:
+            bad = np.flatnonzero(np.diff(times) < 0.0)
+            if bad.size:
+                i = int(bad[0]) + 1
+                raise ValueError(
+                    f"frame_times: expected non-decreasing timestamps, but frame {i} "
+                    f"({times[i]!r} s) is earlier than frame {i - 1} ({times[i - 1]!r} s)"
+                )
+        c2 = _as_f64(self.c2_offset, "c2_offset")
+        if c2.shape != (3,):
+            raise ValueError(f"c2_offset: expected shape (3,) (Lx, Ly, Lz), got {c2.shape}")
+        _check_finite_rows(c2, "c2_offset", "value")
+        mount = _as_f64(self.mount, "mount")
+        if mount.shape != (6,):
+            raise ValueError(
+                f"mount: expected shape (6,) (theta, psi, phi, dx, dy, dz), got {mount.shape}"
+            )
+        _check_finite_rows(mount, "mount", "value")
+        if (self.axis_times is None) != (self.axis_samples is None):
+            missing = "axis_samples" if self.axis_samples is None else "axis_times"
+            raise ValueError(f"{missing}: axis_times and axis_samples must be given together")
+        at = asm = None
+        if self.axis_times is not None:
+            at = _as_f64(self.axis_times, "axis_times")
+            if at.ndim != 1 or at.size < 1:
+                raise ValueError(f"axis_times: expected shape (S,) with S >= 1, got {at.shape}")
+            _check_finite_rows(at, "axis_times", "time")
+            if at.size > 1:
+                bad = np.flatnonzero(np.diff(at) <= 0.0)
+                if bad.size:
+                    i = int(bad[0]) + 1
+                    raise ValueError(
+                        f"axis_times: expected strictly increasing timestamps, but sample {i} "
+                        f"({at[i]!r} s) does not follow sample {i - 1} ({at[i - 1]!r} s)"
+                    )
+            asm = _as_f64(self.axis_samples, "axis_samples")
+            if asm.shape != (at.size, 6):
+                raise ValueError(
+                    f"axis_samples: expected shape (S, 6) with S = {at.size} axis_times, "
+                    f"got {asm.shape}"
+                )
+            _check_finite_rows(asm, "axis_samples", "X, Y, Z, A, C, C2")
+        meta = {} if self.metadata is None else self.metadata
+        if not isinstance(meta, Mapping):
+            raise ValueError(f"metadata: expected a dict, got {type(meta).__name__}")
+        meta = dict(meta)
+        for k in meta:
+            if not isinstance(k, str):
+                raise ValueError(f"metadata: keys must be str, got {k!r}")
+        try:
+            json.dumps(meta)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"metadata: must be JSON-serialisable ({exc})") from None
+        for name, value in (
+            ("frames", frames),
+            ("poses", poses),
+            ("frame_times", times),
+            ("c2_offset", c2),
+            ("mount", mount),
+            ("axis_times", at),
+            ("axis_samples", asm),
+            ("metadata", meta),
+        ):
+            object.__setattr__(self, name, value)
+
+    # ---- sizes -------------------------------------------------------------------------------
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames ``F``."""
+        return int(self.frames.shape[0])
+
+    @property
+    def n_readings(self) -> int:
+        """Readings per frame ``N``."""
+        return int(self.frames.shape[1])
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last frame, s (0 for fewer than two frames)."""
+        return float(self.frame_times[-1] - self.frame_times[0]) if self.n_frames > 1 else 0.0
+
+    def valid_mask(self) -> np.ndarray:
+        """(F, N) boolean mask of the valid readings (see :meth:`Profiler.valid_mask`)."""
+        return self.profiler.valid_mask(self.frames)
+
+    # ---- points (compiled core) ---------------------------------------------------------------
+
+    def _core_frames(self) -> np.ndarray:
+        """Frames for the core, which treats NaN and ``valid_range`` as invalid.
+
+        The sentinel is turned into NaN only when ``valid_range`` would not already reject it.
+        """
+        s = self.profiler.sentinel
+        vr = self.profiler.valid_range
+        if s is None or (vr is not None and not (vr[0] <= s <= vr[1])):
+            return self.frames
+        return np.where(self.frames == s, np.nan, self.frames)
+
+    def scs_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """All valid readings as SCS points (SPEC K1).
+
+        Returns
+        -------
+        points : ndarray, shape (M, 3)
+            ``((i - i0) * pitch, 0, d_i)`` in mm, frame-major then reading order.
+        frame_index : ndarray of int64, shape (M,)
+            Frame of every point.
+        """
+        from machscan import profile_to_points  # compiled core, imported lazily
+
+        p = self.profiler
+        return profile_to_points(
+            self._core_frames(), p.pitch, center=p.center, valid_range=p.valid_range
+        )
+
+    def wcs_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """All valid readings as workpiece (WCS) points, through the AC + C2 chain (SPEC K2, K3).
+
+        Returns
+        -------
+        points : ndarray, shape (M, 3)
+            WCS points in mm, frame-major then reading order.
+        frame_index : ndarray of int64, shape (M,)
+        """
+        from machscan import scan_to_wcs  # compiled core, imported lazily
+
+        p = self.profiler
+        return scan_to_wcs(
+            self._core_frames(),
+            self.poses,
+            p.pitch,
+            self.c2_offset,
+            self.mount,
+            center=p.center,
+            valid_range=p.valid_range,
+        )
+
+    def transforms(self) -> np.ndarray:
+        """WCS <- SCS transform of every frame, shape (F, 4, 4) (``machscan.ac_head_transforms``)."""
+        from machscan import ac_head_transforms  # compiled core, imported lazily
+
+        return ac_head_transforms(self.poses, self.c2_offset, self.mount)
+
+    # ---- selection ----------------------------------------------------------------------------
+
+    def select(self, index) -> "Scan":
+        """A new scan with the frames picked by ``index`` (slice, integer array or boolean mask).
+
+        Axis samples, profiler, offsets and metadata are carried over unchanged.
+        """
+        idx = index
+        if isinstance(idx, slice):
+            pass
+        else:
+            idx = np.asarray(idx)
+            if idx.dtype == bool and idx.shape != (self.n_frames,):
+                raise ValueError(
+                    f"index: expected a boolean mask of shape ({self.n_frames},), got {idx.shape}"
+                )
+        return Scan(
+            frames=self.frames[idx],
+            poses=self.poses[idx],
+            frame_times=self.frame_times[idx],
+            profiler=self.profiler,
+            c2_offset=self.c2_offset,
+            mount=self.mount,
+            axis_times=self.axis_times,
+            axis_samples=self.axis_samples,
+            metadata=dict(self.metadata),
+        )
+
+    # ---- display ------------------------------------------------------------------------------
+
+    def __repr__(self) -> str:
+        f, n = self.frames.shape
+        valid = float(self.valid_mask().mean()) if f * n else 0.0
+        lines = [
+            f"Scan({f} frames x {n} readings, {self.duration:.3f} s, "
+            f"{100.0 * valid:.1f} % valid readings",
+            f"  profiler={self.profiler!r}",
+            "  c2_offset=[" + ", ".join(f"{v:g}" for v in self.c2_offset) + "] mm, "
+            "mount=[" + ", ".join(f"{v:g}" for v in self.mount) + "] (rad, mm)",
+        ]
+        if self.axis_times is not None:
+            lines.append(
+                f"  axis samples: {self.axis_times.size} over "
+                f"[{self.axis_times[0]:.3f}, {self.axis_times[-1]:.3f}] s"
+            )
+        if self.metadata:
+            keys = ", ".join(sorted(self.metadata))
+            lines.append(f"  metadata keys: {keys}")
+        return "\n".join(lines) + ")"
+
+    # ---- persistence --------------------------------------------------------------------------
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the scan to one ``.npz`` file, exactly and without pickles.
+
+        The arrays are stored as float64 members; the profiler and metadata as one JSON string
+        member (``header``), so ``np.load(path, allow_pickle=False)`` reads everything. The file
+        is written at ``path`` as given (no extension is appended).
+        """
+        header = {
+            "format": "machscan.Scan",
+            "version": _NPZ_VERSION,
+            "profiler": self.profiler.to_dict(),
+            "metadata": self.metadata,
+        }
+        arrays: dict[str, np.ndarray] = {
+            "frames": self.frames,
+            "poses": self.poses,
+            "frame_times": self.frame_times,
+            "c2_offset": self.c2_offset,
+            "mount": self.mount,
+            "header": np.array(json.dumps(header)),
+        }
+        if self.axis_times is not None:
+            arrays["axis_times"] = self.axis_times
+            arrays["axis_samples"] = self.axis_samples
+        with open(os.fspath(path), "wb") as fh:
+            np.savez(fh, **arrays)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "Scan":
+        """Read a scan written by :meth:`save`."""
+        p = os.fspath(path)
+        with np.load(p, allow_pickle=False) as z:
+            names = set(z.files)
+            need = {"frames", "poses", "frame_times", "c2_offset", "mount", "header"}
+            missing = sorted(need - names)
+            if missing:
+                raise ValueError(f"path: {p!r} is not a machscan scan file (missing {missing})")
+            try:
+                header = json.loads(str(z["header"][()]))
+            except ValueError as exc:
+                raise ValueError(f"path: {p!r} has an unreadable header ({exc})") from None
+            if header.get("format") != "machscan.Scan":
+                raise ValueError(f"path: {p!r} is not a machscan scan file")
+            if int(header.get("version", 0)) > _NPZ_VERSION:
+                raise ValueError(
+                    f"path: {p!r} was written by a newer machscan (format version "
+                    f"{header.get('version')}, this one reads up to {_NPZ_VERSION})"
+                )
+            has_axes = "axis_times" in names
+            return cls(
+                frames=z["frames"],
+                poses=z["poses"],
+                frame_times=z["frame_times"],
+                profiler=Profiler.from_dict(header["profiler"]),
+                c2_offset=z["c2_offset"],
+                mount=z["mount"],
+                axis_times=z["axis_times"] if has_axes else None,
+                axis_samples=z["axis_samples"] if has_axes else None,
+                metadata=header.get("metadata") or {},
+            )
+
+
+# --------------------------------------------------------------------------------------------
+# CSV
+# --------------------------------------------------------------------------------------------
+
+
+def read_scan_csv(
+    frames_csv: str | os.PathLike,
+    poses_csv: str | os.PathLike,
+    profiler: Profiler,
+    c2_offset,
+    mount,
+    delimiter: str = ",",
+    metadata: Mapping[str, Any] | None = None,
+) -> Scan:
+    """Read a scan from a plain CSV export: one file of frames, one file of poses.
+
+    Parameters
+    ----------
+    frames_csv : path
+        One frame per row. A row holds either ``N`` readings (``N = profiler.readings``) or a
+        timestamp in s followed by the ``N`` readings; which one is decided by the width of
+        the first data row (``N`` or ``N + 1`` cells) and then required of every row. Invalid
+        readings are written as the sentinel or ``nan``; empty cells are an error.
+    poses_csv : path
+        One row per frame with columns ``X, Y, Z, A, C, C2`` (mm, rad), or ``t, X, Y, Z, A, C,
+        C2`` (7 cells; ``t`` in s).
+    profiler : Profiler
+    c2_offset : array_like, shape (3,)
+        ``(Lx, Ly, Lz)`` in mm.
+    mount : array_like, shape (6,)
+        ``(theta, psi, phi, dx, dy, dz)`` in rad and mm.
+    delimiter : str
+        Cell separator of both files.
+    metadata : dict, optional
+        Stored in the scan; the source file names are added under ``"source"``.
+
+    Returns
+    -------
+    Scan
+
+    Notes
+    -----
+    Either file may start with one header line: a first line whose first cell is not a number
+    is skipped. Frame times come from the frames file if it has timestamps, else from the
+    poses file's ``t`` column, else ``i / profiler.frame_rate``; when both files carry times
+    they must agree (to 1e-9 s). Blank lines are ignored. Every problem raises ``ValueError``
+    naming the file and the line.
+
+    Examples
+    --------
+    >>> scan = read_scan_csv("frames.csv", "poses.csv", Profiler.sr7140(), (0, 0, 115),
+    ...                      (0, 0, 0, 0, 0, -140))  # doctest: +SKIP
+    """
+    if not isinstance(profiler, Profiler):
+        raise ValueError(
+            f"profiler: expected a machscan.scan.Profiler, got {type(profiler).__name__}"
+        )
+    n = profiler.readings
+    fdata, flines = _read_numeric_csv(frames_csv, "frames_csv", delimiter, (n, n + 1),
+                                      {n: "N readings", n + 1: "a timestamp and N readings"},
+                                      n_desc=f"N = profiler.readings = {n}")
+    pdata, plines = _read_numeric_csv(poses_csv, "poses_csv", delimiter, (6, 7),
+                                      {6: "X, Y, Z, A, C, C2", 7: "t, X, Y, Z, A, C, C2"},
+                                      n_desc="poses")
+    ff, fp = os.fspath(frames_csv), os.fspath(poses_csv)
+    if fdata.shape[0] != pdata.shape[0]:
+        raise ValueError(
+            f"poses_csv: {fp!r} has {pdata.shape[0]} data rows but frames_csv {ff!r} has "
+            f"{fdata.shape[0]} (one pose per frame expected)"
+        )
+    if fdata.shape[0] == 0:
+        raise ValueError(f"frames_csv: {ff!r} holds no frames")
+    ftimes = fdata[:, 0] if fdata.shape[1] == n + 1 else None
+    frames = fdata[:, 1:] if ftimes is not None else fdata
+    ptimes = pdata[:, 0] if pdata.shape[1] == 7 else None
+    poses = pdata[:, 1:] if ptimes is not None else pdata
+    bad = np.flatnonzero(~np.isfinite(poses).all(axis=1))
+    if bad.size:
+        raise ValueError(
+            f"poses_csv: {fp!r}, line {plines[bad[0]]}: pose is not finite "
+            f"({', '.join(repr(float(v)) for v in poses[bad[0]])})"
+        )
+    if ftimes is not None and ptimes is not None:
+        off = np.flatnonzero(np.abs(ftimes - ptimes) > 1e-9)
+        if off.size:
+            i = int(off[0])
+            raise ValueError(
+                f"poses_csv: {fp!r}, line {plines[i]}: time {ptimes[i]!r} s differs from the "
+                f"frame time {ftimes[i]!r} s at frames_csv {ff!r}, line {flines[i]}"
+            )
+    if ftimes is not None:
+        times = ftimes
+        src, lines = "frames_csv", flines
+    elif ptimes is not None:
+        times = ptimes
+        src, lines = "poses_csv", plines
+    else:
+        if profiler.frame_rate is None:
+            raise ValueError(
+                "frames_csv: no timestamps in either file and profiler.frame_rate is None; "
+                "add a time column or give the profiler a frame_rate"
+            )
+        times = np.arange(frames.shape[0], dtype=np.float64) / profiler.frame_rate
+        src, lines = "", flines
+    if src:
+        nonfinite = np.flatnonzero(~np.isfinite(times))
+        if nonfinite.size:
+            raise ValueError(
+                f"{src}: {os.fspath(frames_csv if src == 'frames_csv' else poses_csv)!r}, "
+                f"line {lines[nonfinite[0]]}: timestamp is not finite"
+            )
+        back = np.flatnonzero(np.diff(times) < 0.0)
+        if back.size:
+            i = int(back[0]) + 1
+            raise ValueError(
+                f"{src}: {os.fspath(frames_csv if src == 'frames_csv' else poses_csv)!r}, "
+                f"line {lines[i]}: timestamp {times[i]!r} s is earlier than the previous row's "
+                f"{times[i - 1]!r} s"
+            )
+    meta = dict(metadata or {})
+    meta.setdefault("source", {"frames_csv": ff, "poses_csv": fp})
+    return Scan(
+        frames=np.ascontiguousarray(frames),
+        poses=np.ascontiguousarray(poses),
+        frame_times=np.ascontiguousarray(times),
+        profiler=profiler,
+        c2_offset=c2_offset,
+        mount=mount,
+        metadata=meta,
+    )
+
+
+def write_scan_csv(
+    scan: Scan,
+    frames_csv: str | os.PathLike,
+    poses_csv: str | os.PathLike,
+    *,
+    delimiter: str = ",",
+    timestamps: bool = True,
+    header: bool = True,
+) -> None:
+    """Write a scan as the two CSV files :func:`read_scan_csv` reads.
+
+    Values are written with 17 significant digits, so reading them back is exact. Invalid
+    readings keep their value (the sentinel, or ``nan``).
+
+    Parameters
+    ----------
+    scan : Scan
+    frames_csv, poses_csv : path
+    delimiter : str
+    timestamps : bool
+        Write the frame time as the first column of both files.
+    header : bool
+        Write one header line in each file.
+    """
+    d = delimiter
+    n = scan.n_readings
+    fmt = "%.17g"
+    fcols = ([ "t"] if timestamps else []) + [f"r{i}" for i in range(n)]
+    pcols = (["t"] if timestamps else []) + list(_AXES)
+    fdata = np.column_stack([scan.frame_times, scan.frames]) if timestamps else scan.frames
+    pdata = np.column_stack([scan.frame_times, scan.poses]) if timestamps else scan.poses
+    np.savetxt(os.fspath(frames_csv), fdata, fmt=fmt, delimiter=d,
+               header=d.join(fcols) if header else "", comments="")
+    np.savetxt(os.fspath(poses_csv), pdata, fmt=fmt, delimiter=d,
+               header=d.join(pcols) if header else "", comments="")
+
+
+# --------------------------------------------------------------------------------------------
+# helpers
+# --------------------------------------------------------------------------------------------
+
+
+def _finite_float(v, name: str) -> float:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a number, got {v!r}") from None
+    if not math.isfinite(f):
+        raise ValueError(f"{name}: expected a finite number, got {f!r}")
+    return f
+
+
+def _as_f64(v, name: str) -> np.ndarray:
+    try:
+        return np.ascontiguousarray(np.asarray(v, dtype=np.float64))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name}: cannot be read as a float64 array ({exc})") from None
+
+
+def _check_finite_rows(a: np.ndarray, name: str, what: str) -> None:
+    if a.ndim == 1:
+        bad = np.flatnonzero(~np.isfinite(a))
+        if bad.size:
+            i = int(bad[0])
+            raise ValueError(f"{name}: entry {i} is not finite ({a[i]!r}); expected {what}")
+        return
+    bad = np.flatnonzero(~np.isfinite(a).all(axis=1))
+    if bad.size:
+        i = int(bad[0])
+        vals = ", ".join(repr(float(v)) for v in a[i])
+        raise ValueError(
+            f"{name}: row {i} is not finite ([{vals}]); expected {what} "
+            f"({bad.size} bad row{'s' if bad.size > 1 else ''} in all)"
+        )
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_numeric_csv(path, argname: str, delimiter: str, widths: tuple[int, ...],
+                      width_desc: dict[int, str], n_desc: str):
+    """Parse a numeric CSV with an optional header line.
+
+    Returns the (rows, cols) float64 array and the 1-based file line number of every row.
+    The fast path is ``np.loadtxt``; when it fails the file is scanned line by line to report
+    the first problem with its line number.
+    """
+    p = os.fspath(path)
+    try:
+        with open(p, encoding="utf-8-sig") as fh:
+            text = fh.read()
+    except OSError as exc:
+        raise ValueError(f"{argname}: cannot read {p!r} ({exc.strerror})") from None
+    raw_lines = text.splitlines()
+    numbered = [(i + 1, ln) for i, ln in enumerate(raw_lines) if ln.strip()]
+    if numbered and not _is_number(numbered[0][1].split(delimiter)[0].strip()):
+        numbered = numbered[1:]  # header line
+    if not numbered:
+        return np.zeros((0, widths[0])), []
+    line_numbers = [i for i, _ in numbered]
+    body = "\n".join(ln for _, ln in numbered)
+    data = None
+    try:
+        data = np.loadtxt(io.StringIO(body), delimiter=delimiter, dtype=np.float64, ndmin=2)
+    except ValueError:
+        data = None
+    if data is not None and data.shape[1] in widths:
+        return data, line_numbers
+    # Slow path: find the first problem and say where it is.
+    first_width = None
+    for lineno, ln in numbered:
+        cells = ln.split(delimiter)
+        if first_width is None:
+            first_width = len(cells)
+            if first_width not in widths:
+                choices = " or ".join(f"{w} cells ({width_desc[w]})" for w in widths)
+                raise ValueError(
+                    f"{argname}: {p!r}, line {lineno}: expected {choices} with {n_desc}, "
+                    f"got {first_width}"
+                )
+        elif len(cells) != first_width:
+            raise ValueError(
+                f"{argname}: {p!r}, line {lineno}: ragged row, expected {first_width} cells "
+                f"({width_desc[first_width]}) like the first data row, got {len(cells)}"
+            )
+        for j, c in enumerate(cells):
+            cs = c.strip()
+            if not cs:
+                raise ValueError(
+                    f"{argname}: {p!r}, line {lineno}, column {j + 1}: empty cell "
+                    "(write invalid readings as the sentinel or nan)"
+                )
+            if not _is_number(cs):
+                raise ValueError(
+                    f"{argname}: {p!r}, line {lineno}, column {j + 1}: cannot read {cs!r} as "
+                    "a number"
+                )
+    # loadtxt failed but every cell parses with float(): should not happen; be explicit.
+    raise ValueError(f"{argname}: {p!r} could not be parsed as a numeric table")

@@ -1,0 +1,72 @@
+//! Bindings of `crate::io`.
+use super::convert::{f64_array, to_py_err, Dim};
+use crate::error::Error;
+use crate::io::{write_ply, PlyScalar};
+use numpy::PyUntypedArrayMethods;
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+
+/// Write points (and optional normals and scalar properties) to a PLY file.
+///
+/// Parameters
+/// ----------
+/// path : str or os.PathLike
+///     Output file (``.ply``).
+/// points : array_like, shape (N, 3)
+///     Points, mm; written as ``double`` so machine coordinates keep full precision.
+/// normals : array_like, shape (N, 3), optional
+/// scalars : dict of str to array_like (N,), optional
+///     Extra per-point properties, e.g. ``{"frame": frame_index}``.
+/// binary : bool
+///     Binary little-endian (default) or ASCII.
+///
+/// Examples
+/// --------
+/// >>> machscan.write_points("scan.ply", points, scalars={"frame": frame_index})
+#[pyfunction]
+#[pyo3(signature = (path, points, normals=None, scalars=None, binary=true))]
+fn write_points(
+    py: Python<'_>,
+    path: PathBuf,
+    points: &Bound<'_, PyAny>,
+    normals: Option<&Bound<'_, PyAny>>,
+    scalars: Option<&Bound<'_, PyDict>>,
+    binary: bool,
+) -> PyResult<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    if ext != "ply" {
+        return Err(PyValueError::new_err(format!("path: {}: only .ply files can be written so far", path.display())));
+    }
+    let pts = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
+    let n = pts.shape()[0];
+    let nrm = match normals {
+        Some(o) if !o.is_none() => Some(f64_array(o, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?),
+        _ => None,
+    };
+    let mut named = Vec::new();
+    if let Some(d) = scalars {
+        for (k, v) in d.iter() {
+            let name: String = k.extract().map_err(|_| PyValueError::new_err("scalars: keys must be property names (str)"))?;
+            let arr = f64_array(&v, &name, &[Dim::Is(n)], "(one value per point)")?;
+            named.push((name, arr));
+        }
+    }
+    let p = pts.as_slice()?;
+    let nr = match &nrm {
+        Some(a) => Some(a.as_slice()?),
+        None => None,
+    };
+    let slices: Vec<(String, &[f64])> = named.iter().map(|(k, a)| Ok((k.clone(), a.as_slice()?))).collect::<PyResult<_>>()?;
+    let props: Vec<PlyScalar<'_>> = slices.iter().map(|(k, v)| PlyScalar { name: k, values: v }).collect();
+    py.detach(|| write_ply(&path, p, nr, &props, binary)).map_err(|e| match e {
+        Error::File { .. } => PyOSError::new_err(e.to_string()),
+        other => to_py_err(other),
+    })
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(write_points, m)?)?;
+    Ok(())
+}

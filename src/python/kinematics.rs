@@ -1,0 +1,569 @@
+//! Bindings of `crate::kinematics`: profiler frames, machine chains, pose timing, calibration.
+use super::convert::{f64_array, f64_range, f64_vector, to_numpy, to_py_err, Dim};
+use crate::geom::Axis;
+use crate::kinematics::{self as kin, AngleSource, KinematicChain, Profiler, Step};
+use nalgebra::Matrix4;
+use numpy::PyUntypedArrayMethods;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
+
+const AC_HEAD_AXES: &str = "with columns X, Y, Z, A, C, C2 (mm, rad)";
+
+fn profiler_for(n_readings: usize, pitch: f64, center: Option<f64>, valid_range: Option<(f64, f64)>) -> PyResult<Profiler> {
+    Profiler::new(pitch, n_readings, center, valid_range).map_err(to_py_err)
+}
+
+fn frames_shape(shape: &[usize]) -> PyResult<(usize, usize)> {
+    let (f, n) = (shape[0], shape[1]);
+    if f == 0 || n == 0 {
+        return Err(PyValueError::new_err(format!(
+            "frames: expected shape (F, N) with at least one frame and one reading, got ({f}, {n})"
+        )));
+    }
+    Ok((f, n))
+}
+
+fn points_result<'py>(py: Python<'py>, out: kin::ProfilePoints) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let m = out.frame_index.len();
+    Ok((to_numpy(py, out.points, &[m, 3])?, to_numpy(py, out.frame_index, &[m])?))
+}
+
+/// Profiler frames to points in the sensor coordinate system (SPEC K1, paper 000 eq 5).
+///
+/// Reading ``i`` of a frame becomes the SCS point ``((i - center) * pitch, 0, d_i)``: the laser
+/// line runs along SCS x, ``d_i`` is a height along SCS z (out of the material). Invalid
+/// readings (NaN, the vendor sentinel, anything outside ``valid_range``) are dropped.
+///
+/// Parameters
+/// ----------
+/// frames : array_like, shape (F, N)
+///     Readings in mm, one frame per row.
+/// pitch : float
+///     Reading spacing along the line, mm.
+/// center : float, optional
+///     Index of the reading at SCS x = 0; default ``N / 2``.
+/// valid_range : (float, float), optional
+///     Measuring range ``(lo, hi)`` in mm; readings outside it are invalid.
+///
+/// Returns
+/// -------
+/// points : ndarray, shape (M, 3)
+///     SCS points in mm, frame by frame, readings in order.
+/// frame_index : ndarray of int64, shape (M,)
+///     Frame of each point. ``frames.size - M`` readings were dropped.
+///
+/// Examples
+/// --------
+/// >>> pts, idx = machscan.profile_to_points([[0.1, float("nan"), 0.3]], pitch=0.025)
+/// >>> pts.shape
+/// (2, 3)
+#[pyfunction]
+#[pyo3(signature = (frames, pitch, center=None, valid_range=None))]
+fn profile_to_points<'py>(
+    py: Python<'py>,
+    frames: &Bound<'py, PyAny>,
+    pitch: f64,
+    center: Option<f64>,
+    valid_range: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let frames = f64_array(frames, "frames", &[Dim::Any("F"), Dim::Any("N")], "")?;
+    let (_, n) = frames_shape(frames.shape())?;
+    let profiler = profiler_for(n, pitch, center, f64_range(valid_range, "valid_range")?)?;
+    let data = frames.as_slice()?;
+    let out = py.detach(|| kin::profile_to_points(data, n, &profiler));
+    points_result(py, out)
+}
+
+/// Frames and AC-head poses to workpiece (WCS) points in one parallel call (SPEC K1–K3, K7).
+///
+/// Every valid reading of frame ``k`` is mapped by ``ac_head_transforms(axes)[k]``. The work is
+/// spread over all cores with the GIL released; the result is identical for any thread count.
+///
+/// Parameters
+/// ----------
+/// frames : array_like, shape (F, N)
+///     Readings in mm.
+/// axes : array_like, shape (F, 6)
+///     X, Y, Z (mm), A, C, C2 (rad) at each frame.
+/// pitch : float
+///     Reading spacing, mm.
+/// c2_offset : array_like, shape (3,)
+///     (Lx, Ly, Lz) of the C2 axis from the tool tip, mm.
+/// mount : array_like, shape (6,)
+///     (theta, psi, phi, dx, dy, dz): mount Euler angles (rad) and translation (mm).
+/// center, valid_range
+///     As in :func:`profile_to_points`.
+///
+/// Returns
+/// -------
+/// points : ndarray, shape (M, 3)
+///     WCS points, mm.
+/// frame_index : ndarray of int64, shape (M,)
+///
+/// Examples
+/// --------
+/// >>> pts, idx = machscan.scan_to_wcs(frames, axes, 0.025, (0, 0, 150), (0, 0, 0, 30, 0, -100))
+#[pyfunction]
+#[pyo3(signature = (frames, axes, pitch, c2_offset, mount, center=None, valid_range=None))]
+#[allow(clippy::too_many_arguments)]
+fn scan_to_wcs<'py>(
+    py: Python<'py>,
+    frames: &Bound<'py, PyAny>,
+    axes: &Bound<'py, PyAny>,
+    pitch: f64,
+    c2_offset: &Bound<'py, PyAny>,
+    mount: &Bound<'py, PyAny>,
+    center: Option<f64>,
+    valid_range: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let chain = ac_head_chain(c2_offset, mount)?;
+    scan_points_with(py, &chain, frames, axes, pitch, center, valid_range)
+}
+
+fn scan_points_with<'py>(
+    py: Python<'py>,
+    chain: &KinematicChain,
+    frames: &Bound<'py, PyAny>,
+    axes: &Bound<'py, PyAny>,
+    pitch: f64,
+    center: Option<f64>,
+    valid_range: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let frames = f64_array(frames, "frames", &[Dim::Any("F"), Dim::Any("N")], "")?;
+    let (f, n) = frames_shape(frames.shape())?;
+    let axes = poses_array(chain, axes, Some(f))?;
+    let profiler = profiler_for(n, pitch, center, f64_range(valid_range, "valid_range")?)?;
+    let (data, poses) = (frames.as_slice()?, axes.as_slice()?);
+    let out = py.detach(|| kin::frames_to_points(chain, data, n, poses, &profiler)).map_err(to_py_err)?;
+    points_result(py, out)
+}
+
+fn poses_array<'py>(chain: &KinematicChain, axes: &Bound<'py, PyAny>, rows: Option<usize>) -> PyResult<numpy::PyReadonlyArrayDyn<'py, f64>> {
+    let w = chain.n_axes();
+    let what = format!("with columns {}", chain.axis_names().join(", "));
+    let rows_dim = match rows {
+        Some(r) => Dim::Is(r),
+        None => Dim::Any("F"),
+    };
+    let arr = f64_array(axes, "axes", &[rows_dim, Dim::Is(w)], &what)?;
+    crate::error::check_finite("axes", arr.as_slice()?, w).map_err(to_py_err)?;
+    Ok(arr)
+}
+
+fn ac_head_chain(c2_offset: &Bound<'_, PyAny>, mount: &Bound<'_, PyAny>) -> PyResult<KinematicChain> {
+    let c2 = f64_vector::<3>(c2_offset, "c2_offset", "(Lx, Ly, Lz) in mm")?;
+    let m = f64_vector::<6>(mount, "mount", "(theta, psi, phi, dx, dy, dz) in rad and mm")?;
+    KinematicChain::ac_head(c2, m).map_err(to_py_err)
+}
+
+fn transforms_array<'py>(py: Python<'py>, chain: &KinematicChain, axes: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    let axes = poses_array(chain, axes, None)?;
+    let f = axes.shape()[0];
+    let poses = axes.as_slice()?;
+    let out = py.detach(|| chain.transforms(poses)).map_err(to_py_err)?;
+    to_numpy(py, out, &[f, 4, 4])
+}
+
+/// WCS ← SCS transforms of the AC double-swing head with C2 and sensor mount (SPEC K2, K3).
+///
+/// ``T = [Rz(C)·Rx(A), (X, Y, Z)] · [Rz(C2), (Lx, Ly, Lz)] · [Rz(phi)·Ry(theta)·Rx(psi), (dx, dy, dz)]``.
+/// The rotations are the proper ones; paper 000 prints eq (4) and eq (8) with sign errors.
+///
+/// Parameters
+/// ----------
+/// axes : array_like, shape (F, 6)
+///     X, Y, Z (mm), A, C, C2 (rad) per frame.
+/// c2_offset : array_like, shape (3,)
+///     (Lx, Ly, Lz), mm.
+/// mount : array_like, shape (6,)
+///     (theta, psi, phi, dx, dy, dz), rad and mm.
+///
+/// Returns
+/// -------
+/// ndarray, shape (F, 4, 4)
+///
+/// Examples
+/// --------
+/// >>> T = machscan.ac_head_transforms([[0, 0, 0, 0, 0, 0]], (0, 0, 0), (0, 0, 0, 0, 0, 0))
+/// >>> T[0]  # identity
+#[pyfunction]
+fn ac_head_transforms<'py>(
+    py: Python<'py>,
+    axes: &Bound<'py, PyAny>,
+    c2_offset: &Bound<'py, PyAny>,
+    mount: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let chain = ac_head_chain(c2_offset, mount)?;
+    transforms_array(py, &chain, axes)
+}
+
+/// Tool points of the milling side to workpiece points of the mirror-milling support side
+/// (SPEC K5, paper 002 eq 1–6), each point with its own AB-head pose.
+///
+/// Evaluates the chain ``p1 = p + Lat; p2 = Rx(A)·p1; p3 = p2 + Lba; p4 = Ry(B)·p3;
+/// p5 = p4 + (X, Y, Z) − Lba − Lat; W = (−p5x, p5y, −p5z)``, which is paper 002 eq (6).
+///
+/// Parameters
+/// ----------
+/// tool_points : array_like, shape (N, 3)
+///     Points in the tool frame, mm.
+/// axes : array_like, shape (N, 5)
+///     X, Y, Z (mm), A, B (rad) for each point.
+/// lat, lba : array_like, shape (3,)
+///     Tool→A-axis and A→B-axis offsets, mm.
+///
+/// Returns
+/// -------
+/// ndarray, shape (N, 3)
+///     Support-side points, mm.
+///
+/// Examples
+/// --------
+/// >>> machscan.ab_mirror_support_points([[0, 0, 0]], [[0, 0, 0, 0, 0]], (0, 0, 200), (0, 0, 150))
+#[pyfunction]
+fn ab_mirror_support_points<'py>(
+    py: Python<'py>,
+    tool_points: &Bound<'py, PyAny>,
+    axes: &Bound<'py, PyAny>,
+    lat: &Bound<'py, PyAny>,
+    lba: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let lat = f64_vector::<3>(lat, "lat", "(x, y, z) in mm")?;
+    let lba = f64_vector::<3>(lba, "lba", "(x, y, z) in mm")?;
+    let chain = KinematicChain::ab_mirror_support(lat, lba).map_err(to_py_err)?;
+    apply_chain(py, &chain, tool_points, "tool_points", axes, false)
+}
+
+fn apply_chain<'py>(
+    py: Python<'py>,
+    chain: &KinematicChain,
+    points: &Bound<'py, PyAny>,
+    name: &str,
+    axes: &Bound<'py, PyAny>,
+    vectors: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let pts = f64_array(points, name, &[Dim::Any("N"), Dim::Is(3)], "")?;
+    let n = pts.shape()[0];
+    crate::error::check_finite(name, pts.as_slice()?, 3).map_err(to_py_err)?;
+    let axes = poses_array(chain, axes, Some(n))?;
+    let (p, a) = (pts.as_slice()?, axes.as_slice()?);
+    let out = py.detach(|| chain.apply(p, a, vectors)).map_err(to_py_err)?;
+    to_numpy(py, out, &[n, 3])
+}
+
+/// Turn CAD points and normals with an AC cradle table (SPEC K6, paper 003 eq 1).
+///
+/// ``P' = Rx(a)·Rz(c)·(P − center) + center``, ``n' = Rx(a)·Rz(c)·n`` (C turns first, then A).
+///
+/// Parameters
+/// ----------
+/// points : array_like, shape (N, 3)
+///     Points, mm.
+/// normals : array_like, shape (N, 3) or None
+///     Normals (turned, not moved).
+/// a, c : float
+///     Table angles, rad.
+/// center : array_like, shape (3,)
+///     Rotation centre in measurement coordinates ``t = O'_w − O_w``, mm.
+///
+/// Returns
+/// -------
+/// points : ndarray, shape (N, 3)
+/// normals : ndarray, shape (N, 3) or None
+///
+/// Examples
+/// --------
+/// >>> p, n = machscan.ac_table_rotate([[1, 0, 0]], [[0, 0, 1]], 0.0, np.pi / 2, (0, 0, 0))
+#[pyfunction]
+fn ac_table_rotate<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    normals: &Bound<'py, PyAny>,
+    a: f64,
+    c: f64,
+    center: &Bound<'py, PyAny>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    if !(a.is_finite() && c.is_finite()) {
+        return Err(PyValueError::new_err(format!("a, c: table angles must be finite, got a = {a}, c = {c}")));
+    }
+    let center = f64_vector::<3>(center, "center", "(x, y, z) in mm")?;
+    let chain = KinematicChain::ac_table(center).map_err(to_py_err)?;
+    let t = chain.transform(&[a, c]);
+    let pts = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
+    let n = pts.shape()[0];
+    let turned = |name: &str, v: &[f64], vectors: bool| -> PyResult<Vec<f64>> {
+        crate::error::check_finite(name, v, 3).map_err(to_py_err)?;
+        Ok(py.detach(|| map_rows(&t, v, vectors)))
+    };
+    let p_out = turned("points", pts.as_slice()?, false)?;
+    let n_out = if normals.is_none() {
+        py.None().into_bound(py)
+    } else {
+        let nrm = f64_array(normals, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
+        to_numpy(py, turned("normals", nrm.as_slice()?, true)?, &[n, 3])?
+    };
+    Ok((to_numpy(py, p_out, &[n, 3])?, n_out))
+}
+
+fn map_rows(t: &Matrix4<f64>, v: &[f64], vectors: bool) -> Vec<f64> {
+    use rayon::prelude::*;
+    let mut out = vec![0.0; v.len()];
+    out.par_chunks_mut(3).zip(v.par_chunks(3)).for_each(|(o, p)| {
+        let p = [p[0], p[1], p[2]];
+        let q = if vectors { crate::geom::transform_vector(t, p) } else { crate::geom::transform_point(t, p) };
+        o.copy_from_slice(&q);
+    });
+    out
+}
+
+/// Axis positions at frame times from CNC samples on their own clock (SPEC K7).
+///
+/// Linear interpolation; rotary columns are unwrapped first (a C axis crossing ±π turns the
+/// short way). Frames outside the sampled time span raise: poses are never extrapolated.
+///
+/// Parameters
+/// ----------
+/// sample_times : array_like, shape (S,)
+///     CNC sample times, s, strictly increasing.
+/// samples : array_like, shape (S, n_axes)
+///     Axis positions (mm, rad).
+/// frame_times : array_like, shape (F,)
+///     Profiler frame times on the same clock, s.
+/// rotary : sequence of int
+///     Columns holding rotary axes in rad; default (3, 4, 5) for X, Y, Z, A, C, C2.
+///
+/// Returns
+/// -------
+/// ndarray, shape (F, n_axes)
+///
+/// Examples
+/// --------
+/// >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
+/// array([[0.5]])
+#[pyfunction]
+#[pyo3(signature = (sample_times, samples, frame_times, rotary=vec![3, 4, 5]))]
+fn interpolate_poses<'py>(
+    py: Python<'py>,
+    sample_times: &Bound<'py, PyAny>,
+    samples: &Bound<'py, PyAny>,
+    frame_times: &Bound<'py, PyAny>,
+    rotary: Vec<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let ts = f64_array(sample_times, "sample_times", &[Dim::Any("S")], "")?;
+    let s = ts.shape()[0];
+    let smp = f64_array(samples, "samples", &[Dim::Is(s), Dim::Any("n_axes")], "(one row per sample time)")?;
+    let w = smp.shape()[1];
+    let ft = f64_array(frame_times, "frame_times", &[Dim::Any("F")], "")?;
+    let f = ft.shape()[0];
+    let (a, b, c) = (ts.as_slice()?, smp.as_slice()?, ft.as_slice()?);
+    let out = py.detach(|| kin::interpolate_poses(a, b, c, &rotary)).map_err(to_py_err)?;
+    to_numpy(py, out, &[f, w])
+}
+
+/// Sensor mount calibration from SCS ↔ WCS correspondences (SPEC K4); the Python function
+/// ``machscan.calibrate_mount`` wraps this in a result object.
+#[pyfunction]
+#[pyo3(signature = (scs_points, wcs_points, axes=None, c2_offset=None))]
+fn calibrate_mount<'py>(
+    py: Python<'py>,
+    scs_points: &Bound<'py, PyAny>,
+    wcs_points: &Bound<'py, PyAny>,
+    axes: Option<&Bound<'py, PyAny>>,
+    c2_offset: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let scs = f64_array(scs_points, "scs_points", &[Dim::Any("n"), Dim::Is(3)], "")?;
+    let n = scs.shape()[0];
+    let wcs = f64_array(wcs_points, "wcs_points", &[Dim::Is(n), Dim::Is(3)], "(one point per SCS point)")?;
+    let as_points = |s: &[f64]| s.chunks(3).map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
+    let (scs_p, wcs_p) = (as_points(scs.as_slice()?), as_points(wcs.as_slice()?));
+    let machine: Option<Vec<Matrix4<f64>>> = match axes {
+        Some(ax) if !ax.is_none() => {
+            let c2 = match c2_offset {
+                Some(o) if !o.is_none() => f64_vector::<3>(o, "c2_offset", "(Lx, Ly, Lz) in mm")?,
+                _ => [0.0; 3],
+            };
+            // The head without its mount: the mount is what is solved for.
+            let head = KinematicChain::ac_head(c2, [0.0; 6]).map_err(to_py_err)?;
+            let ax = f64_array(ax, "axes", &[Dim::Is(n), Dim::Is(6)], AC_HEAD_AXES)?;
+            let poses = ax.as_slice()?;
+            crate::error::check_finite("axes", poses, 6).map_err(to_py_err)?;
+            Some(poses.chunks(6).map(|p| head.transform(p)).collect())
+        }
+        _ => None,
+    };
+    let cal = py
+        .detach(|| kin::calibrate_mount(&scs_p, &wcs_p, machine.as_deref()))
+        .map_err(to_py_err)?;
+    let d = PyDict::new(py);
+    d.set_item("params", to_numpy(py, cal.params.to_vec(), &[6])?)?;
+    d.set_item("rms", cal.rms)?;
+    d.set_item("std_errors", to_numpy(py, cal.std_errors.to_vec(), &[6])?)?;
+    d.set_item("covariance", to_numpy(py, cal.covariance.to_vec(), &[6, 6])?)?;
+    d.set_item("residuals", to_numpy(py, cal.residuals, &[n])?)?;
+    d.set_item("iterations", cal.iterations)?;
+    d.set_item("converged", cal.converged)?;
+    Ok(d)
+}
+
+/// A machine model: a chain of elementary transforms mapping the last link (sensor, tool,
+/// part) into the WCS (SPEC K7).
+///
+/// Parameters
+/// ----------
+/// steps : list of tuple
+///     Composed left to right, each one of
+///     ``("translate", (x, y, z))`` mm;
+///     ``("translate_axes", (ix, iy, iz))`` translation by pose columns (None for 0);
+///     ``("rotate", "x"|"y"|"z", angle)`` constant angle, rad;
+///     ``("rotate_axis", "x"|"y"|"z", column)`` angle from a pose column (index or axis name);
+///     ``("rotation", R)`` a constant 3×3 rotation; ``("mirror", (sx, sy, sz))`` with ±1.
+/// axis_names : list of str
+///     Names of the pose columns, e.g. ``["X", "Y", "Z", "A", "C"]``.
+///
+/// Examples
+/// --------
+/// >>> head = machscan.KinematicChain.ac_head((0, 0, 150), (0, 0, 0, 30, 0, -100))
+/// >>> T = head.transforms(axes)          # (F, 4, 4)
+#[pyclass(name = "KinematicChain", module = "machscan._core", frozen)]
+#[derive(Clone)]
+pub struct PyKinematicChain {
+    inner: KinematicChain,
+}
+
+fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<Step> {
+    let bad = |why: String| PyValueError::new_err(format!("steps: step {k}: {why}"));
+    let tup = item.cast::<PyTuple>().map_err(|_| bad("must be a tuple like (\"rotate\", \"z\", 0.5)".into()))?;
+    if tup.is_empty() {
+        return Err(bad("empty tuple".into()));
+    }
+    let kind: String = tup.get_item(0)?.extract().map_err(|_| bad("the first item must be the step kind (str)".into()))?;
+    let arg = |i: usize| tup.get_item(i).map_err(|_| bad(format!("\"{kind}\" needs {} arguments", i)));
+    let axis = |o: Bound<'_, PyAny>| -> PyResult<Axis> {
+        let s: String = o.extract().map_err(|_| bad("axis must be \"x\", \"y\" or \"z\"".into()))?;
+        Axis::parse(&s).ok_or_else(|| bad(format!("axis must be \"x\", \"y\" or \"z\", got {s:?}")))
+    };
+    let column = |o: Bound<'_, PyAny>| -> PyResult<usize> {
+        if let Ok(s) = o.extract::<String>() {
+            return names.iter().position(|n| *n == s).ok_or_else(|| bad(format!("unknown axis name {s:?}; axes are {names:?}")));
+        }
+        o.extract::<usize>().map_err(|_| bad("a pose column is an index or an axis name".into()))
+    };
+    Ok(match kind.as_str() {
+        "translate" => Step::Translate(f64_vector::<3>(&arg(1)?, "steps", "translation (x, y, z)")?),
+        "translate_axes" => {
+            let cols: Vec<Option<Bound<'_, PyAny>>> = arg(1)?.extract().map_err(|_| bad("needs three columns (None for 0)".into()))?;
+            if cols.len() != 3 {
+                return Err(bad(format!("needs three columns, got {}", cols.len())));
+            }
+            let mut c = [None; 3];
+            for (i, o) in cols.into_iter().enumerate() {
+                c[i] = match o {
+                    Some(o) if !o.is_none() => Some(column(o)?),
+                    _ => None,
+                };
+            }
+            Step::TranslateAxes(c)
+        }
+        "rotate" => Step::Rotate(axis(arg(1)?)?, AngleSource::Constant(arg(2)?.extract().map_err(|_| bad("angle must be a number (rad)".into()))?)),
+        "rotate_axis" => Step::Rotate(axis(arg(1)?)?, AngleSource::AxisColumn(column(arg(2)?)?)),
+        "rotation" => {
+            let r = f64_array(&arg(1)?, "steps", &[Dim::Is(3), Dim::Is(3)], "rotation matrix")?;
+            let s = r.as_slice()?;
+            Step::Rotation(nalgebra::Matrix3::from_row_slice(s))
+        }
+        "mirror" => Step::Mirror(f64_vector::<3>(&arg(1)?, "steps", "mirror diagonal (±1, ±1, ±1)")?),
+        other => return Err(bad(format!("unknown step kind {other:?}; use translate, translate_axes, rotate, rotate_axis, rotation or mirror"))),
+    })
+}
+
+#[pymethods]
+impl PyKinematicChain {
+    #[new]
+    fn new(steps: &Bound<'_, PyList>, axis_names: Vec<String>) -> PyResult<Self> {
+        let parsed = steps
+            .iter()
+            .enumerate()
+            .map(|(k, s)| parse_step(&s, k, &axis_names))
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok(PyKinematicChain { inner: KinematicChain::new(parsed, axis_names).map_err(to_py_err)? })
+    }
+
+    /// AC double-swing head with C2 and sensor mount (SPEC K2, K3); poses X, Y, Z, A, C, C2.
+    #[staticmethod]
+    fn ac_head(c2_offset: &Bound<'_, PyAny>, mount: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Ok(PyKinematicChain { inner: ac_head_chain(c2_offset, mount)? })
+    }
+
+    /// AB head, support side of mirror milling (SPEC K5); poses X, Y, Z, A, B.
+    #[staticmethod]
+    fn ab_mirror_support(lat: &Bound<'_, PyAny>, lba: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let lat = f64_vector::<3>(lat, "lat", "(x, y, z) in mm")?;
+        let lba = f64_vector::<3>(lba, "lba", "(x, y, z) in mm")?;
+        Ok(PyKinematicChain { inner: KinematicChain::ab_mirror_support(lat, lba).map_err(to_py_err)? })
+    }
+
+    /// AC cradle table about ``center`` (SPEC K6); poses A, C.
+    #[staticmethod]
+    fn ac_table(center: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let center = f64_vector::<3>(center, "center", "(x, y, z) in mm")?;
+        Ok(PyKinematicChain { inner: KinematicChain::ac_table(center).map_err(to_py_err)? })
+    }
+
+    /// Number of pose columns.
+    #[getter]
+    fn n_axes(&self) -> usize {
+        self.inner.n_axes()
+    }
+
+    /// Names of the pose columns.
+    #[getter]
+    fn axis_names(&self) -> Vec<String> {
+        self.inner.axis_names().to_vec()
+    }
+
+    /// 4×4 transforms for poses ``axes (F, n_axes)`` → ``(F, 4, 4)``.
+    fn transforms<'py>(&self, py: Python<'py>, axes: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        transforms_array(py, &self.inner, axes)
+    }
+
+    /// Points ``(N, 3)``, each with its own pose ``axes (N, n_axes)`` → ``(N, 3)``.
+    fn transform_points<'py>(&self, py: Python<'py>, points: &Bound<'py, PyAny>, axes: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        apply_chain(py, &self.inner, points, "points", axes, false)
+    }
+
+    /// Directions or normals ``(N, 3)`` with poses ``(N, n_axes)``: turned, not moved.
+    fn transform_vectors<'py>(&self, py: Python<'py>, vectors: &Bound<'py, PyAny>, axes: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        apply_chain(py, &self.inner, vectors, "vectors", axes, true)
+    }
+
+    /// Frames ``(F, N)`` and poses ``(F, n_axes)`` → ``(points (M, 3), frame_index (M,))``.
+    #[pyo3(signature = (frames, axes, pitch, center=None, valid_range=None))]
+    fn scan_points<'py>(
+        &self,
+        py: Python<'py>,
+        frames: &Bound<'py, PyAny>,
+        axes: &Bound<'py, PyAny>,
+        pitch: f64,
+        center: Option<f64>,
+        valid_range: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        scan_points_with(py, &self.inner, frames, axes, pitch, center, valid_range)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("KinematicChain(axes=[{}], steps: {})", self.inner.axis_names().join(", "), self.inner.describe())
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(profile_to_points, m)?)?;
+    m.add_function(wrap_pyfunction!(scan_to_wcs, m)?)?;
+    m.add_function(wrap_pyfunction!(ac_head_transforms, m)?)?;
+    m.add_function(wrap_pyfunction!(ab_mirror_support_points, m)?)?;
+    m.add_function(wrap_pyfunction!(ac_table_rotate, m)?)?;
+    m.add_function(wrap_pyfunction!(interpolate_poses, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate_mount, m)?)?;
+    m.add_class::<PyKinematicChain>()?;
+    Ok(())
+}
