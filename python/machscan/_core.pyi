@@ -2,10 +2,23 @@
 checked by ``python -m mypy.stubtest machscan._core`` in the test command)."""
 
 from os import PathLike
-from typing import Any, Sequence
+from typing import Any, Sequence, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "__version__",
+    "KinematicChain",
+    "ab_mirror_support_points",
+    "ac_head_transforms",
+    "ac_table_rotate",
+    "calibrate_mount",
+    "interpolate_poses",
+    "profile_to_points",
+    "scan_to_wcs",
+    "write_points",
+]
 
 __version__: str
 
@@ -108,6 +121,7 @@ def write_points(
 ) -> None:
     """Write points (mm), optional normals and named scalar properties to a ``.ply`` file."""
 
+@final
 class KinematicChain:
     """A machine model: a chain of elementary transforms mapping the last link into the WCS.
 

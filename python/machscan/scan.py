@@ -739,7 +739,7 @@ def write_scan_csv(
     d = delimiter
     n = scan.n_readings
     fmt = "%.17g"
-    fcols = ([ "t"] if timestamps else []) + [f"r{i}" for i in range(n)]
+    fcols = (["t"] if timestamps else []) + [f"r{i}" for i in range(n)]
     pcols = (["t"] if timestamps else []) + list(_AXES)
     fdata = np.column_stack([scan.frame_times, scan.frames]) if timestamps else scan.frames
     pdata = np.column_stack([scan.frame_times, scan.poses]) if timestamps else scan.poses
@@ -820,7 +820,8 @@ def _read_numeric_csv(path, argname: str, delimiter: str, widths: tuple[int, ...
     body = "\n".join(ln for _, ln in numbered)
     data = None
     try:
-        data = np.loadtxt(io.StringIO(body), delimiter=delimiter, dtype=np.float64, ndmin=2)
+        data = np.loadtxt(io.StringIO(body), delimiter=delimiter, dtype=np.float64, ndmin=2,
+                          comments=None)
     except ValueError:
         data = None
     if data is not None and data.shape[1] in widths:
