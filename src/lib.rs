@@ -3,6 +3,7 @@
 //! The core modules are free of pyo3; `python` is the only place that talks to Python.
 pub mod error;
 pub mod geom;
+pub mod groove;
 pub mod io;
 pub mod kinematics;
 pub mod optim;

@@ -1,0 +1,532 @@
+//! One frame, then all frames in parallel: window → valid readings → spike filter → line fit →
+//! bottom point → surface refit without the groove → levelling → LM template fit → back to the
+//! frame's own (unlevelled) coordinates (SPEC G steps 1–7).
+use super::template::TanhTemplate;
+use crate::error::{Error, Result};
+use crate::optim::{levenberg_marquardt, LeastSquares, LmOptions, LmStop};
+use nalgebra::{SMatrix, SVector};
+use rayon::prelude::*;
+
+/// What became of a frame. Codes are stable: they are what Python sees.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum GrooveStatus {
+    /// The fit converged (small step, small gradient, or the paper's cost test).
+    Converged = 0,
+    /// The iteration limit was hit; the parameters are the best found.
+    MaxIterations = 1,
+    /// No dip deeper than `min_depth` (and 5× the surface noise) in the window, or the fit left
+    /// the window or came out with a non-positive depth or width.
+    NoGroove = 2,
+    /// Fewer valid readings than `min_valid` in the window, or too few surface readings left.
+    TooFewValid = 3,
+    /// A second dip at least half as deep as the first lies in the window.
+    TwoGrooves = 4,
+    /// The groove touches the window edge: no surface on one side.
+    Clipped = 5,
+    /// The fit failed numerically.
+    Failed = 6,
+}
+
+impl GrooveStatus {
+    pub fn describe(self) -> &'static str {
+        match self {
+            GrooveStatus::Converged => "converged",
+            GrooveStatus::MaxIterations => "max iterations",
+            GrooveStatus::NoGroove => "no groove",
+            GrooveStatus::TooFewValid => "too few valid readings",
+            GrooveStatus::TwoGrooves => "two grooves",
+            GrooveStatus::Clipped => "clipped at the window edge",
+            GrooveStatus::Failed => "fit failed",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GrooveOptions {
+    /// Template shape coefficient α, mm⁻¹ (paper 000: 20, chosen by eye).
+    pub alpha: f64,
+    /// Fit α as a fifth parameter, starting from `alpha`.
+    pub fit_alpha: bool,
+    /// Nominal groove width l, mm: the readings within l of the bottom are left out of the
+    /// surface refit.
+    pub nominal_width: f64,
+    /// Number t of readings kept around `window_center`; `None` keeps them all.
+    pub window: Option<usize>,
+    /// Reading index the window is centred on; `None` = N/2.
+    pub window_center: Option<usize>,
+    /// Drop a reading deviating more than this from the median of its 5-reading neighbourhood
+    /// (mm); `None` disables the spike filter.
+    pub spike_threshold: Option<f64>,
+    /// Shallowest dip that counts as a groove, mm.
+    pub min_depth: f64,
+    /// Fewest valid readings in the window.
+    pub min_valid: usize,
+    pub max_iterations: usize,
+    /// Paper 000's stop test `½ Σ f² / t < ε` (ε = 1e-5 there); 0 disables it, which is the
+    /// default: noisy frames never meet it and quiet ones would stop before convergence.
+    pub cost_tolerance: f64,
+    /// Relative step size stop test.
+    pub step_tolerance: f64,
+    /// Gradient stop test, ‖Jᵀf‖∞.
+    pub gradient_tolerance: f64,
+}
+
+impl Default for GrooveOptions {
+    fn default() -> Self {
+        GrooveOptions {
+            alpha: 20.0,
+            fit_alpha: false,
+            nominal_width: 0.5,
+            window: None,
+            window_center: None,
+            spike_threshold: Some(0.1),
+            min_depth: 0.03,
+            min_valid: 12,
+            max_iterations: 100,
+            cost_tolerance: 0.0,
+            step_tolerance: 1e-10,
+            gradient_tolerance: 1e-13,
+        }
+    }
+}
+
+impl GrooveOptions {
+    pub fn validate(&self) -> Result<()> {
+        let positive = |name: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(name, format!("must be a positive number, got {v}")))
+            }
+        };
+        positive("alpha", self.alpha)?;
+        positive("nominal_width", self.nominal_width)?;
+        if !(self.min_depth.is_finite() && self.min_depth >= 0.0) {
+            return Err(Error::invalid("min_depth", format!("must be >= 0 mm, got {}", self.min_depth)));
+        }
+        if let Some(s) = self.spike_threshold {
+            positive("spike_threshold", s)?;
+        }
+        if self.window == Some(0) {
+            return Err(Error::invalid("window", "must hold at least one reading"));
+        }
+        for (name, v) in [("step_tolerance", self.step_tolerance), ("gradient_tolerance", self.gradient_tolerance), ("cost_tolerance", self.cost_tolerance)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(name, format!("must be >= 0, got {v}")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The result for one frame. Positions are in the frame's own coordinates (the x, z given);
+/// for a frame that could not be fitted they are NaN and `status` says why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GrooveFit {
+    /// Groove centre x0 and surface height z0 there, mm.
+    pub x0: f64,
+    pub z0: f64,
+    /// Template depth d and width w, mm.
+    pub depth: f64,
+    pub width: f64,
+    /// α used or fitted, mm⁻¹.
+    pub alpha: f64,
+    /// Residual RMS of the template fit, mm.
+    pub rms: f64,
+    /// Standard errors of d and w from `σ̂² (JᵀJ)⁻¹`, mm.
+    pub se_depth: f64,
+    pub se_width: f64,
+    /// Surface slope angle θ = atan k2 used for levelling, rad.
+    pub tilt: f64,
+    pub iterations: u32,
+    /// Readings used in the template fit.
+    pub n_used: u32,
+    pub status: GrooveStatus,
+}
+
+impl GrooveFit {
+    fn failed(status: GrooveStatus, n_used: usize) -> Self {
+        GrooveFit {
+            x0: f64::NAN,
+            z0: f64::NAN,
+            depth: f64::NAN,
+            width: f64::NAN,
+            alpha: f64::NAN,
+            rms: f64::NAN,
+            se_depth: f64::NAN,
+            se_width: f64::NAN,
+            tilt: f64::NAN,
+            iterations: 0,
+            n_used: n_used as u32,
+            status,
+        }
+    }
+}
+
+/// Least-squares line `z = k x + b` (None when x is constant).
+fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64)> {
+    let (mut n, mut sx, mut sz) = (0.0, 0.0, 0.0);
+    for (xi, zi) in x.clone() {
+        n += 1.0;
+        sx += xi;
+        sz += zi;
+    }
+    if n < 2.0 {
+        return None;
+    }
+    let (mx, mz) = (sx / n, sz / n);
+    let (mut sxx, mut sxz) = (0.0, 0.0);
+    for (xi, zi) in x {
+        sxx += (xi - mx) * (xi - mx);
+        sxz += (xi - mx) * (zi - mz);
+    }
+    if sxx <= 0.0 {
+        return None;
+    }
+    let k = sxz / sxx;
+    Some((k, mz - k * mx))
+}
+
+/// Levelled points and the template problem on them; `P` = 4 (α fixed) or 5 (α fitted).
+struct TemplateProblem<'a> {
+    x: &'a [f64],
+    z: &'a [f64],
+    alpha: f64,
+}
+
+impl TemplateProblem<'_> {
+    fn template(&self, p: &[f64]) -> TanhTemplate {
+        TanhTemplate { x0: p[0], z0: p[1], depth: p[2], width: p[3], alpha: if p.len() > 4 { p[4] } else { self.alpha } }
+    }
+
+    fn cost_of(&self, p: &[f64]) -> f64 {
+        let t = self.template(p);
+        0.5 * self.x.iter().zip(self.z).map(|(&x, &z)| (z - t.value(x)).powi(2)).sum::<f64>()
+    }
+
+    fn normal_equations_of<const P: usize>(&self, p: &[f64]) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64) {
+        let t = self.template(p);
+        let mut jtj = SMatrix::<f64, P, P>::zeros();
+        let mut g = SVector::<f64, P>::zeros();
+        let mut cost = 0.0;
+        for (&x, &z) in self.x.iter().zip(self.z) {
+            let (v, grad) = t.value_and_gradient(x);
+            let f = z - v;
+            cost += 0.5 * f * f;
+            // ∂f/∂p = −∂T/∂p; JᵀJ is sign-free, Jᵀf flips.
+            for a in 0..P {
+                g[a] -= grad[a] * f;
+                for b in a..P {
+                    jtj[(a, b)] += grad[a] * grad[b];
+                }
+            }
+        }
+        for a in 0..P {
+            for b in 0..a {
+                jtj[(a, b)] = jtj[(b, a)];
+            }
+        }
+        (jtj, g, cost)
+    }
+}
+
+impl LeastSquares<4> for TemplateProblem<'_> {
+    fn len(&self) -> usize {
+        self.x.len()
+    }
+    fn cost(&self, p: &SVector<f64, 4>) -> f64 {
+        self.cost_of(p.as_slice())
+    }
+    fn normal_equations(&self, p: &SVector<f64, 4>) -> (SMatrix<f64, 4, 4>, SVector<f64, 4>, f64) {
+        self.normal_equations_of::<4>(p.as_slice())
+    }
+}
+
+impl LeastSquares<5> for TemplateProblem<'_> {
+    fn len(&self) -> usize {
+        self.x.len()
+    }
+    fn cost(&self, p: &SVector<f64, 5>) -> f64 {
+        self.cost_of(p.as_slice())
+    }
+    fn normal_equations(&self, p: &SVector<f64, 5>) -> (SMatrix<f64, 5, 5>, SVector<f64, 5>, f64) {
+        self.normal_equations_of::<5>(p.as_slice())
+    }
+}
+
+/// Median of up to 5 values.
+fn median5(v: &mut [f64]) -> f64 {
+    v.sort_unstable_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Fit one frame: `x` reading abscissae, `z` readings (NaN = invalid), same length.
+pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+    let n = x.len().min(z.len());
+    // 1. Window of t readings around the centre, valid readings only.
+    let (lo, hi) = match o.window {
+        None => (0, n),
+        Some(t) => {
+            let c = o.window_center.unwrap_or(n / 2).min(n);
+            let lo = c.saturating_sub(t / 2);
+            (lo, (lo + t).min(n))
+        }
+    };
+    let mut px = Vec::with_capacity(hi - lo);
+    let mut pz = Vec::with_capacity(hi - lo);
+    for i in lo..hi {
+        if z[i].is_finite() && x[i].is_finite() {
+            px.push(x[i]);
+            pz.push(z[i]);
+        }
+    }
+    if px.len() < o.min_valid.max(6) {
+        return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+    }
+    // Spike filter: a reading far from the median of its neighbours is an outlier.
+    if let Some(th) = o.spike_threshold {
+        let keep: Vec<bool> = (0..px.len())
+            .map(|i| {
+                let a = i.saturating_sub(2);
+                let b = (i + 3).min(px.len());
+                let mut w = [0.0; 5];
+                let m = b - a;
+                w[..m].copy_from_slice(&pz[a..b]);
+                (pz[i] - median5(&mut w[..m])).abs() <= th
+            })
+            .collect();
+        let mut j = 0;
+        for i in 0..px.len() {
+            if keep[i] {
+                px[j] = px[i];
+                pz[j] = pz[i];
+                j += 1;
+            }
+        }
+        px.truncate(j);
+        pz.truncate(j);
+        if px.len() < o.min_valid.max(6) {
+            return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+        }
+    }
+    // 2. Line through all points; the bottom is the point deepest below it (a groove is a dip).
+    let Some((k1, b1)) = fit_line(px.iter().copied().zip(pz.iter().copied())) else {
+        return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+    };
+    let (mut ib, mut below) = (0, f64::NEG_INFINITY);
+    for i in 0..px.len() {
+        let d = k1 * px[i] + b1 - pz[i];
+        if d > below {
+            below = d;
+            ib = i;
+        }
+    }
+    let xd = px[ib];
+    // 3. Surface refit without the l readings' width on each side of the bottom.
+    let l = o.nominal_width;
+    let surface = || px.iter().copied().zip(pz.iter().copied()).filter(move |(x, _)| (x - xd).abs() > l);
+    let (n_left, n_right) = surface().fold((0, 0), |(a, b), (x, _)| if x < xd { (a + 1, b) } else { (a, b + 1) });
+    if n_left + n_right < 4 {
+        return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+    }
+    if n_left < 2 || n_right < 2 {
+        return GrooveFit::failed(GrooveStatus::Clipped, px.len());
+    }
+    let Some((k2, b2)) = fit_line(surface()) else {
+        return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+    };
+    // Surface noise (robust: 1.4826 · median |r|, so a second groove does not inflate it) and
+    // the deepest second dip, both measured on the surface points.
+    let mut abs_r: Vec<f64> = surface().map(|(x, z)| (k2 * x + b2 - z).abs()).collect();
+    let deepest_other = surface().map(|(x, z)| k2 * x + b2 - z).fold(0.0f64, f64::max);
+    let mid = abs_r.len() / 2;
+    let sigma = 1.4826 * *abs_r.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let depth0 = k2 * xd + b2 - pz[ib];
+    if depth0 < o.min_depth.max(5.0 * sigma) {
+        return GrooveFit::failed(GrooveStatus::NoGroove, px.len());
+    }
+    if deepest_other > 0.5 * depth0 && deepest_other > o.min_depth.max(5.0 * sigma) {
+        return GrooveFit::failed(GrooveStatus::TwoGrooves, px.len());
+    }
+    // 4. Level: rotate by −θ so the surface runs along x' (eq 13).
+    let theta = k2.atan();
+    let (s, c) = theta.sin_cos();
+    let lx: Vec<f64> = px.iter().zip(&pz).map(|(&x, &z)| c * x + s * z).collect();
+    let lz: Vec<f64> = px.iter().zip(&pz).map(|(&x, &z)| -s * x + c * z).collect();
+    // 5. Initial guess: x0 at the bottom, z0 the levelled surface mean, d the bottom depth, w = l.
+    let (mut zsum, mut zn) = (0.0, 0.0);
+    for i in 0..lx.len() {
+        if (px[i] - xd).abs() > l {
+            zsum += lz[i];
+            zn += 1.0;
+        }
+    }
+    let z0 = zsum / zn;
+    let problem = TemplateProblem { x: &lx, z: &lz, alpha: o.alpha };
+    let lm = LmOptions {
+        max_iterations: o.max_iterations,
+        cost_tolerance: o.cost_tolerance,
+        step_tolerance: o.step_tolerance,
+        gradient_tolerance: o.gradient_tolerance,
+        tau: 1e-3,
+    };
+    let start = [lx[ib], z0, z0 - lz[ib], l, o.alpha];
+    let (p, cost, iterations, stop, cov_d, cov_w) = if o.fit_alpha {
+        let r = levenberg_marquardt::<5, _>(&problem, SVector::from(start), &lm);
+        let inv = r.jtj.try_inverse();
+        let (cd, cw) = inv.map_or((f64::INFINITY, f64::INFINITY), |m| (m[(2, 2)], m[(3, 3)]));
+        (r.x.as_slice().to_vec(), r.cost, r.iterations, r.stop, cd, cw)
+    } else {
+        let r = levenberg_marquardt::<4, _>(&problem, SVector::from([start[0], start[1], start[2], start[3]]), &lm);
+        let inv = r.jtj.try_inverse();
+        let (cd, cw) = inv.map_or((f64::INFINITY, f64::INFINITY), |m| (m[(2, 2)], m[(3, 3)]));
+        let mut v = r.x.as_slice().to_vec();
+        v.push(o.alpha);
+        (v, r.cost, r.iterations, r.stop, cd, cw)
+    };
+    let m = lx.len();
+    let n_par = if o.fit_alpha { 5 } else { 4 };
+    let xmin = lx.iter().copied().fold(f64::INFINITY, f64::min);
+    let xmax = lx.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let status = match stop {
+        LmStop::Failed => GrooveStatus::Failed,
+        _ if !(p[2] > 0.0 && p[3] > 0.0 && p[4] > 0.0) || p[0] < xmin || p[0] > xmax => GrooveStatus::NoGroove,
+        _ if p.iter().any(|v| !v.is_finite()) => GrooveStatus::Failed,
+        LmStop::MaxIterations => GrooveStatus::MaxIterations,
+        _ => GrooveStatus::Converged,
+    };
+    if matches!(status, GrooveStatus::Failed | GrooveStatus::NoGroove) {
+        return GrooveFit::failed(status, m);
+    }
+    let sigma2 = 2.0 * cost / (m.saturating_sub(n_par).max(1)) as f64;
+    // 7. Back to the frame's coordinates (inverse of eq 13).
+    GrooveFit {
+        x0: c * p[0] - s * p[1],
+        z0: s * p[0] + c * p[1],
+        depth: p[2],
+        width: p[3],
+        alpha: p[4],
+        rms: (2.0 * cost / m as f64).sqrt(),
+        se_depth: (sigma2 * cov_d).sqrt(),
+        se_width: (sigma2 * cov_w).sqrt(),
+        tilt: theta,
+        iterations: iterations as u32,
+        n_used: m as u32,
+        status,
+    }
+}
+
+/// All frames of `z (F, N)` row-major sharing the abscissae `x (N,)`, in parallel. Each frame
+/// is fitted on its own, so the result is identical whatever the thread count.
+pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<GrooveFit>> {
+    options.validate()?;
+    let n = x.len();
+    if n == 0 {
+        return Err(Error::shape("x", "(N,) with N >= 1", "(0,)"));
+    }
+    if z.len() % n != 0 {
+        return Err(Error::shape("z", format!("(F, {n}): one column per x"), format!("{} values", z.len())));
+    }
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(Error::invalid("x", format!("must be finite, found {} at index {i}", x[i])));
+    }
+    Ok(z.par_chunks(n).map(|row| fit_frame(x, row, options)).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
+    }
+
+    fn gauss(seed: &mut u64) -> f64 {
+        let (u, v) = (lcg(seed).max(1e-300), lcg(seed));
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+
+    fn frame(truth: &TanhTemplate, tilt: f64, noise: f64, seed: &mut u64) -> (Vec<f64>, Vec<f64>) {
+        let x: Vec<f64> = (0..200).map(|i| (i as f64 - 100.0) * 0.025).collect();
+        let z = x.iter().map(|&x| truth.value(x) + tilt * x + noise * gauss(seed)).collect();
+        (x, z)
+    }
+
+    #[test]
+    fn recovers_exact_template() {
+        let truth = TanhTemplate { x0: 0.137, z0: 0.05, depth: 0.31, width: 0.48, alpha: 20.0 };
+        let mut seed = 1;
+        let (x, z) = frame(&truth, 0.0, 0.0, &mut seed);
+        let f = fit_frame(&x, &z, &GrooveOptions::default());
+        assert_eq!(f.status, GrooveStatus::Converged);
+        assert!((f.x0 - truth.x0).abs() < 1e-9, "{f:?}");
+        assert!((f.depth - truth.depth).abs() < 1e-9);
+        assert!((f.width - truth.width).abs() < 1e-9);
+        assert!((f.z0 - truth.z0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn fits_alpha_when_asked() {
+        let truth = TanhTemplate { x0: -0.2, z0: 0.0, depth: 0.3, width: 0.5, alpha: 12.0 };
+        let mut seed = 2;
+        let (x, z) = frame(&truth, 0.0, 0.0, &mut seed);
+        let o = GrooveOptions { fit_alpha: true, ..GrooveOptions::default() };
+        let f = fit_frame(&x, &z, &o);
+        assert_eq!(f.status, GrooveStatus::Converged);
+        assert!((f.alpha - 12.0).abs() < 1e-4, "{f:?}");
+    }
+
+    #[test]
+    fn flat_frame_has_no_groove_and_short_frame_too_few() {
+        let mut seed = 3;
+        let x: Vec<f64> = (0..200).map(|i| i as f64 * 0.025).collect();
+        let z: Vec<f64> = x.iter().map(|_| 0.008 * gauss(&mut seed)).collect();
+        assert_eq!(fit_frame(&x, &z, &GrooveOptions::default()).status, GrooveStatus::NoGroove);
+        let nan = vec![f64::NAN; 200];
+        assert_eq!(fit_frame(&x, &nan, &GrooveOptions::default()).status, GrooveStatus::TooFewValid);
+    }
+
+    #[test]
+    fn two_grooves_are_flagged() {
+        let a = TanhTemplate { x0: -1.2, z0: 0.0, depth: 0.3, width: 0.48, alpha: 20.0 };
+        let b = TanhTemplate { x0: 1.3, z0: 0.0, depth: 0.28, width: 0.48, alpha: 20.0 };
+        let x: Vec<f64> = (0..200).map(|i| (i as f64 - 100.0) * 0.025).collect();
+        let z: Vec<f64> = x.iter().map(|&x| a.value(x) + b.value(x)).collect();
+        let f = fit_frame(&x, &z, &GrooveOptions::default());
+        assert_eq!(f.status, GrooveStatus::TwoGrooves, "{f:?}");
+    }
+
+    #[test]
+    fn tilted_noisy_frames_in_parallel_equal_sequential() {
+        let mut seed = 9;
+        let mut z = Vec::new();
+        let mut x = Vec::new();
+        for k in 0..200 {
+            let t = TanhTemplate { x0: 0.1 * lcg(&mut seed) - 0.05, z0: 0.0, depth: 0.31, width: 0.48, alpha: 20.0 };
+            let (fx, fz) = frame(&t, 0.05 * (k as f64 / 200.0 - 0.5), 0.008, &mut seed);
+            x = fx;
+            z.extend(fz);
+        }
+        let o = GrooveOptions::default();
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| fit_frames(&x, &z, &o).unwrap())
+        };
+        let (a, b) = (run(1), run(2));
+        for (p, q) in a.iter().zip(&b) {
+            assert_eq!(p.status, q.status);
+            assert_eq!(p.x0.to_bits(), q.x0.to_bits());
+            assert_eq!(p.depth.to_bits(), q.depth.to_bits());
+        }
+        let ok = a.iter().filter(|f| f.status == GrooveStatus::Converged).count();
+        assert_eq!(ok, 200);
+        let mean_d = a.iter().map(|f| f.depth).sum::<f64>() / 200.0;
+        assert!((mean_d - 0.31).abs() < 0.005, "{mean_d}");
+    }
+}
