@@ -16,11 +16,14 @@ from machscan._core import (
     profile_to_points,
     scan_to_wcs,
 )
+from machscan.grooves import GrooveFits, GrooveStatus, fit_grooves
 from machscan.kinematics import MountCalibration, calibrate_mount
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
     "__version__",
+    "GrooveFits",
+    "GrooveStatus",
     "KinematicChain",
     "MountCalibration",
     "Profiler",
@@ -29,6 +32,7 @@ __all__ = [
     "ac_head_transforms",
     "ac_table_rotate",
     "calibrate_mount",
+    "fit_grooves",
     "interpolate_poses",
     "profile_to_points",
     "read_scan_csv",

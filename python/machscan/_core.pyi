@@ -14,6 +14,7 @@ __all__ = [
     "ac_head_transforms",
     "ac_table_rotate",
     "calibrate_mount",
+    "fit_grooves",
     "interpolate_poses",
     "profile_to_points",
     "scan_to_wcs",
@@ -111,6 +112,25 @@ def calibrate_mount(
     c2_offset: ArrayLike | None = None,
 ) -> dict[str, Any]:
     """Sensor mount calibration (SPEC K4); ``machscan.calibrate_mount`` wraps the dict it returns."""
+
+def fit_grooves(
+    x: ArrayLike,
+    z: ArrayLike,
+    alpha: float = 20.0,
+    nominal_width: float = 0.5,
+    window: int | None = None,
+    window_center: int | None = None,
+    fit_alpha: bool = False,
+    spike_threshold: float | None = 0.1,
+    min_depth: float = 0.03,
+    min_valid: int = 12,
+    max_iterations: int = 100,
+    cost_tolerance: float = 0.0,
+    step_tolerance: float = 1e-10,
+    gradient_tolerance: float = 1e-13,
+) -> dict[str, Any]:
+    """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict
+    of per-frame arrays this returns in a result object."""
 
 def write_points(
     path: str | PathLike[str],

@@ -1,7 +1,7 @@
 //! One frame, then all frames in parallel: window → valid readings → spike filter → line fit →
 //! bottom point → surface refit without the groove → levelling → LM template fit → back to the
 //! frame's own (unlevelled) coordinates (SPEC G steps 1–7).
-use super::template::TanhTemplate;
+use super::template::{fast_tanh, TanhTemplate};
 use crate::error::{Error, Result};
 use crate::optim::{levenberg_marquardt, LeastSquares, LmOptions, LmStop};
 use nalgebra::{SMatrix, SVector};
@@ -189,42 +189,71 @@ fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64)> {
 }
 
 /// Levelled points and the template problem on them; `P` = 4 (α fixed) or 5 (α fitted).
+/// The two tanh terms of every reading are computed in one tight loop first (it vectorises),
+/// then the sums are accumulated; the scratch buffers live with the problem.
 struct TemplateProblem<'a> {
     x: &'a [f64],
     z: &'a [f64],
     alpha: f64,
+    scratch: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
 }
 
-impl TemplateProblem<'_> {
+impl<'a> TemplateProblem<'a> {
+    fn new(x: &'a [f64], z: &'a [f64], alpha: f64) -> Self {
+        let n = x.len();
+        TemplateProblem { x, z, alpha, scratch: std::cell::RefCell::new((vec![0.0; n], vec![0.0; n])) }
+    }
+
     fn template(&self, p: &[f64]) -> TanhTemplate {
         TanhTemplate { x0: p[0], z0: p[1], depth: p[2], width: p[3], alpha: if p.len() > 4 { p[4] } else { self.alpha } }
     }
 
+    /// Fills the scratch with `tanh(α(x − x0 ∓ w/4))`.
+    fn tanh_terms(&self, t: &TanhTemplate, a: &mut [f64], b: &mut [f64]) {
+        let q = 0.25 * t.width;
+        for (xa, (ta, tb)) in self.x.iter().zip(a.iter_mut().zip(b.iter_mut())) {
+            let u = xa - t.x0;
+            *ta = fast_tanh(t.alpha * (u - q));
+            *tb = fast_tanh(t.alpha * (u + q));
+        }
+    }
+
     fn cost_of(&self, p: &[f64]) -> f64 {
         let t = self.template(p);
-        0.5 * self.x.iter().zip(self.z).map(|(&x, &z)| (z - t.value(x)).powi(2)).sum::<f64>()
+        let mut s = self.scratch.borrow_mut();
+        let (a, b) = &mut *s;
+        self.tanh_terms(&t, a, b);
+        let hd = 0.5 * t.depth;
+        0.5 * self.z.iter().zip(a.iter().zip(b.iter())).map(|(&z, (&ta, &tb))| (z - t.z0 - hd * (ta - tb)).powi(2)).sum::<f64>()
     }
 
     fn normal_equations_of<const P: usize>(&self, p: &[f64]) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64) {
         let t = self.template(p);
+        let mut s = self.scratch.borrow_mut();
+        let (ta, tb) = &mut *s;
+        self.tanh_terms(&t, ta, tb);
+        let (hd, q, al) = (0.5 * t.depth, 0.25 * t.width, t.alpha);
         let mut jtj = SMatrix::<f64, P, P>::zeros();
         let mut g = SVector::<f64, P>::zeros();
         let mut cost = 0.0;
-        for (&x, &z) in self.x.iter().zip(self.z) {
-            let (v, grad) = t.value_and_gradient(x);
-            let f = z - v;
+        for i in 0..self.x.len() {
+            let (a, b) = (ta[i], tb[i]);
+            let (sa, sb) = (1.0 - a * a, 1.0 - b * b);
+            let u = self.x[i] - t.x0;
+            let f = self.z[i] - t.z0 - hd * (a - b);
+            // ∂T/∂p of eq (15) and ∂T/∂α; ∂f/∂p = −∂T/∂p (JᵀJ is sign-free, Jᵀf flips).
+            let grad = [hd * al * (sb - sa), 1.0, 0.5 * (a - b), -0.25 * hd * al * (sa + sb), hd * (sa * (u - q) - sb * (u + q))];
             cost += 0.5 * f * f;
-            // ∂f/∂p = −∂T/∂p; JᵀJ is sign-free, Jᵀf flips.
-            for a in 0..P {
-                g[a] -= grad[a] * f;
-                for b in a..P {
-                    jtj[(a, b)] += grad[a] * grad[b];
+            for r in 0..P {
+                g[r] -= grad[r] * f;
+                for c in r..P {
+                    jtj[(r, c)] += grad[r] * grad[c];
                 }
             }
         }
-        for a in 0..P {
-            for b in 0..a {
-                jtj[(a, b)] = jtj[(b, a)];
+        for r in 0..P {
+            for c in 0..r {
+                jtj[(r, c)] = jtj[(c, r)];
             }
         }
         (jtj, g, cost)
@@ -367,8 +396,12 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
             zn += 1.0;
         }
     }
-    let z0 = zsum / zn;
-    let problem = TemplateProblem { x: &lx, z: &lz, alpha: o.alpha };
+    // Fit in coordinates centred on the start (bottom x, surface z), so the relative step test
+    // measures the groove, not how far the frame sits from the sensor origin.
+    let (ox, oz) = (lx[ib], zsum / zn);
+    let lx: Vec<f64> = lx.iter().map(|v| v - ox).collect();
+    let lz: Vec<f64> = lz.iter().map(|v| v - oz).collect();
+    let problem = TemplateProblem::new(&lx, &lz, o.alpha);
     let lm = LmOptions {
         max_iterations: o.max_iterations,
         cost_tolerance: o.cost_tolerance,
@@ -376,7 +409,7 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
         gradient_tolerance: o.gradient_tolerance,
         tau: 1e-3,
     };
-    let start = [lx[ib], z0, z0 - lz[ib], l, o.alpha];
+    let start = [0.0, 0.0, -lz[ib], l, o.alpha];
     let (p, cost, iterations, stop, cov_d, cov_w) = if o.fit_alpha {
         let r = levenberg_marquardt::<5, _>(&problem, SVector::from(start), &lm);
         let inv = r.jtj.try_inverse();
@@ -406,9 +439,10 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
     }
     let sigma2 = 2.0 * cost / (m.saturating_sub(n_par).max(1)) as f64;
     // 7. Back to the frame's coordinates (inverse of eq 13).
+    let (x0, z0) = (p[0] + ox, p[1] + oz);
     GrooveFit {
-        x0: c * p[0] - s * p[1],
-        z0: s * p[0] + c * p[1],
+        x0: c * x0 - s * z0,
+        z0: s * x0 + c * z0,
         depth: p[2],
         width: p[3],
         alpha: p[4],

@@ -117,7 +117,10 @@ pub fn levenberg_marquardt<const P: usize, Prob: LeastSquares<P>>(
             return finish(x, cost, iteration - 1, LmStop::SmallStep, jtj);
         }
         let x_new = x + h;
-        let cost_new = problem.cost(&x_new);
+        // Evaluate the trial with its normal equations in one pass: most steps from a good
+        // start are accepted, and then they are needed anyway.
+        let trial = problem.normal_equations(&x_new);
+        let cost_new = trial.2;
         // Gain ratio (eq 18): actual over predicted reduction, L(0) − L(h) = ½ hᵀ(μh − g).
         let predicted = 0.5 * h.dot(&(mu * h - g));
         let rho = if cost_new.is_finite() && predicted > 0.0 {
@@ -127,10 +130,7 @@ pub fn levenberg_marquardt<const P: usize, Prob: LeastSquares<P>>(
         };
         if rho > 0.0 {
             x = x_new;
-            let ne = problem.normal_equations(&x);
-            jtj = ne.0;
-            g = ne.1;
-            cost = ne.2;
+            (jtj, g, cost) = trial;
             // Nielsen's update (eq 17).
             mu *= f64::max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0).powi(3));
             nu = 2.0;

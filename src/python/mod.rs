@@ -2,6 +2,7 @@
 //! module; `convert` holds the array conversion, shape checks, error mapping and the helper
 //! that releases the GIL.
 mod convert;
+mod groove;
 mod io;
 mod kinematics;
 
@@ -12,5 +13,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     kinematics::register(m)?;
     io::register(m)?;
+    groove::register(m)?;
     Ok(())
 }

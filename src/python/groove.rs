@@ -1,0 +1,72 @@
+//! Bindings of `crate::groove`: the batch groove fit.
+use super::convert::{f64_array, to_numpy, to_py_err, Dim};
+use crate::groove::{fit_frames, GrooveOptions};
+use numpy::PyUntypedArrayMethods;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict of
+/// per-frame arrays this returns in a result object.
+#[pyfunction]
+#[pyo3(signature = (x, z, alpha=20.0, nominal_width=0.5, window=None, window_center=None, fit_alpha=false,
+    spike_threshold=Some(0.1), min_depth=0.03, min_valid=12, max_iterations=100, cost_tolerance=0.0,
+    step_tolerance=1e-10, gradient_tolerance=1e-13))]
+#[allow(clippy::too_many_arguments)]
+fn fit_grooves<'py>(
+    py: Python<'py>,
+    x: &Bound<'py, PyAny>,
+    z: &Bound<'py, PyAny>,
+    alpha: f64,
+    nominal_width: f64,
+    window: Option<usize>,
+    window_center: Option<usize>,
+    fit_alpha: bool,
+    spike_threshold: Option<f64>,
+    min_depth: f64,
+    min_valid: usize,
+    max_iterations: usize,
+    cost_tolerance: f64,
+    step_tolerance: f64,
+    gradient_tolerance: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let xa = f64_array(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
+    let n = xa.shape()[0];
+    let za = f64_array(z, "z", &[Dim::Any("F"), Dim::Is(n)], "(one column per x, mm)")?;
+    let f = za.shape()[0];
+    let options = GrooveOptions {
+        alpha,
+        fit_alpha,
+        nominal_width,
+        window,
+        window_center,
+        spike_threshold,
+        min_depth,
+        min_valid,
+        max_iterations,
+        cost_tolerance,
+        step_tolerance,
+        gradient_tolerance,
+    };
+    let (xs, zs) = (xa.as_slice()?, za.as_slice()?);
+    let fits = py.detach(|| fit_frames(xs, zs, &options)).map_err(to_py_err)?;
+    let d = PyDict::new(py);
+    let column = |get: fn(&crate::groove::GrooveFit) -> f64| fits.iter().map(get).collect::<Vec<f64>>();
+    d.set_item("x0", to_numpy(py, column(|g| g.x0), &[f])?)?;
+    d.set_item("z0", to_numpy(py, column(|g| g.z0), &[f])?)?;
+    d.set_item("depth", to_numpy(py, column(|g| g.depth), &[f])?)?;
+    d.set_item("width", to_numpy(py, column(|g| g.width), &[f])?)?;
+    d.set_item("alpha", to_numpy(py, column(|g| g.alpha), &[f])?)?;
+    d.set_item("rms", to_numpy(py, column(|g| g.rms), &[f])?)?;
+    d.set_item("se_depth", to_numpy(py, column(|g| g.se_depth), &[f])?)?;
+    d.set_item("se_width", to_numpy(py, column(|g| g.se_width), &[f])?)?;
+    d.set_item("tilt", to_numpy(py, column(|g| g.tilt), &[f])?)?;
+    d.set_item("iterations", to_numpy(py, fits.iter().map(|g| g.iterations as i32).collect::<Vec<_>>(), &[f])?)?;
+    d.set_item("n_used", to_numpy(py, fits.iter().map(|g| g.n_used as i32).collect::<Vec<_>>(), &[f])?)?;
+    d.set_item("status", to_numpy(py, fits.iter().map(|g| g.status as u8).collect::<Vec<_>>(), &[f])?)?;
+    Ok(d)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(fit_grooves, m)?)?;
+    Ok(())
+}
