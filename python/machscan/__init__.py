@@ -16,7 +16,7 @@ from machscan._core import (
     profile_to_points,
     scan_to_wcs,
 )
-from machscan.grooves import GrooveFits, GrooveStatus, fit_grooves
+from machscan.grooves import GrooveFits, GrooveStatus, LevelledFrame, fit_grooves, level_groove_frame
 from machscan.kinematics import MountCalibration, calibrate_mount
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
@@ -25,6 +25,7 @@ __all__ = [
     "GrooveFits",
     "GrooveStatus",
     "KinematicChain",
+    "LevelledFrame",
     "MountCalibration",
     "Profiler",
     "Scan",
@@ -34,6 +35,7 @@ __all__ = [
     "calibrate_mount",
     "fit_grooves",
     "interpolate_poses",
+    "level_groove_frame",
     "profile_to_points",
     "read_scan_csv",
     "scan_to_wcs",

@@ -16,6 +16,7 @@ __all__ = [
     "calibrate_mount",
     "fit_grooves",
     "interpolate_poses",
+    "level_groove_frame",
     "profile_to_points",
     "scan_to_wcs",
     "write_points",
@@ -131,6 +132,21 @@ def fit_grooves(
 ) -> dict[str, Any]:
     """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict
     of per-frame arrays this returns in a result object."""
+
+def level_groove_frame(
+    x: ArrayLike,
+    z: ArrayLike,
+    alpha: float = 20.0,
+    nominal_width: float = 0.5,
+    window: int | None = None,
+    window_center: int | None = None,
+    spike_threshold: float | None = 0.1,
+    min_depth: float = 0.03,
+    min_valid: int = 12,
+) -> dict[str, Any]:
+    """One frame levelled as the fit sees it (SPEC G steps 1–4); ``machscan.level_groove_frame``
+    wraps it. Returns a dict with the levelled ``x``, ``z`` (absolute levelled coordinates),
+    ``tilt``, the initial guess ``start`` (x0, z0, d, w, α) and ``status`` (0 when ready)."""
 
 def write_points(
     path: str | PathLike[str],

@@ -167,3 +167,63 @@ def fit_grooves(
         min_valid, max_iterations, cost_tolerance, step_tolerance, gradient_tolerance,
     )
     return GrooveFits(**out)
+
+
+@dataclass(frozen=True, repr=False)
+class LevelledFrame:
+    """One frame as the groove fit sees it (SPEC G steps 1–4).
+
+    Attributes
+    ----------
+    x, z : ndarray (M,)
+        Valid readings of the window after the spike filter, levelled:
+        ``x' = cos θ·x + sin θ·z``, ``z' = −sin θ·x + cos θ·z``, mm.
+    tilt : float
+        θ, the surface slope angle, rad.
+    start : ndarray (5,)
+        Initial guess (x0, z0, d, w, α) in the levelled coordinates.
+    status : GrooveStatus
+        CONVERGED when the frame is ready for the fit; otherwise why it is not.
+    """
+
+    x: NDArray[np.float64]
+    z: NDArray[np.float64]
+    tilt: float
+    start: NDArray[np.float64]
+    status: GrooveStatus
+
+    def to_frame(self, x0: float, z0: float) -> tuple[float, float]:
+        """Map a levelled point back to the frame's own coordinates (inverse of eq 13)."""
+        c, s = np.cos(self.tilt), np.sin(self.tilt)
+        return c * x0 - s * z0, s * x0 + c * z0
+
+    def __repr__(self) -> str:
+        return f"LevelledFrame({len(self.x)} readings, tilt={self.tilt:.3g} rad, {self.status.name})"
+
+
+def level_groove_frame(
+    x: ArrayLike,
+    z: ArrayLike,
+    alpha: float = 20.0,
+    nominal_width: float = 0.5,
+    window: int | None = None,
+    *,
+    window_center: int | None = None,
+    spike_threshold: float | None = 0.1,
+    min_depth: float = 0.03,
+    min_valid: int = 12,
+) -> LevelledFrame:
+    """One frame levelled exactly as :func:`fit_grooves` does before its template fit.
+
+    For plots (the levelled profile under its template, paper 000 fig. 4) and for checking the
+    fit against another solver on the same data. Parameters as in :func:`fit_grooves`;
+    ``z`` is one frame, shape (N,).
+
+    Examples
+    --------
+    >>> lf = machscan.level_groove_frame(x, z[0], window=200)
+    >>> lf.x.shape, lf.start
+    """
+    out = _core.level_groove_frame(x, z, alpha, nominal_width, window, window_center, spike_threshold, min_depth, min_valid)
+    out["status"] = GrooveStatus(out["status"])
+    return LevelledFrame(**out)

@@ -295,8 +295,24 @@ fn median5(v: &mut [f64]) -> f64 {
     }
 }
 
-/// Fit one frame: `x` reading abscissae, `z` readings (NaN = invalid), same length.
-pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+/// A frame made ready for the template fit (SPEC G steps 1–4 and the initial guess).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LevelledFrame {
+    /// Levelled readings, relative to `origin`, mm.
+    pub x: Vec<f64>,
+    pub z: Vec<f64>,
+    /// Levelled coordinates of the local origin (the bottom x and the surface mean z).
+    pub origin: (f64, f64),
+    /// Surface slope angle θ = atan k2, rad: `x' = cos θ·x + sin θ·z`, `z' = −sin θ·x + cos θ·z`.
+    pub tilt: f64,
+    /// Initial guess `[x0, z0, d, w, α]` in the local levelled coordinates.
+    pub start: [f64; 5],
+}
+
+/// Steps 1–4 of SPEC G: window, valid readings, spikes, line fit, bottom, surface refit,
+/// levelling, initial guess. `Err` carries the status of a frame that cannot be fitted and the
+/// number of readings it had.
+pub fn level_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> std::result::Result<LevelledFrame, (GrooveStatus, usize)> {
     let n = x.len().min(z.len());
     // 1. Window of t readings around the centre, valid readings only.
     let (lo, hi) = match o.window {
@@ -316,7 +332,7 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
         }
     }
     if px.len() < o.min_valid.max(6) {
-        return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+        return Err((GrooveStatus::TooFewValid, px.len()));
     }
     // Spike filter: a reading far from the median of its neighbours is an outlier.
     if let Some(th) = o.spike_threshold {
@@ -341,12 +357,12 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
         px.truncate(j);
         pz.truncate(j);
         if px.len() < o.min_valid.max(6) {
-            return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+            return Err((GrooveStatus::TooFewValid, px.len()));
         }
     }
     // 2. Line through all points; the bottom is the point deepest below it (a groove is a dip).
     let Some((k1, b1)) = fit_line(px.iter().copied().zip(pz.iter().copied())) else {
-        return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+        return Err((GrooveStatus::TooFewValid, px.len()));
     };
     let (mut ib, mut below) = (0, f64::NEG_INFINITY);
     for i in 0..px.len() {
@@ -356,19 +372,22 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
             ib = i;
         }
     }
+    if below < o.min_depth {
+        return Err((GrooveStatus::NoGroove, px.len()));
+    }
     let xd = px[ib];
     // 3. Surface refit without the l readings' width on each side of the bottom.
     let l = o.nominal_width;
     let surface = || px.iter().copied().zip(pz.iter().copied()).filter(move |(x, _)| (x - xd).abs() > l);
     let (n_left, n_right) = surface().fold((0, 0), |(a, b), (x, _)| if x < xd { (a + 1, b) } else { (a, b + 1) });
     if n_left + n_right < 4 {
-        return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+        return Err((GrooveStatus::TooFewValid, px.len()));
     }
     if n_left < 2 || n_right < 2 {
-        return GrooveFit::failed(GrooveStatus::Clipped, px.len());
+        return Err((GrooveStatus::Clipped, px.len()));
     }
     let Some((k2, b2)) = fit_line(surface()) else {
-        return GrooveFit::failed(GrooveStatus::TooFewValid, px.len());
+        return Err((GrooveStatus::TooFewValid, px.len()));
     };
     // Surface noise (robust: 1.4826 · median |r|, so a second groove does not inflate it) and
     // the deepest second dip, both measured on the surface points.
@@ -378,10 +397,10 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
     let sigma = 1.4826 * *abs_r.select_nth_unstable_by(mid, f64::total_cmp).1;
     let depth0 = k2 * xd + b2 - pz[ib];
     if depth0 < o.min_depth.max(5.0 * sigma) {
-        return GrooveFit::failed(GrooveStatus::NoGroove, px.len());
+        return Err((GrooveStatus::NoGroove, px.len()));
     }
     if deepest_other > 0.5 * depth0 && deepest_other > o.min_depth.max(5.0 * sigma) {
-        return GrooveFit::failed(GrooveStatus::TwoGrooves, px.len());
+        return Err((GrooveStatus::TwoGrooves, px.len()));
     }
     // 4. Level: rotate by −θ so the surface runs along x' (eq 13).
     let theta = k2.atan();
@@ -401,7 +420,20 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
     let (ox, oz) = (lx[ib], zsum / zn);
     let lx: Vec<f64> = lx.iter().map(|v| v - ox).collect();
     let lz: Vec<f64> = lz.iter().map(|v| v - oz).collect();
-    let problem = TemplateProblem::new(&lx, &lz, o.alpha);
+    let start = [0.0, 0.0, -lz[ib], l, o.alpha];
+    Ok(LevelledFrame { x: lx, z: lz, origin: (ox, oz), tilt: theta, start })
+}
+
+/// Fit one frame: `x` reading abscissae, `z` readings (NaN = invalid), same length.
+pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+    let frame = match level_frame(x, z, o) {
+        Ok(f) => f,
+        Err((status, n)) => return GrooveFit::failed(status, n),
+    };
+    let (lx, lz, (ox, oz), start) = (&frame.x, &frame.z, frame.origin, frame.start);
+    let (s, c) = frame.tilt.sin_cos();
+    let theta = frame.tilt;
+    let problem = TemplateProblem::new(lx, lz, o.alpha);
     let lm = LmOptions {
         max_iterations: o.max_iterations,
         cost_tolerance: o.cost_tolerance,
@@ -409,7 +441,6 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
         gradient_tolerance: o.gradient_tolerance,
         tau: 1e-3,
     };
-    let start = [0.0, 0.0, -lz[ib], l, o.alpha];
     let (p, cost, iterations, stop, cov_d, cov_w) = if o.fit_alpha {
         let r = levenberg_marquardt::<5, _>(&problem, SVector::from(start), &lm);
         let inv = r.jtj.try_inverse();
@@ -463,6 +494,16 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<G
     let n = x.len();
     if n == 0 {
         return Err(Error::shape("x", "(N,) with N >= 1", "(0,)"));
+    }
+    if let Some(t) = options.window {
+        if t > n {
+            return Err(Error::invalid("window", format!("{t} readings, but the frames have only {n}")));
+        }
+    }
+    if let Some(c) = options.window_center {
+        if c >= n {
+            return Err(Error::invalid("window_center", format!("reading {c} does not exist: the frames have {n} readings")));
+        }
     }
     if z.len() % n != 0 {
         return Err(Error::shape("z", format!("(F, {n}): one column per x"), format!("{} values", z.len())));

@@ -3,5 +3,5 @@
 mod fit;
 mod template;
 
-pub use fit::{fit_frame, fit_frames, GrooveFit, GrooveOptions, GrooveStatus};
+pub use fit::{fit_frame, fit_frames, level_frame, GrooveFit, GrooveOptions, GrooveStatus, LevelledFrame};
 pub use template::TanhTemplate;

@@ -1,6 +1,6 @@
 //! Bindings of `crate::groove`: the batch groove fit.
 use super::convert::{f64_array, to_numpy, to_py_err, Dim};
-use crate::groove::{fit_frames, GrooveOptions};
+use crate::groove::{fit_frames, level_frame, GrooveOptions};
 use numpy::PyUntypedArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -66,7 +66,54 @@ fn fit_grooves<'py>(
     Ok(d)
 }
 
+/// One frame levelled as the fit sees it (SPEC G steps 1–4); ``machscan.level_groove_frame``
+/// wraps it. Returns a dict with the levelled ``x``, ``z`` (absolute levelled coordinates),
+/// ``tilt``, the initial guess ``start`` (x0, z0, d, w, α) and ``status`` (0 when ready).
+#[pyfunction]
+#[pyo3(signature = (x, z, alpha=20.0, nominal_width=0.5, window=None, window_center=None, spike_threshold=Some(0.1), min_depth=0.03, min_valid=12))]
+#[allow(clippy::too_many_arguments)]
+fn level_groove_frame<'py>(
+    py: Python<'py>,
+    x: &Bound<'py, PyAny>,
+    z: &Bound<'py, PyAny>,
+    alpha: f64,
+    nominal_width: f64,
+    window: Option<usize>,
+    window_center: Option<usize>,
+    spike_threshold: Option<f64>,
+    min_depth: f64,
+    min_valid: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let xa = f64_array(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
+    let n = xa.shape()[0];
+    let za = f64_array(z, "z", &[Dim::Is(n)], "(one frame, one value per x, mm)")?;
+    let options = GrooveOptions { alpha, nominal_width, window, window_center, spike_threshold, min_depth, min_valid, ..GrooveOptions::default() };
+    options.validate().map_err(to_py_err)?;
+    let d = PyDict::new(py);
+    match level_frame(xa.as_slice()?, za.as_slice()?, &options) {
+        Ok(f) => {
+            let (ox, oz) = f.origin;
+            let m = f.x.len();
+            d.set_item("x", to_numpy(py, f.x.iter().map(|v| v + ox).collect::<Vec<_>>(), &[m])?)?;
+            d.set_item("z", to_numpy(py, f.z.iter().map(|v| v + oz).collect::<Vec<_>>(), &[m])?)?;
+            d.set_item("tilt", f.tilt)?;
+            let st = f.start;
+            d.set_item("start", to_numpy(py, vec![st[0] + ox, st[1] + oz, st[2], st[3], st[4]], &[5])?)?;
+            d.set_item("status", 0u8)?;
+        }
+        Err((status, _)) => {
+            d.set_item("x", to_numpy(py, Vec::<f64>::new(), &[0])?)?;
+            d.set_item("z", to_numpy(py, Vec::<f64>::new(), &[0])?)?;
+            d.set_item("tilt", f64::NAN)?;
+            d.set_item("start", to_numpy(py, vec![f64::NAN; 5], &[5])?)?;
+            d.set_item("status", status as u8)?;
+        }
+    }
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit_grooves, m)?)?;
+    m.add_function(wrap_pyfunction!(level_groove_frame, m)?)?;
     Ok(())
 }
