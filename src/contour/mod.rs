@@ -1,0 +1,9 @@
+//! Contours (SPEC C, paper 000 §2.2): polyline discretisation, matching actual to theoretical
+//! contours, and the contour error with the bidirectional nearest-point correction.
+mod error;
+mod matching;
+mod polyline;
+
+pub use error::{contour_error, ContourError, MatchCase};
+pub use matching::{assign_one_to_one, centroid, nearest_centroid};
+pub use polyline::resample_polyline;
