@@ -12,16 +12,21 @@ from machscan._core import (
     ab_mirror_support_points,
     ac_head_transforms,
     ac_table_rotate,
+    euclidean_clusters,
     interpolate_poses,
+    match_contours,
     profile_to_points,
+    resample_polyline,
     scan_to_wcs,
 )
+from machscan.contours import ContourError, contour_error
 from machscan.grooves import GrooveFits, GrooveStatus, LevelledFrame, fit_grooves, level_groove_frame
 from machscan.kinematics import MountCalibration, calibrate_mount
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
     "__version__",
+    "ContourError",
     "GrooveFits",
     "GrooveStatus",
     "KinematicChain",
@@ -33,11 +38,15 @@ __all__ = [
     "ac_head_transforms",
     "ac_table_rotate",
     "calibrate_mount",
+    "contour_error",
+    "euclidean_clusters",
     "fit_grooves",
     "interpolate_poses",
     "level_groove_frame",
+    "match_contours",
     "profile_to_points",
     "read_scan_csv",
+    "resample_polyline",
     "scan_to_wcs",
     "synth",
     "write_scan_csv",

@@ -14,10 +14,14 @@ __all__ = [
     "ac_head_transforms",
     "ac_table_rotate",
     "calibrate_mount",
+    "contour_error",
+    "euclidean_clusters",
     "fit_grooves",
     "interpolate_poses",
     "level_groove_frame",
+    "match_contours",
     "profile_to_points",
+    "resample_polyline",
     "scan_to_wcs",
     "write_points",
 ]
@@ -147,6 +151,28 @@ def level_groove_frame(
     """One frame levelled as the fit sees it (SPEC G steps 1–4); ``machscan.level_groove_frame``
     wraps it. Returns a dict with the levelled ``x``, ``z`` (absolute levelled coordinates),
     ``tilt``, the initial guess ``start`` (x0, z0, d, w, α) and ``status`` (0 when ready)."""
+
+def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -> NDArray[np.int64]:
+    """Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than ``radius`` share a cluster.
+
+    Clusters are the connected components of the neighbour graph: every neighbour within
+    ``radius`` (the same partition as Open3D's ``cluster_dbscan(eps=radius, min_points=1)``), or
+    with ``k`` the paper's form, the k nearest within ``radius`` (made symmetric so the result
+    does not depend on the seed order). Returns labels ``(N,)`` 0..n_clusters−1 numbered in the
+    order of their first point. Memory O(N); queries in parallel.
+    """
+
+def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0, delta2: float = 1.0) -> dict[str, Any]:
+    """Contour error of one contour (SPEC C3–C5); ``machscan.contour_error`` wraps the dict."""
+
+def resample_polyline(vertices: ArrayLike, spacing: float, closed: bool = True) -> NDArray[np.float64]:
+    """Points along a polyline ``(n, 3)`` every ``spacing`` mm (corners kept), ``(M, 3)``."""
+
+def match_contours(
+    actual_centroids: ArrayLike, theoretical_centroids: ArrayLike, max_distance: float = ...
+) -> NDArray[np.int64]:
+    """One-to-one matching of actual to theoretical contour centroids (minimal summed distance);
+    indices into the theoretical centroids, −1 where none lies within ``max_distance`` mm."""
 
 def write_points(
     path: str | PathLike[str],

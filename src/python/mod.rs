@@ -1,10 +1,12 @@
 //! The Python face of the core: the only module that uses pyo3 and numpy. One file per core
 //! module; `convert` holds the array conversion, shape checks, error mapping and the helper
 //! that releases the GIL.
+mod contour;
 mod convert;
 mod groove;
 mod io;
 mod kinematics;
+mod spatial;
 
 use pyo3::prelude::*;
 
@@ -14,5 +16,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     kinematics::register(m)?;
     io::register(m)?;
     groove::register(m)?;
+    spatial::register(m)?;
+    contour::register(m)?;
     Ok(())
 }

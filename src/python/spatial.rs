@@ -1,0 +1,47 @@
+//! Bindings of `crate::spatial`.
+use super::convert::{f64_array, to_numpy, to_py_err, Dim};
+use numpy::PyUntypedArrayMethods;
+use pyo3::prelude::*;
+
+pub(crate) fn as_points(s: &[f64]) -> Vec<[f64; 3]> {
+    s.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect()
+}
+
+/// Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than ``radius`` share a cluster.
+///
+/// Clusters are the connected components of the neighbour graph: every neighbour within
+/// ``radius`` (the same partition as Open3D's ``cluster_dbscan(eps=radius, min_points=1)``), or
+/// with ``k`` the paper's form, the k nearest within ``radius`` (made symmetric so the result
+/// does not depend on the seed order). Memory is O(N); queries run in parallel.
+///
+/// Parameters
+/// ----------
+/// points : array_like, shape (N, 3)
+///     Points, mm.
+/// radius : float
+///     Neighbour distance threshold, mm (paper: 5 mm).
+/// k : int, optional
+///     Number of nearest neighbours considered (paper: 5); default all within ``radius``.
+///
+/// Returns
+/// -------
+/// ndarray of int64, shape (N,)
+///     Cluster of every point, 0..n_clusters−1, numbered in the order of their first point.
+///
+/// Examples
+/// --------
+/// >>> labels = machscan.euclidean_clusters(centres, radius=5.0, k=5)
+#[pyfunction]
+#[pyo3(signature = (points, radius, k=None))]
+fn euclidean_clusters<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: f64, k: Option<usize>) -> PyResult<Bound<'py, PyAny>> {
+    let arr = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
+    let n = arr.shape()[0];
+    let pts = as_points(arr.as_slice()?);
+    let labels = py.detach(|| crate::spatial::euclidean_clusters(&pts, radius, k)).map_err(to_py_err)?;
+    to_numpy(py, labels.into_iter().map(|l| l as i64).collect::<Vec<_>>(), &[n])
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(euclidean_clusters, m)?)?;
+    Ok(())
+}
