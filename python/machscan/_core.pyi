@@ -131,7 +131,7 @@ def fit_grooves(
     min_valid: int = 12,
     max_iterations: int = 100,
     cost_tolerance: float = 0.0,
-    step_tolerance: float = 1e-10,
+    step_tolerance: float = 1e-8,
     gradient_tolerance: float = 1e-13,
 ) -> dict[str, Any]:
     """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict

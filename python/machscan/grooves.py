@@ -116,7 +116,7 @@ def fit_grooves(
     min_valid: int = 12,
     max_iterations: int = 100,
     cost_tolerance: float = 0.0,
-    step_tolerance: float = 1e-10,
+    step_tolerance: float = 1e-8,
     gradient_tolerance: float = 1e-13,
 ) -> GrooveFits:
     """Fit the groove template of paper 000 to every profiler frame (SPEC G).

@@ -85,7 +85,7 @@ impl Default for GrooveOptions {
             min_valid: 12,
             max_iterations: 100,
             cost_tolerance: 0.0,
-            step_tolerance: 1e-10,
+            step_tolerance: 1e-8,
             gradient_tolerance: 1e-13,
         }
     }
@@ -165,6 +165,7 @@ impl GrooveFit {
 }
 
 /// Least-squares line `z = k x + b` (None when x is constant).
+#[inline(always)]
 fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64)> {
     let (mut n, mut sx, mut sz) = (0.0, 0.0, 0.0);
     for (xi, zi) in x.clone() {
@@ -189,71 +190,133 @@ fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64)> {
 }
 
 /// Levelled points and the template problem on them; `P` = 4 (α fixed) or 5 (α fitted).
-/// The two tanh terms of every reading are computed in one tight loop first (it vectorises),
-/// then the sums are accumulated; the scratch buffers live with the problem.
+///
+/// Evaluation is split into element-wise passes over the frame (tanh terms, residuals, template
+/// gradient columns) that the compiler vectorises, and dot products with four explicit partial
+/// sums for JᵀJ and Jᵀf. The summation order is fixed, so results do not depend on threads.
 struct TemplateProblem<'a> {
     x: &'a [f64],
     z: &'a [f64],
     alpha: f64,
-    scratch: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
+    scratch: std::cell::RefCell<Scratch>,
+}
+
+/// Per-frame work arrays: the two tanh terms, the residuals, the template gradient columns.
+struct Scratch {
+    a: Vec<f64>,
+    b: Vec<f64>,
+    f: Vec<f64>,
+    grad: [Vec<f64>; 5],
+}
+
+/// Σ a·b with four partial sums (vectorises; fixed order).
+#[inline(always)]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    for (x, y) in ra.iter().zip(rb) {
+        s += x * y;
+    }
+    s
+}
+
+/// Σ a with four partial sums.
+#[inline(always)]
+fn sum(a: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let ca = a.chunks_exact(4);
+    let ra = ca.remainder();
+    for x in ca {
+        for l in 0..4 {
+            acc[l] += x[l];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + ra.iter().sum::<f64>()
 }
 
 impl<'a> TemplateProblem<'a> {
     fn new(x: &'a [f64], z: &'a [f64], alpha: f64) -> Self {
         let n = x.len();
-        TemplateProblem { x, z, alpha, scratch: std::cell::RefCell::new((vec![0.0; n], vec![0.0; n])) }
+        let v = || vec![0.0; n];
+        let scratch = Scratch { a: v(), b: v(), f: v(), grad: [v(), v(), v(), v(), v()] };
+        TemplateProblem { x, z, alpha, scratch: std::cell::RefCell::new(scratch) }
     }
 
+    #[inline(always)]
     fn template(&self, p: &[f64]) -> TanhTemplate {
         TanhTemplate { x0: p[0], z0: p[1], depth: p[2], width: p[3], alpha: if p.len() > 4 { p[4] } else { self.alpha } }
     }
 
-    /// Fills the scratch with `tanh(α(x − x0 ∓ w/4))`.
-    fn tanh_terms(&self, t: &TanhTemplate, a: &mut [f64], b: &mut [f64]) {
-        let q = 0.25 * t.width;
-        for (xa, (ta, tb)) in self.x.iter().zip(a.iter_mut().zip(b.iter_mut())) {
-            let u = xa - t.x0;
-            *ta = fast_tanh(t.alpha * (u - q));
-            *tb = fast_tanh(t.alpha * (u + q));
+    /// Fills `a`, `b` with `tanh(α(x − x0 ∓ w/4))` and `f` with the residuals; returns ½Σf².
+    #[inline(always)]
+    fn residuals(&self, t: &TanhTemplate, s: &mut Scratch) -> f64 {
+        let (q, hd, al, x0, z0) = (0.25 * t.width, 0.5 * t.depth, t.alpha, t.x0, t.z0);
+        for (x, a) in self.x.iter().zip(s.a.iter_mut()) {
+            *a = fast_tanh(al * (x - x0 - q));
         }
+        for (x, b) in self.x.iter().zip(s.b.iter_mut()) {
+            *b = fast_tanh(al * (x - x0 + q));
+        }
+        for ((f, z), (a, b)) in s.f.iter_mut().zip(self.z).zip(s.a.iter().zip(&s.b)) {
+            *f = z - z0 - hd * (a - b);
+        }
+        0.5 * dot(&s.f, &s.f)
     }
 
+    #[inline(always)]
     fn cost_of(&self, p: &[f64]) -> f64 {
         let t = self.template(p);
-        let mut s = self.scratch.borrow_mut();
-        let (a, b) = &mut *s;
-        self.tanh_terms(&t, a, b);
-        let hd = 0.5 * t.depth;
-        0.5 * self.z.iter().zip(a.iter().zip(b.iter())).map(|(&z, (&ta, &tb))| (z - t.z0 - hd * (ta - tb)).powi(2)).sum::<f64>()
+        self.residuals(&t, &mut self.scratch.borrow_mut())
     }
 
+    #[inline(always)]
     fn normal_equations_of<const P: usize>(&self, p: &[f64]) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64) {
         let t = self.template(p);
-        let mut s = self.scratch.borrow_mut();
-        let (ta, tb) = &mut *s;
-        self.tanh_terms(&t, ta, tb);
+        let mut guard = self.scratch.borrow_mut();
+        let s = &mut *guard;
+        let cost = self.residuals(&t, s);
         let (hd, q, al) = (0.5 * t.depth, 0.25 * t.width, t.alpha);
-        let mut jtj = SMatrix::<f64, P, P>::zeros();
-        let mut g = SVector::<f64, P>::zeros();
-        let mut cost = 0.0;
-        for i in 0..self.x.len() {
-            let (a, b) = (ta[i], tb[i]);
+        // ∂T/∂p of eq (15), and ∂T/∂α; the z0 column is all ones and is not stored.
+        let [g0, _, g2, g3, g4] = &mut s.grad;
+        let ab = s.a.iter().zip(&s.b);
+        for (((a, b), g0), (g2, g3)) in ab.clone().zip(g0.iter_mut()).zip(g2.iter_mut().zip(g3.iter_mut())) {
             let (sa, sb) = (1.0 - a * a, 1.0 - b * b);
-            let u = self.x[i] - t.x0;
-            let f = self.z[i] - t.z0 - hd * (a - b);
-            // ∂T/∂p of eq (15) and ∂T/∂α; ∂f/∂p = −∂T/∂p (JᵀJ is sign-free, Jᵀf flips).
-            let grad = [hd * al * (sb - sa), 1.0, 0.5 * (a - b), -0.25 * hd * al * (sa + sb), hd * (sa * (u - q) - sb * (u + q))];
-            cost += 0.5 * f * f;
-            for r in 0..P {
-                g[r] -= grad[r] * f;
-                for c in r..P {
-                    jtj[(r, c)] += grad[r] * grad[c];
-                }
+            *g0 = hd * al * (sb - sa);
+            *g2 = 0.5 * (a - b);
+            *g3 = -0.25 * hd * al * (sa + sb);
+        }
+        if P > 4 {
+            for ((a, b), (x, g4)) in ab.zip(self.x.iter().zip(g4.iter_mut())) {
+                let (sa, sb) = (1.0 - a * a, 1.0 - b * b);
+                let u = x - t.x0;
+                *g4 = hd * (sa * (u - q) - sb * (u + q));
             }
         }
+        let n = self.x.len() as f64;
+        let col = |k: usize| -> Option<&[f64]> { if k == 1 { None } else { Some(&s.grad[k][..]) } };
+        let mut jtj = SMatrix::<f64, P, P>::zeros();
+        let mut g = SVector::<f64, P>::zeros();
         for r in 0..P {
-            for c in 0..r {
-                jtj[(r, c)] = jtj[(c, r)];
+            // ∂f/∂p = −∂T/∂p: JᵀJ is sign-free, Jᵀf flips.
+            g[r] = -match col(r) {
+                Some(c) => dot(c, &s.f),
+                None => sum(&s.f),
+            };
+            for c in r..P {
+                let v = match (col(r), col(c)) {
+                    (Some(x), Some(y)) => dot(x, y),
+                    (Some(x), None) | (None, Some(x)) => sum(x),
+                    (None, None) => n,
+                };
+                jtj[(r, c)] = v;
+                jtj[(c, r)] = v;
             }
         }
         (jtj, g, cost)
@@ -261,12 +324,15 @@ impl<'a> TemplateProblem<'a> {
 }
 
 impl LeastSquares<4> for TemplateProblem<'_> {
+    #[inline(always)]
     fn len(&self) -> usize {
         self.x.len()
     }
+    #[inline(always)]
     fn cost(&self, p: &SVector<f64, 4>) -> f64 {
         self.cost_of(p.as_slice())
     }
+    #[inline(always)]
     fn normal_equations(&self, p: &SVector<f64, 4>) -> (SMatrix<f64, 4, 4>, SVector<f64, 4>, f64) {
         self.normal_equations_of::<4>(p.as_slice())
     }
@@ -276,23 +342,27 @@ impl LeastSquares<5> for TemplateProblem<'_> {
     fn len(&self) -> usize {
         self.x.len()
     }
+    #[inline(always)]
     fn cost(&self, p: &SVector<f64, 5>) -> f64 {
         self.cost_of(p.as_slice())
     }
+    #[inline(always)]
     fn normal_equations(&self, p: &SVector<f64, 5>) -> (SMatrix<f64, 5, 5>, SVector<f64, 5>, f64) {
         self.normal_equations_of::<5>(p.as_slice())
     }
 }
 
-/// Median of up to 5 values.
-fn median5(v: &mut [f64]) -> f64 {
-    v.sort_unstable_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
+/// Median of three, branch-free.
+#[inline(always)]
+fn median3(x: f64, y: f64, z: f64) -> f64 {
+    x.min(y).max(x.max(y).min(z))
+}
+
+/// Median of five with min/max only (no sort): of the two pairs (a, b) and (c, d) the overall
+/// smallest and largest cannot be the median, which leaves a median of three.
+#[inline(always)]
+fn median5(a: f64, b: f64, c: f64, d: f64, e: f64) -> f64 {
+    median3(e, a.min(b).max(c.min(d)), a.max(b).min(c.max(d)))
 }
 
 /// A frame made ready for the template fit (SPEC G steps 1–4 and the initial guess).
@@ -312,6 +382,7 @@ pub struct LevelledFrame {
 /// Steps 1–4 of SPEC G: window, valid readings, spikes, line fit, bottom, surface refit,
 /// levelling, initial guess. `Err` carries the status of a frame that cannot be fitted and the
 /// number of readings it had.
+#[inline(always)]
 pub fn level_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> std::result::Result<LevelledFrame, (GrooveStatus, usize)> {
     let n = x.len().min(z.len());
     // 1. Window of t readings around the centre, valid readings only.
@@ -336,14 +407,13 @@ pub fn level_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> std::result::Resu
     }
     // Spike filter: a reading far from the median of its neighbours is an outlier.
     if let Some(th) = o.spike_threshold {
-        let keep: Vec<bool> = (0..px.len())
+        // Median of the five readings around i (the window slides inward at the ends).
+        let n_p = px.len();
+        let keep: Vec<bool> = (0..n_p)
             .map(|i| {
-                let a = i.saturating_sub(2);
-                let b = (i + 3).min(px.len());
-                let mut w = [0.0; 5];
-                let m = b - a;
-                w[..m].copy_from_slice(&pz[a..b]);
-                (pz[i] - median5(&mut w[..m])).abs() <= th
+                let a = i.saturating_sub(2).min(n_p - 5);
+                let w = &pz[a..a + 5];
+                (pz[i] - median5(w[0], w[1], w[2], w[3], w[4])).abs() <= th
             })
             .collect();
         let mut j = 0;
@@ -425,7 +495,29 @@ pub fn level_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> std::result::Resu
 }
 
 /// Fit one frame: `x` reading abscissae, `z` readings (NaN = invalid), same length.
+///
+/// On x86-64 CPUs with AVX2 and FMA the same code runs compiled for them (chosen at run time,
+/// the same choice for every frame on a machine, so results never depend on the thread count):
+/// the tanh and dot-product passes then run four readings at a time.
 pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU has the features the function is compiled for (checked above).
+            return unsafe { fit_frame_avx2_fma(x, z, o) };
+        }
+    }
+    fit_frame_portable(x, z, o)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn fit_frame_avx2_fma(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+    fit_frame_portable(x, z, o)
+}
+
+#[inline(always)]
+fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
     let frame = match level_frame(x, z, o) {
         Ok(f) => f,
         Err((status, n)) => return GrooveFit::failed(status, n),
@@ -517,6 +609,20 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<G
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn median5_network_equals_sorting() {
+        let mut seed = 11u64;
+        for _ in 0..20000 {
+            let mut v = [0.0; 5];
+            for x in v.iter_mut() {
+                *x = (lcg(&mut seed) * 7.0).floor();
+            }
+            let m = median5(v[0], v[1], v[2], v[3], v[4]);
+            v.sort_by(f64::total_cmp);
+            assert_eq!(m, v[2], "{v:?}");
+        }
+    }
 
     fn lcg(seed: &mut u64) -> f64 {
         *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);

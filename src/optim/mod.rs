@@ -70,6 +70,7 @@ pub struct LmResult<const P: usize> {
     pub jtj: SMatrix<f64, P, P>,
 }
 
+#[inline(always)] // so that callers compiled for wider vector units get their own copy
 pub fn levenberg_marquardt<const P: usize, Prob: LeastSquares<P>>(
     problem: &Prob,
     x0: SVector<f64, P>,

@@ -10,7 +10,7 @@ use pyo3::types::PyDict;
 #[pyfunction]
 #[pyo3(signature = (x, z, alpha=20.0, nominal_width=0.5, window=None, window_center=None, fit_alpha=false,
     spike_threshold=Some(0.1), min_depth=0.03, min_valid=12, max_iterations=100, cost_tolerance=0.0,
-    step_tolerance=1e-10, gradient_tolerance=1e-13))]
+    step_tolerance=1e-8, gradient_tolerance=1e-13))]
 #[allow(clippy::too_many_arguments)]
 fn fit_grooves<'py>(
     py: Python<'py>,
