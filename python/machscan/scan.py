@@ -328,7 +328,7 @@ class Scan:
                 i = int(bad[0]) + 1
                 raise ValueError(
                     f"frame_times: expected non-decreasing timestamps, but frame {i} "
-                    f"({times[i]!r} s) is earlier than frame {i - 1} ({times[i - 1]!r} s)"
+                    f"({float(times[i])!r} s) is earlier than frame {i - 1} ({float(times[i - 1])!r} s)"
                 )
         c2 = _as_f64(self.c2_offset, "c2_offset")
         if c2.shape != (3,):
@@ -355,7 +355,7 @@ class Scan:
                     i = int(bad[0]) + 1
                     raise ValueError(
                         f"axis_times: expected strictly increasing timestamps, but sample {i} "
-                        f"({at[i]!r} s) does not follow sample {i - 1} ({at[i - 1]!r} s)"
+                        f"({float(at[i])!r} s) does not follow sample {i - 1} ({float(at[i - 1])!r} s)"
                     )
             asm = _as_f64(self.axis_samples, "axis_samples")
             if asm.shape != (at.size, 6):
@@ -539,11 +539,11 @@ class Scan:
             "mount": self.mount,
             "header": np.array(json.dumps(header)),
         }
-        if self.axis_times is not None:
+        if self.axis_times is not None and self.axis_samples is not None:
             arrays["axis_times"] = self.axis_times
             arrays["axis_samples"] = self.axis_samples
         with open(os.fspath(path), "wb") as fh:
-            np.savez(fh, **arrays)
+            np.savez(fh, **arrays)  # type: ignore[arg-type]
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "Scan":
@@ -667,8 +667,8 @@ def read_scan_csv(
         if off.size:
             i = int(off[0])
             raise ValueError(
-                f"poses_csv: {fp!r}, line {plines[i]}: time {ptimes[i]!r} s differs from the "
-                f"frame time {ftimes[i]!r} s at frames_csv {ff!r}, line {flines[i]}"
+                f"poses_csv: {fp!r}, line {plines[i]}: time {float(ptimes[i])!r} s differs from the "
+                f"frame time {float(ftimes[i])!r} s at frames_csv {ff!r}, line {flines[i]}"
             )
     if ftimes is not None:
         times = ftimes
@@ -696,8 +696,8 @@ def read_scan_csv(
             i = int(back[0]) + 1
             raise ValueError(
                 f"{src}: {os.fspath(frames_csv if src == 'frames_csv' else poses_csv)!r}, "
-                f"line {lines[i]}: timestamp {times[i]!r} s is earlier than the previous row's "
-                f"{times[i - 1]!r} s"
+                f"line {lines[i]}: timestamp {float(times[i])!r} s is earlier than the previous row's "
+                f"{float(times[i - 1])!r} s"
             )
     meta = dict(metadata or {})
     meta.setdefault("source", {"frames_csv": ff, "poses_csv": fp})
@@ -776,7 +776,7 @@ def _check_finite_rows(a: np.ndarray, name: str, what: str) -> None:
         bad = np.flatnonzero(~np.isfinite(a))
         if bad.size:
             i = int(bad[0])
-            raise ValueError(f"{name}: entry {i} is not finite ({a[i]!r}); expected {what}")
+            raise ValueError(f"{name}: entry {i} is not finite ({float(a[i])!r}); expected {what}")
         return
     bad = np.flatnonzero(~np.isfinite(a).all(axis=1))
     if bad.size:
