@@ -47,9 +47,10 @@ def _demo(args: argparse.Namespace) -> int:
         print(line)
     err = synth.surface_error(points, frame_index, truth)
     print(
-        "round trip: workpiece points vs the true surface, away from the grooves: "
-        f"rms {err.rms * 1e3:.1f} µm, max |e| {err.max_abs * 1e3:.1f} µm over {err.n:,} points "
-        f"(profiler noise {scan.profiler.noise * 1e3:.1f} µm)"
+        f"round trip: workpiece points vs the true bent surface, away from the grooves ({err.n:,} points): "
+        f"mean {err.mean * 1e3:+.2f} µm, robust sigma {err.robust_sigma * 1e3:.1f} µm "
+        f"(profiler noise {scan.profiler.noise * 1e3:.1f} µm), {err.n_outliers} spikes beyond "
+        f"{err.outlier_threshold * 1e3:.0f} µm"
     )
     print(f"written   : {args.out}")
     return 0
