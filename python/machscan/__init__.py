@@ -15,19 +15,24 @@ from machscan._core import (
     euclidean_clusters,
     interpolate_poses,
     match_contours,
+    nearest_neighbors,
     profile_to_points,
     resample_polyline,
     scan_to_wcs,
 )
 from machscan.contours import ContourError, contour_error
 from machscan.grooves import GrooveFits, GrooveStatus, LevelledFrame, fit_grooves, level_groove_frame
+from machscan.inspection import ContourResult, Decomposition, GrooveReport, inspect_grooves
 from machscan.kinematics import MountCalibration, calibrate_mount
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
     "__version__",
     "ContourError",
+    "ContourResult",
+    "Decomposition",
     "GrooveFits",
+    "GrooveReport",
     "GrooveStatus",
     "KinematicChain",
     "LevelledFrame",
@@ -41,9 +46,11 @@ __all__ = [
     "contour_error",
     "euclidean_clusters",
     "fit_grooves",
+    "inspect_grooves",
     "interpolate_poses",
     "level_groove_frame",
     "match_contours",
+    "nearest_neighbors",
     "profile_to_points",
     "read_scan_csv",
     "resample_polyline",

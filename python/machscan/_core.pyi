@@ -20,6 +20,7 @@ __all__ = [
     "interpolate_poses",
     "level_groove_frame",
     "match_contours",
+    "nearest_neighbors",
     "profile_to_points",
     "resample_polyline",
     "scan_to_wcs",
@@ -126,7 +127,7 @@ def fit_grooves(
     window: int | None = None,
     window_center: int | None = None,
     fit_alpha: bool = False,
-    spike_threshold: float | None = 0.1,
+    spike_threshold: float | None = ...,
     min_depth: float = 0.03,
     min_valid: int = 12,
     max_iterations: int = 100,
@@ -144,7 +145,7 @@ def level_groove_frame(
     nominal_width: float = 0.5,
     window: int | None = None,
     window_center: int | None = None,
-    spike_threshold: float | None = 0.1,
+    spike_threshold: float | None = ...,
     min_depth: float = 0.03,
     min_valid: int = 12,
 ) -> dict[str, Any]:
@@ -161,6 +162,9 @@ def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -
     does not depend on the seed order). Returns labels ``(N,)`` 0..n_clusters−1 numbered in the
     order of their first point. Memory O(N); queries in parallel.
     """
+
+def nearest_neighbors(points: ArrayLike, queries: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """Nearest point of ``points (N, 3)`` for every query ``(M, 3)``: ``(index (M,), distance (M,))``, mm."""
 
 def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0, delta2: float = 1.0) -> dict[str, Any]:
     """Contour error of one contour (SPEC C3–C5); ``machscan.contour_error`` wraps the dict."""

@@ -41,7 +41,46 @@ fn euclidean_clusters<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: 
     to_numpy(py, labels.into_iter().map(|l| l as i64).collect::<Vec<_>>(), &[n])
 }
 
+/// Nearest point of ``points`` for every query (kd-tree, parallel over queries).
+///
+/// Parameters
+/// ----------
+/// points : array_like, shape (N, 3)
+///     The cloud searched, mm.
+/// queries : array_like, shape (M, 3)
+///     Query points, mm.
+///
+/// Returns
+/// -------
+/// index : ndarray of int64, shape (M,)
+/// distance : ndarray, shape (M,)
+///     Euclidean distance, mm.
+///
+/// Examples
+/// --------
+/// >>> idx, dist = machscan.nearest_neighbors(model, measured)
+#[pyfunction]
+fn nearest_neighbors<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, queries: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    use rayon::prelude::*;
+    let p = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
+    let q = f64_array(queries, "queries", &[Dim::Any("M"), Dim::Is(3)], "")?;
+    if p.shape()[0] == 0 {
+        return Err(pyo3::exceptions::PyValueError::new_err("points: expected at least one point to search, got (0, 3)"));
+    }
+    let m = q.shape()[0];
+    let (pp, qq) = (as_points(p.as_slice()?), as_points(q.as_slice()?));
+    crate::error::check_finite("queries", q.as_slice()?, 3).map_err(to_py_err)?;
+    let (idx, dist): (Vec<i64>, Vec<f64>) = py
+        .detach(|| -> crate::Result<_> {
+            let index = crate::spatial::PointIndex::new(&pp)?;
+            Ok(qq.par_iter().map(|x| { let (i, d) = index.nearest(x); (i as i64, d) }).unzip())
+        })
+        .map_err(to_py_err)?;
+    Ok((to_numpy(py, idx, &[m])?, to_numpy(py, dist, &[m])?))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(euclidean_clusters, m)?)?;
+    m.add_function(wrap_pyfunction!(nearest_neighbors, m)?)?;
     Ok(())
 }

@@ -1,0 +1,120 @@
+"""Groove inspection end to end on synthetic scans with exact truth (issue #3 §4)."""
+
+import numpy as np
+import pytest
+
+import machscan
+from machscan import synth
+from machscan.inspection import inspect_grooves
+
+
+@pytest.fixture(scope="module")
+def run():
+    scan, truth = synth.groove_scan(seed=0)
+    return scan, truth, inspect_grooves(scan, truth.nominal_polylines)
+
+
+def test_width_and_depth_per_frame_against_truth(run):
+    scan, truth, r = run
+    ok = r.fits.ok
+    assert ok.mean() > 0.99
+    w_err = np.abs(r.fits.width[ok] - truth.width[ok])
+    d_rel = np.abs(r.fits.depth[ok] - truth.depth[ok]) / truth.depth[ok]
+    assert np.median(w_err) <= 0.010
+    assert np.median(d_rel) <= 0.015
+
+
+def test_groove_centres_in_the_wcs(run):
+    scan, truth, r = run
+    ok = r.fits.ok
+    err = np.linalg.norm(r.centre_wcs[ok] - truth.centre_wcs[ok], axis=1)
+    assert np.sqrt(np.mean(err**2)) <= 0.010
+    assert np.isnan(r.centre_wcs[~ok]).all()
+
+
+def test_every_contour_found_and_matched(run):
+    scan, truth, r = run
+    assert [c.cad_index for c in r.contours] == list(range(11))
+    assert r.unmatched_cad == () and r.unmatched_clusters == ()
+    for c in r.contours:
+        assert (truth.frame_contour[c.frames] == c.cad_index).all()
+
+
+def test_contour_error_recovers_the_truth(run):
+    scan, truth, r = run
+    for c in r.contours:
+        true_contour = machscan.resample_polyline(np.asarray(truth.engraved_polylines[c.cad_index]), 0.002, True)
+        ref = machscan.contour_error(c.theoretical, true_contour)
+        assert np.sqrt(np.mean((c.error.errors - ref.errors) ** 2)) <= 0.010, c.cad_index
+        # The offset alone (bending taken out) against the applied offset.
+        assert abs(c.offset_error - np.linalg.norm(truth.offsets[c.cad_index])) <= 0.005
+
+
+def test_decomposition_shares_within_5_points_of_truth(run):
+    scan, truth, r = run
+    off = np.linalg.norm(truth.centre_offset, axis=1).mean()
+    bend = np.abs(truth.centre_bend).mean()
+    loc = np.abs(truth.centre_local).mean()
+    true_shares = np.array([off, bend, loc]) / (off + bend + loc)
+    d = r.decomposition
+    got = np.array([d.offset_share, d.bending_share, d.local_share])
+    assert np.abs(got - true_shares).max() <= 0.05, (got, true_shares)
+    assert abs(got.sum() - 1) < 1e-12
+
+
+def test_tables_and_csv(run, tmp_path):
+    scan, truth, r = run
+    text = r.summary()
+    assert "shares of the error" in text and "all" in text
+    paths = r.to_csv(tmp_path)
+    assert [p.name for p in paths] == ["frames.csv", "widths.csv", "contour_errors.csv"]
+    rows = np.genfromtxt(tmp_path / "widths.csv", delimiter=",", names=True)
+    assert len(rows) == 12 and np.isfinite(rows["width_mean"]).all()
+    frames = np.genfromtxt(tmp_path / "frames.csv", delimiter=",", names=True)
+    assert len(frames) == scan.n_frames
+    # No NaN in a table: the per-contour tables are all numbers.
+    errs = np.genfromtxt(tmp_path / "contour_errors.csv", delimiter=",", names=True)
+    assert all(np.isfinite(errs[n]).all() for n in errs.dtype.names)
+
+
+def test_unmatched_contours_are_reported():
+    scan, truth = synth.groove_scan(seed=1, readings=800, keep_every=100)
+    cad = list(truth.nominal_polylines)
+    extra = np.asarray(cad[0]) + [0.0, 300.0, 0.0]  # off the plate: never engraved
+    r = inspect_grooves(scan, cad[1:] + [extra])
+    assert r.unmatched_cad == (10,)
+    assert len(r.unmatched_clusters) == 1  # contour 0 was engraved but is not in this CAD
+    assert len(r.contours) == 10
+
+
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(cad_contours=[np.zeros((2, 3))]), "cad_contours"),
+        (dict(cad_contours=[]), "cad_contours"),
+        (dict(cad_contours=np.zeros((5, 3))), "cad_contours"),
+        (dict(cad_contours=[np.full((4, 3), np.nan)]), "cad_contours"),
+        (dict(window=10**6), "window"),
+        (dict(min_cluster_frames=0), "min_cluster_frames"),
+    ],
+)
+def test_bad_input(kwargs, name):
+    scan, truth = synth.groove_scan(seed=2, readings=400, keep_every=400)
+    args = dict(cad_contours=truth.nominal_polylines)
+    args.update(kwargs)
+    with pytest.raises(ValueError) as exc:
+        inspect_grooves(scan, **args)
+    assert str(exc.value).startswith(name)
+
+
+def test_scan_without_grooves_gives_an_empty_report():
+    scan, truth = synth.groove_scan(seed=3, readings=400, keep_every=400)
+    flat = scan.frames.copy()
+    flat[:] = 0.0
+    from dataclasses import replace
+
+    r = inspect_grooves(replace(scan, frames=flat), truth.nominal_polylines)
+    assert r.contours == () and r.decomposition is None
+    assert (r.fits.status == machscan.GrooveStatus.NO_GROOVE).all()
+    assert r.unmatched_cad == tuple(range(11))
+    assert "0 contours matched" in r.summary()
