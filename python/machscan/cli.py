@@ -1,7 +1,8 @@
 """The ``machscan`` command (also ``python -m machscan``).
 
-    machscan demo [--out scan.ply] [--seed 0]      synthetic groove scan → workpiece point cloud
-    machscan points SCAN.npz [--out cloud.ply]     a saved raw scan → workpiece point cloud
+    machscan demo [--out DIR] [--seed 0]            synthetic engraved plate → groove tables
+    machscan grooves SCAN CAD [CAD ...] [--out DIR] raw scan + CAD contours → groove tables (CSV)
+    machscan points SCAN [--out cloud.ply]          raw scan → workpiece point cloud (PLY)
 """
 
 from __future__ import annotations
@@ -32,17 +33,49 @@ def _scan_summary(scan, points: np.ndarray, seconds: float) -> list[str]:
     ]
 
 
+def _load_scan(args: argparse.Namespace):
+    from machscan.scan import Profiler, Scan, read_scan_csv
+
+    path = Path(args.scan)
+    if path.suffix.lower() == ".npz":
+        return Scan.load(path)
+    missing = [n for n in ("poses", "pitch", "c2_offset", "mount") if getattr(args, n, None) is None]
+    if missing:
+        raise ValueError(f"scan: {path} is a CSV export; give --{' --'.join(m.replace('_', '-') for m in missing)} too")
+    readings = args.readings or _csv_readings(path)
+    profiler = Profiler(readings=readings, pitch=args.pitch, valid_range=tuple(args.valid_range) if args.valid_range else None,
+                        sentinel=args.sentinel, name="profiler")
+    return read_scan_csv(path, args.poses, profiler, args.c2_offset, args.mount)
+
+
+def _csv_readings(path: Path) -> int:
+    """Readings per frame of a frames CSV: the width of its first data row, less a leading
+    time column when the header names one."""
+    header: list[str] = []
+    with open(path) as fh:
+        for line in fh:
+            cells = [c.strip() for c in line.split(",")]
+            try:
+                float(cells[0])
+            except ValueError:
+                header = header or cells
+                continue
+            timed = bool(header) and header[0].lower() in ("t", "time", "timestamp")
+            return len(cells) - (1 if timed else 0)
+    raise ValueError(f"scan: {path}: no frames")
+
+
 def _demo(args: argparse.Namespace) -> int:
     from machscan import synth
+    from machscan.inspection import inspect_grooves
 
     t0 = time.perf_counter()
     scan, truth = synth.groove_scan(seed=args.seed)
     t_synth = time.perf_counter() - t0
+    print(f"machscan demo: synthetic engraved plate, 11 contours (seed {args.seed}), generated in {t_synth:.1f} s")
     t0 = time.perf_counter()
     points, frame_index = scan.wcs_points()
     t_points = time.perf_counter() - t0
-    _write_cloud(args.out, points, frame_index, binary=not args.ascii)
-    print(f"machscan demo: synthetic engraved plate (seed {args.seed}), generated in {t_synth:.1f} s")
     for line in _scan_summary(scan, points, t_points):
         print(line)
     err = synth.surface_error(points, frame_index, truth)
@@ -52,14 +85,43 @@ def _demo(args: argparse.Namespace) -> int:
         f"(profiler noise {scan.profiler.noise * 1e3:.1f} µm), {err.n_outliers} spikes beyond "
         f"{err.outlier_threshold * 1e3:.0f} µm"
     )
-    print(f"written   : {args.out}")
+    t0 = time.perf_counter()
+    report = inspect_grooves(scan, truth.nominal_polylines)
+    t_inspect = time.perf_counter() - t0
+    print(f"inspection: {t_inspect:.2f} s\n")
+    print(report.summary())
+    ok = report.fits.ok
+    print(
+        f"\nagainst the truth: width |error| median {np.median(np.abs(report.fits.width[ok] - truth.width[ok])) * 1e3:.1f} µm, "
+        f"depth |error| median {100 * np.median(np.abs(report.fits.depth[ok] - truth.depth[ok]) / truth.depth[ok]):.2f} %, "
+        f"centre rms {np.sqrt(np.mean(np.sum((report.centre_wcs[ok] - truth.centre_wcs[ok]) ** 2, axis=1))) * 1e3:.1f} µm"
+    )
+    out = Path(args.out)
+    paths = report.to_csv(out)
+    keep = frame_index % args.cloud_every == 0
+    cloud = out / "cloud.ply"
+    _write_cloud(cloud, points[keep], frame_index[keep], binary=True)
+    print(f"\nwritten   : {', '.join(str(p) for p in paths)}")
+    print(f"            {cloud} (workpiece points of every {args.cloud_every}th frame; --cloud-every 1 for all)")
+    return 0
+
+
+def _grooves(args: argparse.Namespace) -> int:
+    from machscan.cad import read_contours
+    from machscan.inspection import inspect_grooves
+
+    scan = _load_scan(args)
+    cad = read_contours(args.cad)
+    report = inspect_grooves(scan, cad, window=args.window, alpha=args.alpha, nominal_width=args.nominal_width,
+                             cluster_radius=args.cluster_radius)
+    print(report.summary())
+    paths = report.to_csv(args.out)
+    print(f"\nwritten   : {', '.join(str(p) for p in paths)}")
     return 0
 
 
 def _points(args: argparse.Namespace) -> int:
-    from machscan.scan import Scan
-
-    scan = Scan.load(args.scan)
+    scan = _load_scan(args)
     t0 = time.perf_counter()
     points, frame_index = scan.wcs_points()
     seconds = time.perf_counter() - t0
@@ -68,6 +130,18 @@ def _points(args: argparse.Namespace) -> int:
         print(line)
     print(f"written   : {args.out}")
     return 0
+
+
+def _scan_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scan", type=Path, help="raw scan: .npz saved by Scan.save, or a CSV export (one frame per row)")
+    g = p.add_argument_group("for a CSV scan")
+    g.add_argument("--poses", type=Path, help="poses CSV (X, Y, Z, A, C, C2 per frame, optional leading t)")
+    g.add_argument("--pitch", type=float, help="reading spacing, mm")
+    g.add_argument("--readings", type=int, help="readings per frame (default: the file's)")
+    g.add_argument("--c2-offset", type=float, nargs=3, metavar=("LX", "LY", "LZ"), help="C2 axis offset, mm")
+    g.add_argument("--mount", type=float, nargs=6, metavar=("THETA", "PSI", "PHI", "DX", "DY", "DZ"), help="sensor mount, rad and mm")
+    g.add_argument("--valid-range", type=float, nargs=2, metavar=("LO", "HI"), help="measuring range, mm")
+    g.add_argument("--sentinel", type=float, help="value the profiler returns for no reading")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -81,14 +155,24 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"machscan {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    demo = sub.add_parser("demo", help="run the main job on a built-in synthetic scan")
-    demo.add_argument("--out", type=Path, default=Path("machscan-demo.ply"), help="output PLY (default: %(default)s)")
+    demo = sub.add_parser("demo", help="run the groove inspection on a built-in synthetic scan")
+    demo.add_argument("--out", type=Path, default=Path("machscan-demo"), help="output folder (default: %(default)s)")
     demo.add_argument("--seed", type=int, default=0, help="seed of the synthetic scan (default: %(default)s)")
-    demo.add_argument("--ascii", action="store_true", help="write ASCII PLY instead of binary")
+    demo.add_argument("--cloud-every", type=int, default=10, help="write the workpiece points of every Nth frame (default: %(default)s)")
     demo.set_defaults(run=_demo)
 
-    pts = sub.add_parser("points", help="turn a saved raw scan (.npz) into a workpiece point cloud")
-    pts.add_argument("scan", type=Path, help="raw scan saved with Scan.save (.npz)")
+    gr = sub.add_parser("grooves", help="groove width, depth and contour error from a raw scan and CAD contours")
+    _scan_arguments(gr)
+    gr.add_argument("cad", nargs="+", type=Path, help="CAD contours: CSV (contour, x, y, z) or APT/CL files (GOTO points)")
+    gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
+    gr.add_argument("--window", type=int, default=200, help="readings around the line centre fitted per frame (default: %(default)s)")
+    gr.add_argument("--alpha", type=float, default=20.0, help="template shape coefficient, 1/mm (default: %(default)s)")
+    gr.add_argument("--nominal-width", type=float, default=0.5, help="nominal groove width, mm (default: %(default)s)")
+    gr.add_argument("--cluster-radius", type=float, default=5.0, help="contour segmentation distance, mm (default: %(default)s)")
+    gr.set_defaults(run=_grooves)
+
+    pts = sub.add_parser("points", help="turn a raw scan into a workpiece point cloud (PLY)")
+    _scan_arguments(pts)
     pts.add_argument("--out", type=Path, default=Path("cloud.ply"), help="output PLY (default: %(default)s)")
     pts.add_argument("--ascii", action="store_true", help="write ASCII PLY instead of binary")
     pts.set_defaults(run=_points)
@@ -101,6 +185,8 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "run", None):
         parser.print_help()
         return 0
+    if getattr(args, "cloud_every", 1) < 1:
+        parser.error("--cloud-every must be at least 1")
     try:
         return int(args.run(args))
     except (ValueError, OSError) as e:

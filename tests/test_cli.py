@@ -1,0 +1,129 @@
+"""The command line and the CAD contour readers."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import machscan
+from machscan import synth
+from machscan.cad import read_contours, read_contours_apt, read_contours_csv, write_contours_csv
+from machscan.cli import main
+from machscan.inspection import inspect_grooves
+
+
+def test_help_and_version():
+    out = subprocess.run([sys.executable, "-m", "machscan", "--help"], capture_output=True, text=True, check=True)
+    assert "demo" in out.stdout and "grooves" in out.stdout
+    out = subprocess.run(["machscan", "--version"], capture_output=True, text=True, check=True)
+    assert machscan.__version__ in out.stdout
+
+
+def test_import_is_fast():
+    code = "import time; t = time.perf_counter(); import machscan; print(time.perf_counter() - t)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert float(out.stdout) < 1.0
+
+
+def test_demo_prints_both_tables(tmp_path):
+    out = subprocess.run(["machscan", "demo", "--out", str(tmp_path / "d")], capture_output=True, text=True, check=True)
+    assert "width (mm)" in out.stdout and "error (mm)" in out.stdout and "shares of the error" in out.stdout
+    assert "robust sigma" in out.stdout
+    for name in ("frames.csv", "widths.csv", "contour_errors.csv", "cloud.ply"):
+        assert (tmp_path / "d" / name).stat().st_size > 0
+    with open(tmp_path / "d" / "cloud.ply", "rb") as fh:
+        assert fh.read(60).startswith(b"ply\nformat binary_little_endian 1.0")
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    scan, truth = synth.groove_scan(seed=5, readings=800, keep_every=100)
+    scan.save(d / "scan.npz")
+    write_contours_csv(d / "cad.csv", truth.nominal_polylines)
+    return d, scan, truth
+
+
+def test_grooves_command_equals_the_library(small):
+    d, scan, truth = small
+    assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--out", str(d / "out")]) == 0
+    ref = inspect_grooves(scan, truth.nominal_polylines)
+    rows = np.genfromtxt(d / "out" / "contour_errors.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(rows["error_mean"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
+
+
+def test_grooves_command_on_a_csv_scan_and_apt_contours(small):
+    d, scan, truth = small
+    machscan.write_scan_csv(scan, d / "frames.csv", d / "poses.csv")
+    apt = d / "cad.apt"
+    with open(apt, "w") as fh:
+        fh.write("PARTNO/ TEMPLATE $$ engraving program\nMULTAX\n")
+        for c in truth.nominal_polylines:
+            fh.write("RAPID\n")
+            for x, y, z in np.asarray(c):
+                fh.write(f"GOTO/{x:.6f},{y:.6f}, $\n  {z:.6f},0.0,0.0,1.0\n")
+        fh.write("FINI\n")
+    args = ["grooves", str(d / "frames.csv"), str(apt), "--poses", str(d / "poses.csv"), "--pitch", str(scan.profiler.pitch),
+            "--c2-offset", *map(str, scan.c2_offset), "--mount", *map(str, scan.mount), "--sentinel", str(scan.profiler.sentinel),
+            "--valid-range", *map(str, scan.profiler.valid_range), "--out", str(d / "out2")]
+    assert main(args) == 0
+    rows = np.genfromtxt(d / "out2" / "widths.csv", delimiter=",", names=True)
+    assert len(rows) == len(truth.nominal_polylines) + 1
+
+
+def test_grooves_command_reports_errors(small, capsys):
+    d, scan, truth = small
+    assert main(["grooves", str(d / "frames.csv"), str(d / "cad.csv")]) == 2
+    assert "--poses" in capsys.readouterr().err
+
+
+def test_cad_csv_layouts(tmp_path):
+    sq = np.array([[0, 0, 0], [10, 0, 0], [10, 5, 0], [0, 5, 0.0]])
+    (tmp_path / "xy.csv").write_text("x,y\n" + "\n".join(f"{x},{y}" for x, y, _ in sq))
+    (tmp_path / "xyz.csv").write_text("\n".join(f"{x},{y},{z}" for x, y, z in sq))
+    (tmp_path / "ids.csv").write_text("contour,x,y\n" + "\n".join(f"{k // 2},{x},{y}" for k, (x, y, _) in enumerate(sq)))
+    np.testing.assert_array_equal(read_contours_csv(tmp_path / "xy.csv")[0], sq)
+    np.testing.assert_array_equal(read_contours_csv(tmp_path / "xyz.csv")[0], sq)
+    two = read_contours_csv(tmp_path / "ids.csv")
+    assert len(two) == 2 and np.array_equal(two[1], sq[2:])
+    write_contours_csv(tmp_path / "rt.csv", [sq, sq + 1])
+    back = read_contours([tmp_path / "rt.csv"])
+    assert len(back) == 2 and np.array_equal(back[1], sq + 1)
+
+
+def test_apt_reader_splits_on_rapid_and_jumps(tmp_path):
+    text = """$$ comment line
+PARTNO/ DEMO
+GOTO/0,0,0
+GOTO/1,0,0, $
+   0,0,1
+FEDRAT/ 1200
+GOTO/1,1,0
+RAPID
+GOTO/50,50,0
+GOTO/51,50,0
+GOTO/100,100,0
+GOTO/101,100,0
+"""
+    (tmp_path / "p.apt").write_text(text)
+    c = read_contours_apt(tmp_path / "p.apt")
+    assert [len(x) for x in c] == [3, 2, 2]
+    np.testing.assert_array_equal(c[0][1], [1, 0, 0])
+
+
+@pytest.mark.parametrize(
+    "name, text, msg",
+    [
+        ("bad.csv", "x,y,z\n1,2,3\n4,five,6\n", "line 3"),
+        ("ragged.csv", "1,2,3\n4,5\n", "row 2"),
+        ("empty.csv", "x,y\n", "no points"),
+        ("bad.apt", "GOTO/1,2\n", "line 1"),
+        ("none.apt", "PARTNO/X\nFINI\n", "no GOTO"),
+    ],
+)
+def test_malformed_cad_files_name_the_file(tmp_path, name, text, msg):
+    (tmp_path / name).write_text(text)
+    with pytest.raises(ValueError) as exc:
+        read_contours([tmp_path / name])
+    assert name in str(exc.value) and msg in str(exc.value)
