@@ -134,6 +134,7 @@ def fit_grooves(
     cost_tolerance: float = 0.0,
     step_tolerance: float = 1e-8,
     gradient_tolerance: float = 1e-13,
+    template: str = "tanh",
 ) -> dict[str, Any]:
     """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict
     of per-frame arrays this returns in a result object."""

@@ -118,6 +118,7 @@ def fit_grooves(
     cost_tolerance: float = 0.0,
     step_tolerance: float = 1e-8,
     gradient_tolerance: float = 1e-13,
+    template: str = "tanh",
 ) -> GrooveFits:
     """Fit the groove template of paper 000 to every profiler frame (SPEC G).
 
@@ -164,7 +165,7 @@ def fit_grooves(
     """
     out = _core.fit_grooves(
         x, z, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth,
-        min_valid, max_iterations, cost_tolerance, step_tolerance, gradient_tolerance,
+        min_valid, max_iterations, cost_tolerance, step_tolerance, gradient_tolerance, template,
     )
     return GrooveFits(**out)
 

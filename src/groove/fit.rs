@@ -1,7 +1,7 @@
 //! One frame, then all frames in parallel: window → valid readings → spike filter → line fit →
 //! bottom point → surface refit without the groove → levelling → LM template fit → back to the
 //! frame's own (unlevelled) coordinates (SPEC G steps 1–7).
-use super::template::{fast_tanh, TanhTemplate};
+use super::template::{fast_tanh, TanhTemplate, VTemplate};
 use crate::error::{Error, Result};
 use crate::optim::{levenberg_marquardt, LeastSquares, LmOptions, LmStop};
 use nalgebra::{SMatrix, SVector};
@@ -42,11 +42,24 @@ impl GrooveStatus {
     }
 }
 
+/// The cross-section model fitted to a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TemplateKind {
+    /// Paper 000 eq (11): a difference of two tanh steps (α = 20 mm⁻¹ in the paper). Fits
+    /// rounded, U-like sections; on a straight-sided V it is ~18 % off in width and depth.
+    Tanh,
+    /// A V with straight flanks and corners rounded over ~1/α (see `VTemplate`).
+    V,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GrooveOptions {
-    /// Template shape coefficient α, mm⁻¹ (paper 000: 20, chosen by eye).
+    /// Which template.
+    pub template: TemplateKind,
+    /// Template shape coefficient, mm⁻¹: α of the tanh template (paper 000: 20, chosen by
+    /// eye), β (corner sharpness) of the V template.
     pub alpha: f64,
-    /// Fit α as a fifth parameter, starting from `alpha`.
+    /// Fit the shape coefficient as a fifth parameter, starting from `alpha`.
     pub fit_alpha: bool,
     /// Nominal groove width l, mm: the readings within l of the bottom are left out of the
     /// surface refit.
@@ -75,6 +88,7 @@ pub struct GrooveOptions {
 impl Default for GrooveOptions {
     fn default() -> Self {
         GrooveOptions {
+            template: TemplateKind::Tanh,
             alpha: 20.0,
             fit_alpha: false,
             nominal_width: 0.5,
@@ -323,6 +337,78 @@ impl<'a> TemplateProblem<'a> {
     }
 }
 
+/// The V template problem: evaluated reading by reading (it is not the hot path the paper's
+/// template is, so it is kept plain).
+struct VProblem<'a> {
+    x: &'a [f64],
+    z: &'a [f64],
+    sharpness: f64,
+}
+
+impl VProblem<'_> {
+    fn template(&self, p: &[f64]) -> VTemplate {
+        VTemplate { x0: p[0], z0: p[1], depth: p[2], width: p[3], sharpness: if p.len() > 4 { p[4] } else { self.sharpness } }
+    }
+
+    fn eval<const P: usize>(&self, p: &[f64]) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64) {
+        let t = self.template(p);
+        let (mut jtj, mut g, mut cost) = (SMatrix::<f64, P, P>::zeros(), SVector::<f64, P>::zeros(), 0.0);
+        for (&x, &z) in self.x.iter().zip(self.z) {
+            let (v, grad) = t.value_and_gradient(x);
+            let f = z - v;
+            cost += 0.5 * f * f;
+            for r in 0..P {
+                g[r] -= grad[r] * f;
+                for c in 0..P {
+                    jtj[(r, c)] += grad[r] * grad[c];
+                }
+            }
+        }
+        (jtj, g, cost)
+    }
+}
+
+impl LeastSquares<4> for VProblem<'_> {
+    fn len(&self) -> usize {
+        self.x.len()
+    }
+    fn cost(&self, p: &SVector<f64, 4>) -> f64 {
+        self.eval::<4>(p.as_slice()).2
+    }
+    fn normal_equations(&self, p: &SVector<f64, 4>) -> (SMatrix<f64, 4, 4>, SVector<f64, 4>, f64) {
+        self.eval::<4>(p.as_slice())
+    }
+}
+
+impl LeastSquares<5> for VProblem<'_> {
+    fn len(&self) -> usize {
+        self.x.len()
+    }
+    fn cost(&self, p: &SVector<f64, 5>) -> f64 {
+        self.eval::<5>(p.as_slice()).2
+    }
+    fn normal_equations(&self, p: &SVector<f64, 5>) -> (SMatrix<f64, 5, 5>, SVector<f64, 5>, f64) {
+        self.eval::<5>(p.as_slice())
+    }
+}
+
+/// Runs LM with 4 or 5 parameters: `(params [x0, z0, d, w, shape], cost, iterations, stop,
+/// var(d), var(w))` with the variances from (JᵀJ)⁻¹ (to be scaled by σ̂²).
+#[inline(always)]
+fn solve<Prob: LeastSquares<4> + LeastSquares<5>>(problem: &Prob, start: [f64; 5], fit_shape: bool, lm: &LmOptions) -> (Vec<f64>, f64, usize, LmStop, f64, f64) {
+    if fit_shape {
+        let r = levenberg_marquardt::<5, _>(problem, SVector::from(start), lm);
+        let (cd, cw) = r.jtj.try_inverse().map_or((f64::INFINITY, f64::INFINITY), |m| (m[(2, 2)], m[(3, 3)]));
+        (r.x.as_slice().to_vec(), r.cost, r.iterations, r.stop, cd, cw)
+    } else {
+        let r = levenberg_marquardt::<4, _>(problem, SVector::from([start[0], start[1], start[2], start[3]]), lm);
+        let (cd, cw) = r.jtj.try_inverse().map_or((f64::INFINITY, f64::INFINITY), |m| (m[(2, 2)], m[(3, 3)]));
+        let mut v = r.x.as_slice().to_vec();
+        v.push(start[4]);
+        (v, r.cost, r.iterations, r.stop, cd, cw)
+    }
+}
+
 impl LeastSquares<4> for TemplateProblem<'_> {
     #[inline(always)]
     fn len(&self) -> usize {
@@ -525,7 +611,6 @@ fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
     let (lx, lz, (ox, oz), start) = (&frame.x, &frame.z, frame.origin, frame.start);
     let (s, c) = frame.tilt.sin_cos();
     let theta = frame.tilt;
-    let problem = TemplateProblem::new(lx, lz, o.alpha);
     let lm = LmOptions {
         max_iterations: o.max_iterations,
         cost_tolerance: o.cost_tolerance,
@@ -533,18 +618,9 @@ fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
         gradient_tolerance: o.gradient_tolerance,
         tau: 1e-3,
     };
-    let (p, cost, iterations, stop, cov_d, cov_w) = if o.fit_alpha {
-        let r = levenberg_marquardt::<5, _>(&problem, SVector::from(start), &lm);
-        let inv = r.jtj.try_inverse();
-        let (cd, cw) = inv.map_or((f64::INFINITY, f64::INFINITY), |m| (m[(2, 2)], m[(3, 3)]));
-        (r.x.as_slice().to_vec(), r.cost, r.iterations, r.stop, cd, cw)
-    } else {
-        let r = levenberg_marquardt::<4, _>(&problem, SVector::from([start[0], start[1], start[2], start[3]]), &lm);
-        let inv = r.jtj.try_inverse();
-        let (cd, cw) = inv.map_or((f64::INFINITY, f64::INFINITY), |m| (m[(2, 2)], m[(3, 3)]));
-        let mut v = r.x.as_slice().to_vec();
-        v.push(o.alpha);
-        (v, r.cost, r.iterations, r.stop, cd, cw)
+    let (p, cost, iterations, stop, cov_d, cov_w) = match o.template {
+        TemplateKind::Tanh => solve(&TemplateProblem::new(lx, lz, o.alpha), start, o.fit_alpha, &lm),
+        TemplateKind::V => solve(&VProblem { x: lx, z: lz, sharpness: o.alpha }, start, o.fit_alpha, &lm),
     };
     let m = lx.len();
     let n_par = if o.fit_alpha { 5 } else { 4 };

@@ -1,6 +1,7 @@
 //! Bindings of `crate::groove`: the batch groove fit.
 use super::convert::{f64_array, to_numpy, to_py_err, Dim};
-use crate::groove::{fit_frames, level_frame, GrooveOptions};
+use crate::groove::{fit_frames, level_frame, GrooveOptions, TemplateKind};
+use pyo3::exceptions::PyValueError;
 use numpy::PyUntypedArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -10,7 +11,7 @@ use pyo3::types::PyDict;
 #[pyfunction]
 #[pyo3(signature = (x, z, alpha=20.0, nominal_width=0.5, window=None, window_center=None, fit_alpha=false,
     spike_threshold=Some(0.1), min_depth=0.03, min_valid=12, max_iterations=100, cost_tolerance=0.0,
-    step_tolerance=1e-8, gradient_tolerance=1e-13))]
+    step_tolerance=1e-8, gradient_tolerance=1e-13, template="tanh"))]
 #[allow(clippy::too_many_arguments)]
 fn fit_grooves<'py>(
     py: Python<'py>,
@@ -28,12 +29,19 @@ fn fit_grooves<'py>(
     cost_tolerance: f64,
     step_tolerance: f64,
     gradient_tolerance: f64,
+    template: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let template = match template {
+        "tanh" => TemplateKind::Tanh,
+        "v" => TemplateKind::V,
+        other => return Err(PyValueError::new_err(format!("template: expected \"tanh\" (paper 000) or \"v\", got {other:?}"))),
+    };
     let xa = f64_array(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
     let n = xa.shape()[0];
     let za = f64_array(z, "z", &[Dim::Any("F"), Dim::Is(n)], "(one column per x, mm)")?;
     let f = za.shape()[0];
     let options = GrooveOptions {
+        template,
         alpha,
         fit_alpha,
         nominal_width,
