@@ -27,7 +27,7 @@ class GrooveStatus(IntEnum):
     CLIPPED = 5
     """The groove touches the window edge: no surface on one side."""
     FAILED = 6
-    """The fit failed numerically."""
+    """The fit failed numerically, or ran away to a width outside ¼–4× the nominal width."""
 
 
 @dataclass(frozen=True, repr=False)
@@ -136,7 +136,8 @@ def fit_grooves(
     z : array_like, shape (F, N)
         Readings (heights), mm; NaN marks an invalid reading.
     alpha : float
-        Template shape coefficient α, mm⁻¹ (paper: 20).
+        Template shape coefficient, mm⁻¹: α of the tanh template (paper: 20), or the corner
+        sharpness β of the V template.
     nominal_width : float
         Nominal groove width l, mm.
     window : int, optional
@@ -144,7 +145,12 @@ def fit_grooves(
     window_center : int, optional
         Reading index the window is centred on; default N // 2.
     fit_alpha : bool
-        Fit α as a fifth parameter.
+        Fit the shape coefficient as a fifth parameter.
+    template : {"tanh", "v"}
+        ``"tanh"``: paper 000 eq (11), for rounded (laser-sintered, U-like) sections; on a
+        straight-sided V it reads ~18 % too wide and too shallow. ``"v"``: straight flanks
+        with corners rounded over ~1/alpha mm; for V grooves (use ``alpha`` ≈ 80 or
+        ``fit_alpha=True``); ``depth`` is then the depth of the flanks' meeting point.
     spike_threshold : float or None
         Drop readings further than this from their 5-reading median, mm.
     min_depth : float

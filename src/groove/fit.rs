@@ -24,7 +24,7 @@ pub enum GrooveStatus {
     TwoGrooves = 4,
     /// The groove touches the window edge: no surface on one side.
     Clipped = 5,
-    /// The fit failed numerically.
+    /// The fit failed numerically, or ran away to a width outside ¼–4× the nominal width.
     Failed = 6,
 }
 
@@ -520,14 +520,21 @@ pub fn level_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> std::result::Resu
     let Some((k1, b1)) = fit_line(px.iter().copied().zip(pz.iter().copied())) else {
         return Err((GrooveStatus::TooFewValid, px.len()));
     };
+    // The depth below the line is averaged over 5 readings first: a groove is ~20 readings
+    // wide, a spike the spike filter let through is one or two, and must not win.
+    let below_line: Vec<f64> = (0..px.len()).map(|i| k1 * px[i] + b1 - pz[i]).collect();
     let (mut ib, mut below) = (0, f64::NEG_INFINITY);
     for i in 0..px.len() {
-        let d = k1 * px[i] + b1 - pz[i];
+        let a = i.saturating_sub(2).min(px.len() - 5);
+        let d = below_line[a..a + 5].iter().sum::<f64>() / 5.0;
         if d > below {
             below = d;
             ib = i;
         }
     }
+    // The bottom reading itself: the deepest of the five.
+    let a = ib.saturating_sub(2).min(px.len() - 5);
+    ib = (a..a + 5).max_by(|&i, &j| below_line[i].total_cmp(&below_line[j])).unwrap_or(ib);
     if below < o.min_depth {
         return Err((GrooveStatus::NoGroove, px.len()));
     }
@@ -629,6 +636,9 @@ fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
     let status = match stop {
         LmStop::Failed => GrooveStatus::Failed,
         _ if !(p[2] > 0.0 && p[3] > 0.0 && p[4] > 0.0) || p[0] < xmin || p[0] > xmax => GrooveStatus::NoGroove,
+        // A width far from the nominal one is a fit that locked onto something else (a spike,
+        // a dropout edge) and ran away.
+        _ if p[3] < 0.25 * o.nominal_width || p[3] > 4.0 * o.nominal_width => GrooveStatus::Failed,
         _ if p.iter().any(|v| !v.is_finite()) => GrooveStatus::Failed,
         LmStop::MaxIterations => GrooveStatus::MaxIterations,
         _ => GrooveStatus::Converged,
