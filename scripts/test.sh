@@ -25,5 +25,5 @@ echo "== stub check of machscan._core"
 # Run from outside the source tree so the installed package is the one checked.
 (cd /tmp && python -m mypy.stubtest machscan._core)
 
-echo "== pytest"
-python -m pytest -q "$@"
+echo "== pytest (tests and notebooks)"
+python -m pytest -q -p no:cacheprovider --nbmake tests notebooks "$@"

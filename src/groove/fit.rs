@@ -583,7 +583,31 @@ pub fn level_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> std::result::Resu
     let (ox, oz) = (lx[ib], zsum / zn);
     let lx: Vec<f64> = lx.iter().map(|v| v - ox).collect();
     let lz: Vec<f64> = lz.iter().map(|v| v - oz).collect();
-    let start = [0.0, 0.0, -lz[ib], l, o.alpha];
+    // Width start: twice the distance between the half-depth crossings on either side of the
+    // bottom (a V, and the template, are w/2 wide at half depth); the nominal width when the
+    // crossings are not found within it.
+    let half = 0.5 * lz[ib];
+    let crossing = |step: isize| -> Option<f64> {
+        let mut i = ib as isize;
+        while i + step >= 0 && ((i + step) as usize) < lx.len() {
+            let j = (i + step) as usize;
+            if lz[j] >= half {
+                let (a, b) = (i as usize, j);
+                let t = (half - lz[a]) / (lz[b] - lz[a]);
+                return Some(lx[a] + t * (lx[b] - lx[a]));
+            }
+            if (lx[j] - lx[ib]).abs() > l {
+                return None;
+            }
+            i += step;
+        }
+        None
+    };
+    let w0 = match (crossing(-1), crossing(1)) {
+        (Some(a), Some(b)) if b > a => (2.0 * (b - a)).clamp(0.5 * l, 2.0 * l),
+        _ => l,
+    };
+    let start = [0.0, 0.0, -lz[ib], w0, o.alpha];
     Ok(LevelledFrame { x: lx, z: lz, origin: (ox, oz), tilt: theta, start })
 }
 
@@ -623,7 +647,7 @@ fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
         cost_tolerance: o.cost_tolerance,
         step_tolerance: o.step_tolerance,
         gradient_tolerance: o.gradient_tolerance,
-        tau: 1e-3,
+        tau: 1e-6,
     };
     let (p, cost, iterations, stop, cov_d, cov_w) = match o.template {
         TemplateKind::Tanh => solve(&TemplateProblem::new(lx, lz, o.alpha), start, o.fit_alpha, &lm),
