@@ -1,7 +1,7 @@
 //! One frame, then all frames in parallel: window → valid readings → spike filter → line fit →
 //! bottom point → surface refit without the groove → levelling → LM template fit → back to the
 //! frame's own (unlevelled) coordinates (SPEC G steps 1–7).
-use super::template::{fast_tanh, TanhTemplate, VTemplate};
+use super::template::{tanh_pair, TanhTemplate, VTemplate};
 use crate::error::{Error, Result};
 use crate::optim::{levenberg_marquardt, LeastSquares, LmOptions, LmStop};
 use nalgebra::{SMatrix, SVector};
@@ -272,11 +272,8 @@ impl<'a> TemplateProblem<'a> {
     #[inline(always)]
     fn residuals(&self, t: &TanhTemplate, s: &mut Scratch) -> f64 {
         let (q, hd, al, x0, z0) = (0.25 * t.width, 0.5 * t.depth, t.alpha, t.x0, t.z0);
-        for (x, a) in self.x.iter().zip(s.a.iter_mut()) {
-            *a = fast_tanh(al * (x - x0 - q));
-        }
-        for (x, b) in self.x.iter().zip(s.b.iter_mut()) {
-            *b = fast_tanh(al * (x - x0 + q));
+        for (x, (a, b)) in self.x.iter().zip(s.a.iter_mut().zip(s.b.iter_mut())) {
+            (*a, *b) = tanh_pair(al * (x - x0 - q), al * (x - x0 + q));
         }
         for ((f, z), (a, b)) in s.f.iter_mut().zip(self.z).zip(s.a.iter().zip(&s.b)) {
             *f = z - z0 - hd * (a - b);

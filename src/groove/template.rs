@@ -58,6 +58,16 @@ pub(crate) fn fast_tanh(y: f64) -> f64 {
     ((1.0 - e) / (1.0 + e)).copysign(y)
 }
 
+/// `(tanh ya, tanh yb)` with one division instead of two (divisions are the slowest step of
+/// the template loop): `1/((1 + ea)(1 + eb))` serves both quotients.
+#[inline(always)]
+pub(crate) fn tanh_pair(ya: f64, yb: f64) -> (f64, f64) {
+    let ea = exp_nonpositive(-2.0 * ya.abs());
+    let eb = exp_nonpositive(-2.0 * yb.abs());
+    let inv = 1.0 / ((1.0 + ea) * (1.0 + eb));
+    (((1.0 - ea) * (1.0 + eb) * inv).copysign(ya), ((1.0 - eb) * (1.0 + ea) * inv).copysign(yb))
+}
+
 impl TanhTemplate {
     #[inline(always)]
     pub fn value(&self, x: f64) -> f64 {
@@ -189,6 +199,15 @@ mod tests {
         }
         assert!(worst < 4e-16, "{worst}");
         assert_eq!(exp_nonpositive(-1e6), exp_nonpositive(-700.0));
+    }
+
+    #[test]
+    fn tanh_pair_matches_std() {
+        for k in -3000..=3000 {
+            let (ya, yb) = (k as f64 * 7e-3, 2.0 - k as f64 * 3e-3);
+            let (a, b) = tanh_pair(ya, yb);
+            assert!((a - ya.tanh()).abs() < 5e-16 && (b - yb.tanh()).abs() < 5e-16, "{ya} {yb}");
+        }
     }
 
     #[test]
