@@ -75,7 +75,7 @@ def test_width_depth_histograms(run):
     report, _, _ = run
     fig = plot.width_depth_histograms(report, bins=30)
     assert len(fig.axes) == 2
-    ok = report.fits.ok
+    ok = report.used
     for ax, v in zip(fig.axes, (report.fits.width[ok], report.fits.depth[ok])):
         bars = ax.patches
         assert len(bars) == 30

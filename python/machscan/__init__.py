@@ -55,15 +55,17 @@ __all__ = [
     "read_scan_csv",
     "resample_polyline",
     "scan_to_wcs",
+    "plot",
     "synth",
     "write_scan_csv",
 ]
 
 
 def __getattr__(name: str) -> object:
-    # `machscan.synth` is imported on first use: it is only needed for demos and tests.
-    if name == "synth":
+    # `machscan.synth` and `machscan.plot` are imported on first use: demos, tests and figures
+    # need them, a plant script does not (and plot needs matplotlib).
+    if name in ("synth", "plot"):
         import importlib
 
-        return importlib.import_module("machscan.synth")
+        return importlib.import_module(f"machscan.{name}")
     raise AttributeError(f"module 'machscan' has no attribute {name!r}")

@@ -90,7 +90,7 @@ def _demo(args: argparse.Namespace) -> int:
     t_inspect = time.perf_counter() - t0
     print(f"inspection: {t_inspect:.2f} s\n")
     print(report.summary())
-    ok = report.fits.ok
+    ok = report.used
     print(
         f"\nagainst the truth: width |error| median {np.median(np.abs(report.fits.width[ok] - truth.width[ok])) * 1e3:.1f} µm, "
         f"depth |error| median {100 * np.median(np.abs(report.fits.depth[ok] - truth.depth[ok]) / truth.depth[ok]):.2f} %, "

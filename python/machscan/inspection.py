@@ -104,6 +104,10 @@ class GrooveReport:
     ----------
     fits : GrooveFits
         Per-frame groove fits in the SCS.
+    suspect : ndarray of bool (F,)
+        Converged fits left out because their standard error of width or depth is more than
+        ``max_se_ratio`` times the median (typically a groove whose flank readings were lost:
+        the fit converges, but to a width the data do not fix).
     centre_wcs : ndarray (F, 3)
         Groove centre (x0, 0, z0) of every frame in the WCS, mm; NaN where the frame was not
         fitted (its status in ``fits.status`` says why).
@@ -124,6 +128,7 @@ class GrooveReport:
     """
 
     fits: GrooveFits
+    suspect: NDArray[np.bool_]
     centre_wcs: NDArray[np.float64]
     cluster: NDArray[np.int64]
     contour: NDArray[np.int64]
@@ -131,6 +136,11 @@ class GrooveReport:
     unmatched_clusters: tuple[int, ...]
     unmatched_cad: tuple[int, ...]
     decomposition: Decomposition | None
+
+    @property
+    def used(self) -> NDArray[np.bool_]:
+        """Frames whose groove centre went into the contours: converged and not suspect."""
+        return self.fits.ok & ~self.suspect
 
     # ---- the paper's tables ---------------------------------------------------------------
 
@@ -200,6 +210,8 @@ class GrooveReport:
         bad = {k: v for k, v in f.counts().items() if v and k != "converged"}
         if bad:
             lines.append("  frames not fitted: " + ", ".join(f"{k} {v}" for k, v in bad.items()))
+        if self.suspect.any():
+            lines.append(f"  fits left out as suspect (standard error far above the median): {int(self.suspect.sum())}")
         if self.unmatched_clusters:
             lines.append(f"  clusters with no CAD contour: {list(self.unmatched_clusters)}")
         if self.unmatched_cad:
@@ -218,7 +230,7 @@ class GrooveReport:
         out.mkdir(parents=True, exist_ok=True)
         paths = []
         f = self.fits
-        frame_cols = {"frame": np.arange(len(f)), "status": f.status, "x0_scs": f.x0, "z0_scs": f.z0,
+        frame_cols = {"frame": np.arange(len(f)), "status": f.status, "suspect": self.suspect.astype(np.int64), "x0_scs": f.x0, "z0_scs": f.z0,
                       "x_wcs": self.centre_wcs[:, 0], "y_wcs": self.centre_wcs[:, 1], "z_wcs": self.centre_wcs[:, 2],
                       "width": f.width, "depth": f.depth, "se_width": f.se_width, "se_depth": f.se_depth,
                       "rms": f.rms, "cluster": self.cluster, "contour": self.contour}
@@ -303,6 +315,7 @@ def inspect_grooves(
     actual_spacing: float = 0.002,
     max_match_distance: float = 10.0,
     bending_degree: int = 4,
+    max_se_ratio: float = 5.0,
 ) -> GrooveReport:
     """Measure engraved grooves and their contour error from a raw scan (paper 000).
 
@@ -337,6 +350,9 @@ def inspect_grooves(
         Clustering (see :func:`machscan.euclidean_clusters`).
     cad_spacing, actual_spacing, max_match_distance, bending_degree
         As above, mm.
+    max_se_ratio : float
+        Converged fits whose standard error of width or depth exceeds this many times the
+        median are left out as suspect (see ``GrooveReport.suspect``).
 
     Returns
     -------
@@ -363,7 +379,14 @@ def inspect_grooves(
     x = (np.arange(scan.n_readings) - prof.i0) * prof.pitch
     z = np.where(scan.valid_mask(), scan.frames, np.nan)
     fits = fit_grooves(x, z, alpha=alpha, nominal_width=nominal_width, window=window, fit_alpha=fit_alpha)
-    ok = fits.ok
+    if not max_se_ratio > 0:
+        raise ValueError(f"max_se_ratio: must be positive, got {max_se_ratio}")
+    converged = fits.ok
+    suspect = np.zeros(len(fits), dtype=bool)
+    if converged.any():
+        for se in (fits.se_width, fits.se_depth):
+            suspect |= converged & (se > max_se_ratio * np.median(se[converged]))
+    ok = converged & ~suspect
 
     # Centres to the WCS with each frame's pose.
     t = scan.transforms()
@@ -440,6 +463,7 @@ def inspect_grooves(
     matched_cad = {m for m, _ in pairs}
     return GrooveReport(
         fits=fits,
+        suspect=suspect,
         centre_wcs=centre,
         cluster=cluster,
         contour=contour,

@@ -228,7 +228,7 @@ def width_depth_histograms(
     else:
         aw, ad = axes
         fig = aw.figure
-    ok = report.fits.ok
+    ok = report.used
     for ax, v, name, col in ((aw, report.fits.width[ok], "groove width w (mm)", "tab:blue"),
                              (ad, report.fits.depth[ok], "groove depth d (mm)", "tab:orange")):
         ax.set_xlabel(name)
