@@ -22,12 +22,14 @@ from machscan._core import (
 )
 from machscan.contours import ContourError, contour_error
 from machscan.grooves import GrooveFits, GrooveStatus, LevelledFrame, fit_grooves, level_groove_frame
+from machscan.io import CloudFile, read_points, write_points
 from machscan.inspection import ContourResult, Decomposition, GrooveReport, inspect_grooves
 from machscan.kinematics import MountCalibration, calibrate_mount
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
     "__version__",
+    "CloudFile",
     "ContourError",
     "ContourResult",
     "Decomposition",
@@ -52,11 +54,14 @@ __all__ = [
     "match_contours",
     "nearest_neighbors",
     "profile_to_points",
+    "read_points",
     "read_scan_csv",
     "resample_polyline",
     "scan_to_wcs",
+    "io",
     "plot",
     "synth",
+    "write_points",
     "write_scan_csv",
 ]
 

@@ -22,6 +22,7 @@ __all__ = [
     "match_contours",
     "nearest_neighbors",
     "profile_to_points",
+    "read_cloud",
     "resample_polyline",
     "scan_to_wcs",
     "write_points",
@@ -178,6 +179,12 @@ def match_contours(
 ) -> NDArray[np.int64]:
     """One-to-one matching of actual to theoretical contour centroids (minimal summed distance);
     indices into the theoretical centroids, −1 where none lies within ``max_distance`` mm."""
+
+def read_cloud(
+    path: str | PathLike[str], delimiter: str | None = None, columns: tuple[int, int, int] = (0, 1, 2)
+) -> dict[str, Any]:
+    """Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text); ``machscan.io.read`` wraps the
+    dict this returns (``points``, ``normals``, ``scalars``, ``triangles``)."""
 
 def write_points(
     path: str | PathLike[str],

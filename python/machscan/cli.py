@@ -16,7 +16,7 @@ import numpy as np
 
 
 def _write_cloud(path: Path, points: np.ndarray, frame_index: np.ndarray, binary: bool) -> None:
-    from machscan._core import write_points
+    from machscan._core import write_points  # noqa: F401
 
     path.parent.mkdir(parents=True, exist_ok=True)
     write_points(path, points, scalars={"frame": frame_index}, binary=binary)

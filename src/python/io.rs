@@ -1,5 +1,5 @@
 //! Bindings of `crate::io`.
-use super::convert::{f64_array, to_py_err, Dim};
+use super::convert::{f64_array, to_numpy, to_py_err, Dim};
 use crate::error::Error;
 use crate::io::{write_ply, PlyScalar};
 use numpy::PyUntypedArrayMethods;
@@ -66,7 +66,62 @@ fn write_points(
     })
 }
 
+fn file_error(e: Error) -> PyErr {
+    match e {
+        // A file that cannot be opened is an OSError; one whose content is wrong a ValueError.
+        Error::File { ref reason, .. } if reason.starts_with("cannot read") || reason.starts_with("cannot write") => {
+            PyOSError::new_err(e.to_string())
+        }
+        other => to_py_err(other),
+    }
+}
+
+/// Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text); ``machscan.io.read`` wraps the
+/// dict this returns (``points``, ``normals``, ``scalars``, ``triangles``).
+#[pyfunction]
+#[pyo3(signature = (path, delimiter=None, columns=(0, 1, 2)))]
+fn read_cloud<'py>(py: Python<'py>, path: PathBuf, delimiter: Option<char>, columns: (usize, usize, usize)) -> PyResult<Bound<'py, PyDict>> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let (points, normals, scalars, triangles) = match ext.as_str() {
+        "ply" => {
+            let d = py.detach(|| crate::io::read_ply(&path)).map_err(file_error)?;
+            (d.points, d.normals, d.scalars, d.triangles)
+        }
+        "pcd" => {
+            let d = py.detach(|| crate::io::read_pcd(&path)).map_err(file_error)?;
+            (d.points, d.normals, d.scalars, Vec::new())
+        }
+        "xyz" | "csv" | "txt" | "pts" | "asc" => {
+            let cols = [columns.0, columns.1, columns.2];
+            let p = py.detach(|| crate::io::read_xyz(&path, delimiter, cols)).map_err(file_error)?;
+            (p, None, Vec::new(), Vec::new())
+        }
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "path: {}: unknown point file type {other:?}; machscan reads .ply, .pcd, .xyz, .csv, .txt, .pts",
+                path.display()
+            )))
+        }
+    };
+    let n = points.len() / 3;
+    let d = PyDict::new(py);
+    d.set_item("points", to_numpy(py, points, &[n, 3])?)?;
+    d.set_item("normals", match normals {
+        Some(v) => to_numpy(py, v, &[n, 3])?,
+        None => py.None().into_bound(py),
+    })?;
+    let sd = PyDict::new(py);
+    for (name, v) in scalars {
+        sd.set_item(name, to_numpy(py, v, &[n])?)?;
+    }
+    d.set_item("scalars", sd)?;
+    let t = triangles.len();
+    d.set_item("triangles", to_numpy(py, triangles.into_iter().flatten().map(|v| v as i64).collect::<Vec<_>>(), &[t, 3])?)?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_points, m)?)?;
+    m.add_function(wrap_pyfunction!(read_cloud, m)?)?;
     Ok(())
 }

@@ -1,0 +1,94 @@
+"""Point cloud files: PLY (ASCII, binary little/big endian; any scalar properties; faces),
+PCD (ascii, binary, binary_compressed), and XYZ/CSV text. Readers and writers are in Rust;
+these functions are their Python face.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from machscan import _core
+
+
+@dataclass(frozen=True, repr=False)
+class CloudFile:
+    """What a point file holds.
+
+    Attributes
+    ----------
+    points : ndarray (N, 3)
+        float64 coordinates as stored (PLY float32 coordinates are widened exactly).
+    normals : ndarray (N, 3) or None
+        PLY nx, ny, nz or PCD normal_x, normal_y, normal_z.
+    scalars : dict of str to ndarray (N,)
+        Every other per-point property by name (curvature, intensity, allowance, ...).
+    triangles : ndarray of int64 (T, 3)
+        PLY faces, polygons fanned into triangles; empty for clouds.
+    """
+
+    points: NDArray[np.float64]
+    normals: NDArray[np.float64] | None
+    scalars: dict[str, NDArray[np.float64]]
+    triangles: NDArray[np.int64]
+
+    def __repr__(self) -> str:
+        extra = ", normals" if self.normals is not None else ""
+        extra += f", scalars {sorted(self.scalars)}" if self.scalars else ""
+        extra += f", {len(self.triangles)} triangles" if len(self.triangles) else ""
+        return f"CloudFile({len(self.points)} points{extra})"
+
+
+def read(path: str | os.PathLike[str], *, delimiter: str | None = None, columns: tuple[int, int, int] = (0, 1, 2)) -> CloudFile:
+    """Read a point file, choosing the reader by the extension.
+
+    ``.ply``, ``.pcd``, and text files ``.xyz``, ``.csv``, ``.txt``, ``.pts``, ``.asc`` (one
+    point per line; ``columns`` picks x, y, z, 0-based; ``delimiter`` None splits on
+    whitespace and commas; header lines are skipped).
+
+    Bad files raise ``ValueError`` naming the file and what is wrong (truncated data, a header
+    that promises more than there is, an unknown property type, a bad LZF stream); a file that
+    cannot be opened raises ``OSError``.
+
+    Examples
+    --------
+    >>> cloud = machscan.io.read("scan.pcd")
+    >>> cloud.points.shape, cloud.scalars.keys()
+    """
+    return CloudFile(**_core.read_cloud(path, delimiter, tuple(columns)))
+
+
+def read_points(path: str | os.PathLike[str]) -> NDArray[np.float64]:
+    """The ``(N, 3)`` float64 points of any supported point file (see :func:`read`).
+
+    Examples
+    --------
+    >>> pts = machscan.read_points("bunny.pcd")
+    """
+    return read(path).points
+
+
+def write_points(
+    path: str | os.PathLike[str],
+    points: ArrayLike,
+    normals: ArrayLike | None = None,
+    binary: bool = True,
+    *,
+    scalars: dict[str, ArrayLike] | None = None,
+) -> None:
+    """Write points (mm), optional normals and named scalar properties to a ``.ply`` file.
+
+    Coordinates are written as ``double`` so machine coordinates keep full precision; binary
+    little-endian by default, ASCII with ``binary=False`` (shortest round-trip text).
+
+    Examples
+    --------
+    >>> machscan.write_points("cloud.ply", pts, scalars={"allowance": a})
+    """
+    _core.write_points(path, points, normals, scalars, binary)
+
+
+write = write_points

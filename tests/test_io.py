@@ -1,0 +1,173 @@
+"""Point files: every shared data file against Open3D / trimesh-free references, round trips,
+byte orders, and malformed files."""
+
+import struct
+from pathlib import Path
+
+import numpy as np
+import open3d
+import pytest
+
+import machscan
+from machscan import io
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+PCDS = ["bun0.pcd", "bun4.pcd", "bunny.pcd", "milk.pcd"]
+
+
+@pytest.mark.parametrize("name", PCDS)
+def test_shared_pcd_files_equal_open3d(name):
+    path = DATA / "pcl-bunny-icp" / name
+    got = io.read(path)
+    ref = open3d.io.read_point_cloud(str(path))
+    np.testing.assert_array_equal(got.points, np.asarray(ref.points))
+    if ref.has_normals():
+        np.testing.assert_array_equal(got.normals, np.asarray(ref.normals))
+    np.testing.assert_array_equal(machscan.read_points(path), got.points)
+
+
+def test_bun0_curvature_is_read_by_name():
+    c = io.read(DATA / "pcl-bunny-icp" / "bun0.pcd")
+    assert c.normals is not None and "curvature" in c.scalars and len(c.scalars["curvature"]) == 397
+
+
+def test_stanford_bunny_mesh_equals_open3d():
+    path = DATA / "stanford-bunny-mesh" / "stanford_bunny.ply"
+    c = io.read(path)
+    m = open3d.io.read_triangle_mesh(str(path))
+    np.testing.assert_array_equal(c.points, np.asarray(m.vertices))
+    np.testing.assert_array_equal(c.triangles, np.asarray(m.triangles))
+    assert set(c.scalars) == {"confidence", "intensity"}
+
+
+@pytest.mark.parametrize("binary", [True, False])
+def test_ply_round_trip_is_exact(tmp_path, binary):
+    rng = np.random.default_rng(0)
+    p = rng.normal(0, 1000, (500, 3))  # machine coordinates, full double precision
+    n = rng.normal(size=(500, 3))
+    a = rng.normal(size=500)
+    path = tmp_path / "c.ply"
+    machscan.write_points(path, p, n, binary, scalars={"allowance": a})
+    c = io.read(path)
+    np.testing.assert_array_equal(c.points, p)
+    np.testing.assert_array_equal(c.normals, n)
+    np.testing.assert_array_equal(c.scalars["allowance"], a)
+    ref = open3d.io.read_point_cloud(str(path))
+    np.testing.assert_array_equal(np.asarray(ref.points), p)
+
+
+def _ply(path, fmt, header_props, rows_bytes_or_text, n, faces=None):
+    head = f"ply\nformat {fmt} 1.0\nelement vertex {n}\n" + "".join(f"property {t} {name}\n" for t, name in header_props)
+    if faces is not None:
+        head += f"element face {len(faces)}\nproperty list uchar int vertex_indices\n"
+    head += "end_header\n"
+    with open(path, "wb") as fh:
+        fh.write(head.encode())
+        fh.write(rows_bytes_or_text)
+        if faces is not None:
+            for f in faces:
+                fh.write(f if isinstance(f, bytes) else f.encode())
+
+
+@pytest.mark.parametrize("order", [">", "<"])
+def test_binary_ply_float32_both_byte_orders_with_faces(tmp_path, order):
+    p = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.5]], dtype=np.float32)
+    q = np.arange(4, dtype=np.uint8)
+    rec = np.zeros(4, dtype=[("x", order + "f4"), ("y", order + "f4"), ("z", order + "f4"), ("q", "u1")])
+    rec["x"], rec["y"], rec["z"], rec["q"] = p[:, 0], p[:, 1], p[:, 2], q
+    fmt = "binary_big_endian" if order == ">" else "binary_little_endian"
+    quad = struct.pack(order + "B4i", 4, 0, 1, 2, 3)
+    path = tmp_path / "m.ply"
+    _ply(path, fmt, [("float", "x"), ("float", "y"), ("float", "z"), ("uchar", "q")], rec.tobytes(), 4, faces=[quad])
+    c = io.read(path)
+    np.testing.assert_array_equal(c.points, p.astype(np.float64))
+    np.testing.assert_array_equal(c.scalars["q"], q)
+    np.testing.assert_array_equal(c.triangles, [[0, 1, 2], [0, 2, 3]])
+
+
+def _pcd_header(fields, sizes, types, n, data):
+    return (
+        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n"
+        f"FIELDS {' '.join(fields)}\nSIZE {' '.join(map(str, sizes))}\nTYPE {' '.join(types)}\n"
+        f"COUNT {' '.join('1' for _ in fields)}\nWIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n"
+    ).encode()
+
+
+def _lzf_literal(raw: bytes) -> bytes:
+    out = bytearray()
+    for k in range(0, len(raw), 32):
+        chunk = raw[k:k + 32]
+        out.append(len(chunk) - 1)
+        out += chunk
+    return bytes(out)
+
+
+@pytest.mark.parametrize("data", ["ascii", "binary", "binary_compressed"])
+def test_pcd_layouts_equal_open3d(tmp_path, data):
+    rng = np.random.default_rng(1)
+    n = 257
+    p = rng.normal(size=(n, 3)).astype(np.float32)
+    inten = rng.uniform(0, 1, n).astype(np.float32)
+    fields, sizes, types = ["x", "y", "z", "intensity"], [4, 4, 4, 4], ["F", "F", "F", "F"]
+    cols = [p[:, 0], p[:, 1], p[:, 2], inten]
+    path = tmp_path / f"c_{data}.pcd"
+    with open(path, "wb") as fh:
+        fh.write(_pcd_header(fields, sizes, types, n, data))
+        if data == "ascii":
+            fh.write("".join(" ".join(repr(float(c[i])) for c in cols) + "\n" for i in range(n)).encode())
+        elif data == "binary":
+            fh.write(np.column_stack(cols).astype("<f4").tobytes())
+        else:
+            raw = b"".join(c.astype("<f4").tobytes() for c in cols)  # column-major
+            comp = _lzf_literal(raw)
+            fh.write(struct.pack("<II", len(comp), len(raw)) + comp)
+    c = io.read(path)
+    np.testing.assert_array_equal(c.points, p.astype(np.float64))
+    np.testing.assert_array_equal(c.scalars["intensity"], inten.astype(np.float64))
+    ref = open3d.io.read_point_cloud(str(path))
+    np.testing.assert_array_equal(np.asarray(ref.points), c.points)
+
+
+def test_text_points_with_header_and_columns(tmp_path):
+    (tmp_path / "a.csv").write_text("id,x,y,z\n0,1.5,2,3\n1,4,5,6e-3\n")
+    got = io.read(tmp_path / "a.csv", columns=(1, 2, 3))
+    np.testing.assert_array_equal(got.points, [[1.5, 2, 3], [4, 5, 6e-3]])
+    (tmp_path / "b.xyz").write_text("# comment\n1 2 3\n4 5 6\n")
+    np.testing.assert_array_equal(machscan.read_points(tmp_path / "b.xyz"), [[1, 2, 3], [4, 5, 6]])
+
+
+def _write(path, content):
+    with open(path, "wb") as fh:
+        fh.write(content)
+
+
+def bad_files(tmp_path):
+    hdr = b"ply\nformat binary_little_endian 1.0\nelement vertex 10\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+    yield "truncated.ply", hdr + b"\0" * 50, "truncated"
+    yield "liar.ply", b"ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n", "declares 5 vertices"
+    yield "type.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n1\n", "unknown property type"
+    yield "noend.ply", b"ply\nformat ascii 1.0\nelement vertex 1\n", "end_header"
+    yield "noxyz.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float a\nend_header\n1\n", "x, y and z"
+    yield "face.ply", (b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                       b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "vertex 7"
+    yield "notnum.pcd", _pcd_header(["x", "y", "z"], [4, 4, 4], ["F", "F", "F"], 2, "ascii") + b"1 2 3\n4 x 6\n", "not a number"
+    yield "short.pcd", _pcd_header(["x", "y", "z"], [4, 4, 4], ["F", "F", "F"], 9, "binary") + b"\0" * 20, "truncated"
+    raw = np.zeros(12, "<f4").tobytes()
+    yield "lzf.pcd", _pcd_header(["x", "y", "z"], [4, 4, 4], ["F", "F", "F"], 4, "binary_compressed") + struct.pack("<II", 3, len(raw)) + b"\x05ab", "LZF"
+    yield "type.pcd", _pcd_header(["x", "y", "z"], [4, 4, 3], ["F", "F", "F"], 1, "ascii") + b"1 2 3\n", "not a number type"
+
+
+def test_malformed_files_name_the_file_and_the_problem(tmp_path):
+    for name, content, msg in bad_files(tmp_path):
+        path = tmp_path / name
+        _write(path, content)
+        with pytest.raises(ValueError) as exc:
+            io.read(path)
+        assert name in str(exc.value) and msg in str(exc.value), (name, str(exc.value))
+
+
+def test_missing_file_and_unknown_type():
+    with pytest.raises(OSError, match="cannot read"):
+        io.read("/nonexistent/cloud.ply")
+    with pytest.raises(ValueError, match="unknown point file type"):
+        io.read("cloud.obj")
