@@ -150,3 +150,10 @@ def test_bad_input_raises_value_error(call, name):
 
 def test_empty_cloud_gives_no_clusters():
     assert machscan.euclidean_clusters(np.zeros((0, 3)), 1.0).shape == (0,)
+
+
+def test_radius_is_strict_like_open3d():
+    p = np.column_stack([np.arange(6.0), np.zeros(6), np.zeros(6)])  # 1 mm apart
+    ref = np.asarray(open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p)).cluster_dbscan(eps=1.0, min_points=1))
+    np.testing.assert_array_equal(machscan.euclidean_clusters(p, 1.0), ref)
+    assert machscan.euclidean_clusters(p, 1.0 + 1e-9).max() == 0

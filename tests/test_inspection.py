@@ -93,7 +93,7 @@ def test_unmatched_contours_are_reported():
     [
         (dict(cad_contours=[np.zeros((2, 3))]), "cad_contours"),
         (dict(cad_contours=[]), "cad_contours"),
-        (dict(cad_contours=np.zeros((5, 3))), "cad_contours"),
+        (dict(cad_contours=np.zeros((2, 3))), "cad_contours"),
         (dict(cad_contours=[np.full((4, 3), np.nan)]), "cad_contours"),
         (dict(window=10**6), "window"),
         (dict(min_cluster_frames=0), "min_cluster_frames"),
@@ -134,3 +134,15 @@ def test_suspect_fits_are_left_out():
     c10 = [c for c in r.contours if c.cad_index == 10][0]
     c10_loose = [c for c in loose.contours if c.cad_index == 10][0]
     assert c10_loose.error.max > c10.error.max + 0.02
+
+
+def test_cad_as_one_point_set_is_clustered_into_contours(run):
+    scan, truth, r = run
+    cloud = np.vstack([machscan.resample_polyline(np.asarray(p), 0.005, True) for p in truth.nominal_polylines])
+    r2 = inspect_grooves(scan, cloud[np.random.default_rng(0).permutation(len(cloud))])
+    assert len(r2.contours) == 11 and r2.unmatched_cad == ()
+    # Same contours (in clustering order), same errors as from the polylines.
+    by_centroid = {tuple(np.round(c.theoretical.mean(0), 3)): c for c in r.contours}
+    for c in r2.contours:
+        ref = by_centroid[tuple(np.round(c.theoretical.mean(0), 3))]
+        assert abs(c.error.mean - ref.error.mean) < 1e-4

@@ -280,9 +280,7 @@ def _fit_bending(x, y, dz, degree):
 
 # ---- the workflow -------------------------------------------------------------------------
 
-def _as_polylines(cad_contours: Sequence[ArrayLike]) -> list[NDArray[np.float64]]:
-    if isinstance(cad_contours, np.ndarray) and cad_contours.ndim == 2:
-        raise ValueError("cad_contours: expected a sequence of (n, 3) polylines, got one (n, 3) array; wrap it in a list")
+def _as_polylines(cad_contours: Sequence[ArrayLike] | NDArray[np.float64]) -> list[NDArray[np.float64]]:
     out = []
     for k, c in enumerate(cad_contours):
         a = np.asarray(c, dtype=np.float64)
@@ -342,8 +340,11 @@ def inspect_grooves(
     ----------
     scan : Scan
         Raw scan: frames, poses, profiler, machine (AC head with C2 and mount).
-    cad_contours : sequence of array_like, each (n, 3) or (n, 2)
-        Closed CAD polylines in the WCS, mm (z = 0 when only x, y are given).
+    cad_contours : sequence of array_like, each (n, 3) or (n, 2); or one (n, 3) array
+        Closed CAD polylines in the WCS, mm (z = 0 when only x, y are given), resampled every
+        ``cad_spacing`` mm. Or the points of the whole drawing as one array: its contours are
+        then found by the same Euclidean clustering as the groove centres and its points are
+        used as they are (they should be dense: see step 5).
     window, alpha, nominal_width, fit_alpha
         Groove fit settings (see :func:`machscan.fit_grooves`).
     cluster_radius, cluster_k, min_cluster_frames
@@ -368,7 +369,19 @@ def inspect_grooves(
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan: expected a machscan.Scan, got {type(scan).__name__}")
-    polylines = _as_polylines(cad_contours)
+    cad_cloud = isinstance(cad_contours, np.ndarray) and cad_contours.ndim == 2
+    if cad_cloud:
+        # One point set for the whole drawing: its contours are found by the same Euclidean
+        # clustering as the groove centres (SPEC C1); the points are used as they are.
+        cad_points = np.asarray(cad_contours, dtype=np.float64)
+        if cad_points.shape[1] == 2:
+            cad_points = np.column_stack([cad_points, np.zeros(len(cad_points))])
+        if cad_points.shape[1] != 3 or len(cad_points) < 3 or not np.isfinite(cad_points).all():
+            raise ValueError(f"cad_contours: expected finite (n, 3) points with n >= 3, got {cad_contours.shape}")
+        cad_labels = _core.euclidean_clusters(cad_points, cluster_radius, cluster_k)
+        polylines = [cad_points[cad_labels == c] for c in range(int(cad_labels.max()) + 1)]
+    else:
+        polylines = _as_polylines(cad_contours)
     if window > scan.n_readings:
         raise ValueError(f"window: {window} readings, but the frames have only {scan.n_readings}")
     if min_cluster_frames < 1:
@@ -407,7 +420,7 @@ def inspect_grooves(
         renum[kept_labels] = np.arange(len(kept_labels))
         cluster[idx_ok] = renum[labels]
     n_clusters = int(cluster.max()) + 1
-    theoretical = [_core.resample_polyline(p, cad_spacing, True) for p in polylines]
+    theoretical = polylines if cad_cloud else [_core.resample_polyline(p, cad_spacing, True) for p in polylines]
     cad_centroids = np.array([p.mean(0) for p in theoretical])
     cl_centroids = np.array([centre[cluster == c].mean(0) for c in range(n_clusters)]).reshape(-1, 3)
     match = _core.match_contours(cl_centroids, cad_centroids, max_match_distance)

@@ -1,9 +1,9 @@
 //! Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than a threshold belong to the
 //! same contour. Unlike k-means it needs no cluster count.
 //!
-//! Clusters are the connected components of the neighbour graph: i—j when j is within `radius`
-//! of i (radius form, the same partition as DBSCAN with min_points = 1, i.e. Open3D's
-//! `cluster_dbscan(eps, 1)`), or when j is one of the `k` nearest of i within `radius` or i one
+//! Clusters are the connected components of the neighbour graph: i—j when j is closer than
+//! `radius` to i (strictly, as Open3D's radius search: the same partition as DBSCAN with
+//! min_points = 1, i.e. Open3D's `cluster_dbscan(eps, 1)`), or when j is one of the `k` nearest of i within `radius` or i one
 //! of j's (the paper's k-nearest form, made symmetric so the result does not depend on which
 //! point a cluster grows from). Neighbours are queried in parallel blocks and merged by
 //! union–find: memory stays O(N), with no neighbour lists kept for the whole cloud. Clusters are
@@ -87,7 +87,8 @@ type Cell = [i64; 3];
 /// Radius form on a grid of cells of edge r/√3 (see the module note).
 fn union_within_radius_grid(points: &[[f64; 3]], radius: f64, parent: &mut [u32]) {
     let n = points.len();
-    let edge = radius / 3f64.sqrt();
+    // A hair under r/√3, so that two points of one cell are strictly closer than r.
+    let edge = radius / 3f64.sqrt() * (1.0 - 1e-12);
     let r2 = radius * radius;
     let cell_of = |p: &[f64; 3]| -> Cell { [(p[0] / edge).floor() as i64, (p[1] / edge).floor() as i64, (p[2] / edge).floor() as i64] };
     // Points sorted by cell (stable: within a cell, by index).
@@ -129,7 +130,7 @@ fn union_within_radius_grid(points: &[[f64; 3]], radius: f64, parent: &mut [u32]
                     let p = points[i as usize];
                     for &j in others {
                         let q = points[j as usize];
-                        if (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2) <= r2 {
+                        if (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2) < r2 {
                             out.push((i, j));
                             break 'pair;
                         }
