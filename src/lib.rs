@@ -1,6 +1,7 @@
 //! machscan: on-machine measurement kernels for five-axis machining.
 //!
 //! The core modules are free of pyo3; `python` is the only place that talks to Python.
+pub mod cloud;
 pub mod contour;
 pub mod error;
 pub mod geom;

@@ -15,6 +15,7 @@ __all__ = [
     "ac_table_rotate",
     "calibrate_mount",
     "contour_error",
+    "crop_box",
     "euclidean_clusters",
     "fit_grooves",
     "interpolate_poses",
@@ -22,9 +23,15 @@ __all__ = [
     "match_contours",
     "nearest_neighbors",
     "profile_to_points",
+    "radius_outlier_removal",
+    "random_downsample",
     "read_cloud",
+    "remove_duplicates",
     "resample_polyline",
     "scan_to_wcs",
+    "statistical_outlier_removal",
+    "uniform_downsample",
+    "voxel_downsample",
     "write_points",
 ]
 
@@ -181,7 +188,7 @@ def match_contours(
     indices into the theoretical centroids, −1 where none lies within ``max_distance`` mm."""
 
 def read_cloud(
-    path: str | PathLike[str], delimiter: str | None = None, columns: tuple[int, int, int] = (0, 1, 2)
+    path: str | PathLike[str], delimiter: str | None = None, columns: tuple[int, int, int] = ...
 ) -> dict[str, Any]:
     """Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text); ``machscan.io.read`` wraps the
     dict this returns (``points``, ``normals``, ``scalars``, ``triangles``)."""
@@ -194,6 +201,29 @@ def write_points(
     binary: bool = True,
 ) -> None:
     """Write points (mm), optional normals and named scalar properties to a ``.ply`` file."""
+
+def voxel_downsample(points: ArrayLike, voxel_size: float, return_index: bool = False) -> Any:
+    """Voxel grid (Open3D's ``voxel_down_sample`` definition, bit-identical centroids); voxels in
+    the order of their first point. Returns ``centroids (M, 3)``, or ``(centroids,
+    voxel_of_point (N,))`` with ``return_index``."""
+
+def statistical_outlier_removal(points: ArrayLike, k: int, std_ratio: float) -> NDArray[np.int64]:
+    """Kept indices of Open3D's ``remove_statistical_outlier(nb_neighbors=k, std_ratio)``."""
+
+def radius_outlier_removal(points: ArrayLike, radius: float, min_neighbors: int) -> NDArray[np.int64]:
+    """Kept indices of Open3D's ``remove_radius_outlier(nb_points=min_neighbors, radius)``."""
+
+def remove_duplicates(points: ArrayLike, tolerance: float) -> NDArray[np.int64]:
+    """Kept indices after duplicate removal without chain deletion (paper 004)."""
+
+def crop_box(points: ArrayLike, min_bound: ArrayLike, max_bound: ArrayLike) -> NDArray[np.int64]:
+    """Indices of the points inside ``[min_bound, max_bound]`` (bounds included)."""
+
+def random_downsample(n_points: int, count: int, seed: int = 0) -> NDArray[np.int64]:
+    """``count`` indices drawn without replacement from ``n_points``, reproducibly; ascending."""
+
+def uniform_downsample(n_points: int, every_k: int) -> NDArray[np.int64]:
+    """Every ``every_k``-th index from 0 (Open3D's ``uniform_down_sample``)."""
 
 @final
 class KinematicChain:

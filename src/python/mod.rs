@@ -1,6 +1,7 @@
 //! The Python face of the core: the only module that uses pyo3 and numpy. One file per core
 //! module; `convert` holds the array conversion, shape checks, error mapping and the helper
 //! that releases the GIL.
+mod cloud;
 mod contour;
 mod convert;
 mod groove;
@@ -18,5 +19,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     groove::register(m)?;
     spatial::register(m)?;
     contour::register(m)?;
+    cloud::register(m)?;
     Ok(())
 }

@@ -1,0 +1,280 @@
+//! Point cloud filters. Where Open3D has the same filter its definition is matched exactly,
+//! so results compare index for index (Open3D 0.20, `PointCloud.cpp`):
+//!
+//! - voxel grid: origin = min bound − voxel/2, voxel = ⌊(p − origin)/voxel⌋, centroid = sum in
+//!   point order / count (`voxel_down_sample`);
+//! - statistical outlier removal: k nearest including the point itself, mean of the distances,
+//!   cloud mean over N and sample standard deviation over the points with a non-zero mean,
+//!   kept when 0 < mean_i < mean + ratio·std (`remove_statistical_outlier`);
+//! - radius outlier removal: points strictly within the radius, the point itself included,
+//!   kept when more than `min_neighbors` (`remove_radius_outlier(nb_points, radius)`);
+//! - uniform down-sampling: every k-th point from the first (`uniform_down_sample`).
+//!
+//! Voxel keys are 64-bit and relative to the minimum bound, so clouds in machine coordinates
+//! several metres from the origin keep full precision.
+use crate::error::{Error, Result};
+use crate::spatial::PointIndex;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+fn check_points(points: &[[f64; 3]]) -> Result<()> {
+    if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
+    }
+    Ok(())
+}
+
+/// Indices of the points inside the axis-aligned box `[min, max]` (bounds included).
+pub fn crop_box(points: &[[f64; 3]], min: [f64; 3], max: [f64; 3]) -> Result<Vec<usize>> {
+    if (0..3).any(|k| !(min[k] <= max[k])) {
+        return Err(Error::invalid("min_bound", format!("must be <= max_bound in every axis, got {min:?} and {max:?}")));
+    }
+    Ok((0..points.len())
+        .into_par_iter()
+        .filter(|&i| (0..3).all(|k| points[i][k] >= min[k] && points[i][k] <= max[k]))
+        .collect())
+}
+
+/// A voxel grid: one centroid per occupied voxel, voxels in the order of their first point.
+pub struct VoxelGrid {
+    pub centroids: Vec<[f64; 3]>,
+    /// Voxel of every input point (index into `centroids`).
+    pub voxel_of_point: Vec<u32>,
+}
+
+/// Splitmix-style hasher for voxel keys: std's SipHash is several times slower here and
+/// protects against nothing a point cloud can do.
+#[derive(Default)]
+struct KeyHasher(u64);
+
+impl Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        let mut z = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 << 8) | b as u64 ^ (self.0 >> 56);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 ^= v.wrapping_add(self.0 << 6);
+    }
+}
+
+pub fn voxel_downsample(points: &[[f64; 3]], voxel: f64) -> Result<VoxelGrid> {
+    if !(voxel.is_finite() && voxel > 0.0) {
+        return Err(Error::invalid("voxel_size", format!("must be a positive length in mm, got {voxel}")));
+    }
+    check_points(points)?;
+    if points.is_empty() {
+        return Ok(VoxelGrid { centroids: Vec::new(), voxel_of_point: Vec::new() });
+    }
+    if points.len() >= u32::MAX as usize {
+        return Err(Error::invalid("points", "more than 2^32 − 1 points"));
+    }
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let origin = [lo[0] - 0.5 * voxel, lo[1] - 0.5 * voxel, lo[2] - 0.5 * voxel];
+    // Voxel counts per axis: keys pack three 21-bit indices into 64 bits when they fit.
+    let extent: Vec<u64> = (0..3).map(|k| ((hi[k] - origin[k]) / voxel).floor() as u64 + 1).collect();
+    let max_extent = *extent.iter().max().unwrap_or(&1);
+    if max_extent >= 1 << 21 {
+        return Err(Error::invalid(
+            "voxel_size",
+            format!("{voxel} mm over a cloud {:.6} mm across makes more than 2^21 voxels per axis", (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)),
+        ));
+    }
+    let keys: Vec<u64> = points
+        .par_iter()
+        .map(|p| {
+            // Same arithmetic as Open3D: (p − origin) / voxel, floored.
+            let i = ((p[0] - origin[0]) / voxel).floor() as u64;
+            let j = ((p[1] - origin[1]) / voxel).floor() as u64;
+            let k = ((p[2] - origin[2]) / voxel).floor() as u64;
+            (i << 42) | (j << 21) | k
+        })
+        .collect();
+    let mut map: HashMap<u64, u32, BuildHasherDefault<KeyHasher>> = HashMap::default();
+    let mut voxel_of_point = Vec::with_capacity(points.len());
+    let mut sums: Vec<([f64; 3], u32)> = Vec::new();
+    for (p, key) in points.iter().zip(&keys) {
+        let id = *map.entry(*key).or_insert_with(|| {
+            sums.push(([0.0; 3], 0));
+            (sums.len() - 1) as u32
+        });
+        let s = &mut sums[id as usize];
+        // Summed in point order, as Open3D accumulates: bit-identical centroids.
+        s.0[0] += p[0];
+        s.0[1] += p[1];
+        s.0[2] += p[2];
+        s.1 += 1;
+        voxel_of_point.push(id);
+    }
+    let centroids = sums.into_iter().map(|(s, n)| [s[0] / n as f64, s[1] / n as f64, s[2] / n as f64]).collect();
+    Ok(VoxelGrid { centroids, voxel_of_point })
+}
+
+/// Kept indices, ascending.
+pub fn statistical_outlier_removal(points: &[[f64; 3]], k: usize, std_ratio: f64) -> Result<Vec<usize>> {
+    if k == 0 {
+        return Err(Error::invalid("k", "must be at least 1"));
+    }
+    if !(std_ratio.is_finite() && std_ratio >= 0.0) {
+        return Err(Error::invalid("std_ratio", format!("must be >= 0, got {std_ratio}")));
+    }
+    let n = points.len();
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let index = PointIndex::new(points)?;
+    let kk = k.min(n);
+    let avg: Vec<f64> = points
+        .par_iter()
+        .map(|p| {
+            let nn = index.knn(p, kk);
+            nn.iter().map(|&(_, d2)| d2.sqrt()).sum::<f64>() / nn.len() as f64
+        })
+        .collect();
+    // Sequential in point order, as Open3D sums.
+    let valid = n as f64;
+    let mut total = 0.0;
+    for &a in &avg {
+        if a > 0.0 {
+            total += a;
+        }
+    }
+    let mean = total / valid;
+    let mut sq = 0.0;
+    for &a in &avg {
+        if a > 0.0 {
+            sq += (a - mean) * (a - mean);
+        }
+    }
+    let std = (sq / (valid - 1.0)).sqrt();
+    let threshold = mean + std_ratio * std;
+    Ok((0..n).filter(|&i| avg[i] > 0.0 && avg[i] < threshold).collect())
+}
+
+/// Kept indices, ascending: points with more than `min_neighbors` points strictly closer than
+/// `radius` (the point itself counted).
+pub fn radius_outlier_removal(points: &[[f64; 3]], radius: f64, min_neighbors: usize) -> Result<Vec<usize>> {
+    if !(radius.is_finite() && radius > 0.0) {
+        return Err(Error::invalid("radius", format!("must be a positive distance in mm, got {radius}")));
+    }
+    if points.is_empty() {
+        return Ok(Vec::new());
+    }
+    let index = PointIndex::new(points)?;
+    let r2 = radius * radius;
+    Ok((0..points.len())
+        .into_par_iter()
+        .filter(|&i| {
+            let p = points[i];
+            let mut count = 0usize;
+            index.for_each_within(&p, radius, |j| {
+                let q = points[j];
+                if (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2) < r2 {
+                    count += 1;
+                }
+            });
+            count > min_neighbors
+        })
+        .collect())
+}
+
+/// Duplicate-point removal (paper 004): in point order, each point not yet removed removes every
+/// other point within `tolerance`; a removed point never removes others, so no chain of
+/// deletions opens a hole. Returns the kept indices, ascending.
+pub fn remove_duplicates(points: &[[f64; 3]], tolerance: f64) -> Result<Vec<usize>> {
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(Error::invalid("tolerance", format!("must be a positive distance in mm, got {tolerance}")));
+    }
+    if points.is_empty() {
+        return Ok(Vec::new());
+    }
+    let index = PointIndex::new(points)?;
+    let mut removed = vec![false; points.len()];
+    for i in 0..points.len() {
+        if removed[i] {
+            continue;
+        }
+        index.for_each_within(&points[i], tolerance, |j| {
+            if j != i {
+                removed[j] = true;
+            }
+        });
+    }
+    Ok((0..points.len()).filter(|&i| !removed[i]).collect())
+}
+
+/// `count` points drawn without replacement, reproducibly from `seed`; ascending indices.
+pub fn random_downsample(n: usize, count: usize, seed: u64) -> Vec<usize> {
+    let count = count.min(n);
+    // Partial Fisher–Yates with splitmix64: no RNG crate for one shuffle.
+    let mut idx: Vec<usize> = (0..n).collect();
+    let mut s = seed;
+    let mut next = || {
+        s = s.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    for i in 0..count {
+        let j = i + (next() % (n - i) as u64) as usize;
+        idx.swap(i, j);
+    }
+    idx.truncate(count);
+    idx.sort_unstable();
+    idx
+}
+
+/// Every `every`-th point from the first: 0, k, 2k, …
+pub fn uniform_downsample(n: usize, every: usize) -> Result<Vec<usize>> {
+    if every == 0 {
+        return Err(Error::invalid("every_k", "must be at least 1"));
+    }
+    Ok((0..n).step_by(every).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn voxel_grid_far_from_the_origin_keeps_precision() {
+        // 3 m from the origin, 10 µm voxels.
+        let pts: Vec<[f64; 3]> = (0..100).map(|i| [3000.0 + i as f64 * 0.004, -2500.0, 1200.0]).collect();
+        let g = voxel_downsample(&pts, 0.01).unwrap();
+        assert_eq!(g.centroids.len(), 41);
+        let first = g.centroids[0];
+        assert!((first[0] - 3000.002).abs() < 1e-9, "{first:?}");
+    }
+
+    #[test]
+    fn duplicates_do_not_chain() {
+        // A chain of points 0.8 apart with tolerance 1: removing by chains would keep one.
+        let pts: Vec<[f64; 3]> = (0..10).map(|i| [i as f64 * 0.8, 0.0, 0.0]).collect();
+        assert_eq!(remove_duplicates(&pts, 1.0).unwrap(), vec![0, 2, 4, 6, 8]);
+    }
+
+    #[test]
+    fn random_is_reproducible_and_without_replacement() {
+        let a = random_downsample(1000, 100, 7);
+        assert_eq!(a, random_downsample(1000, 100, 7));
+        assert_ne!(a, random_downsample(1000, 100, 8));
+        let mut d = a.clone();
+        d.dedup();
+        assert_eq!(d.len(), 100);
+    }
+}
