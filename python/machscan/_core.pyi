@@ -16,12 +16,14 @@ __all__ = [
     "calibrate_mount",
     "contour_error",
     "crop_box",
+    "estimate_normals",
     "euclidean_clusters",
     "fit_grooves",
     "interpolate_poses",
     "level_groove_frame",
     "match_contours",
     "nearest_neighbors",
+    "principal_curvatures",
     "profile_to_points",
     "radius_outlier_removal",
     "random_downsample",
@@ -30,6 +32,7 @@ __all__ = [
     "resample_polyline",
     "scan_to_wcs",
     "statistical_outlier_removal",
+    "surface_variation",
     "uniform_downsample",
     "voxel_downsample",
     "write_points",
@@ -224,6 +227,27 @@ def random_downsample(n_points: int, count: int, seed: int = 0) -> NDArray[np.in
 
 def uniform_downsample(n_points: int, every_k: int) -> NDArray[np.int64]:
     """Every ``every_k``-th index from 0 (Open3D's ``uniform_down_sample``)."""
+
+def estimate_normals(
+    points: ArrayLike,
+    k: int = 20,
+    radius: float | None = None,
+    towards: ArrayLike | None = None,
+    along: ArrayLike | None = None,
+    consistent: bool = False,
+) -> NDArray[np.float64]:
+    """PCA normals ``(N, 3)``: smallest eigenvector of each k-nearest (itself included) or hybrid
+    radius neighbourhood covariance; oriented ``towards`` a viewpoint, ``along`` a direction,
+    or ``consistent`` (MST propagation from the highest point, turned to +z)."""
+
+def surface_variation(points: ArrayLike, k: int = 20, radius: float | None = None) -> NDArray[np.float64]:
+    """λ0 / (λ0 + λ1 + λ2) of each neighbourhood covariance, ``(N,)``."""
+
+def principal_curvatures(
+    points: ArrayLike, normals: ArrayLike | None = None, k: int = 20, radius: float | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Principal curvatures ``(N, 2)`` (1/mm, k1 ≥ k2, signed along the normals) and directions
+    ``(N, 2, 3)`` from a local quadric fit."""
 
 @final
 class KinematicChain:

@@ -128,7 +128,135 @@ fn uniform_downsample<'py>(py: Python<'py>, n_points: usize, every_k: usize) -> 
     indices(py, crate::cloud::uniform_downsample(n_points, every_k).map_err(to_py_err)?)
 }
 
+fn neighbourhood(k: usize, radius: Option<f64>) -> crate::cloud::Neighbourhood {
+    match radius {
+        Some(r) => crate::cloud::Neighbourhood::Hybrid { radius: r, max_nn: k },
+        None => crate::cloud::Neighbourhood::Knn(k),
+    }
+}
+
+fn vec3(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<[f64; 3]>> {
+    match obj {
+        Some(o) if !o.is_none() => Ok(Some(super::convert::f64_vector::<3>(o, name, "(x, y, z)")?)),
+        _ => Ok(None),
+    }
+}
+
+/// PCA normals (SPEC F): the eigenvector of the smallest eigenvalue of each point's
+/// neighbourhood covariance — the k nearest points, the point itself included (Open3D's
+/// ``KDTreeSearchParamKNN(k)``), or with ``radius`` the nearest ``k`` strictly closer than it
+/// (``KDTreeSearchParamHybrid(radius, k)``). Unit length.
+///
+/// Orientation (at most one): ``towards`` a viewpoint (n·(v − p) ≥ 0), ``along`` a direction
+/// (n·d ≥ 0), or ``consistent=True``: propagation over a minimum spanning tree of the k-nearest
+/// graph from the highest point, turned to +z (Hoppe et al. 1992). Without one the sign is the
+/// solver's. A point with fewer than 3 neighbours gets (0, 0, 1), as in Open3D.
+///
+/// Examples
+/// --------
+/// >>> n = machscan.estimate_normals(pts, k=20, towards=(0, 0, 500))
+#[pyfunction]
+#[pyo3(signature = (points, k=20, radius=None, towards=None, along=None, consistent=false))]
+fn estimate_normals<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    k: usize,
+    radius: Option<f64>,
+    towards: Option<&Bound<'py, PyAny>>,
+    along: Option<&Bound<'py, PyAny>>,
+    consistent: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let pts = points_arg(points)?;
+    let (towards, along) = (vec3(towards, "towards")?, vec3(along, "along")?);
+    if [towards.is_some(), along.is_some(), consistent].iter().filter(|b| **b).count() > 1 {
+        return Err(pyo3::exceptions::PyValueError::new_err("towards, along, consistent: choose at most one orientation"));
+    }
+    let nbh = neighbourhood(k, radius);
+    let normals = py
+        .detach(|| -> crate::Result<Vec<[f64; 3]>> {
+            let (mut n, _, _) = crate::cloud::estimate_normals(&pts, nbh)?;
+            if let Some(v) = towards {
+                crate::cloud::orient_towards(&pts, &mut n, v);
+            } else if let Some(d) = along {
+                crate::cloud::orient_along(&mut n, d);
+            } else if consistent {
+                crate::cloud::orient_consistent(&pts, &mut n, k)?;
+            }
+            Ok(n)
+        })
+        .map_err(to_py_err)?;
+    let m = normals.len();
+    to_numpy(py, normals.into_iter().flatten().collect::<Vec<_>>(), &[m, 3])
+}
+
+/// Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighbourhood covariance (0 on a
+/// plane, up to 1/3 for isotropic scatter); neighbourhoods as in :func:`estimate_normals`.
+#[pyfunction]
+#[pyo3(signature = (points, k=20, radius=None))]
+fn surface_variation<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: usize, radius: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+    let pts = points_arg(points)?;
+    let (_, var, _) = py.detach(|| crate::cloud::estimate_normals(&pts, neighbourhood(k, radius))).map_err(to_py_err)?;
+    let n = var.len();
+    to_numpy(py, var, &[n])
+}
+
+/// Principal curvatures and directions from a local quadric fit (SPEC F).
+///
+/// In each point's frame (tangents u, v; normal n) the neighbours are fitted by
+/// ``h = a u² + b uv + c v² + d u + e v + f``; the shape operator at the point gives
+/// ``k1 ≥ k2`` (1/mm) and their directions. Signs follow the normals: positive where the
+/// surface bends towards the normal (a sphere with outward normals: −1/R). ``normals`` default
+/// to :func:`estimate_normals` with the same neighbourhood. Points with fewer than 6
+/// neighbours get NaN.
+///
+/// Returns
+/// -------
+/// curvatures : ndarray (N, 2)
+///     k1, k2 in 1/mm.
+/// directions : ndarray (N, 2, 3)
+///     Unit principal directions.
+///
+/// Examples
+/// --------
+/// >>> k, d = machscan.principal_curvatures(pts, k=30)
+#[pyfunction]
+#[pyo3(signature = (points, normals=None, k=20, radius=None))]
+fn principal_curvatures<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    normals: Option<&Bound<'py, PyAny>>,
+    k: usize,
+    radius: Option<f64>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let pts = points_arg(points)?;
+    let n = pts.len();
+    let given = match normals {
+        Some(o) if !o.is_none() => {
+            let a = f64_array(o, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
+            crate::error::check_finite("normals", a.as_slice()?, 3).map_err(to_py_err)?;
+            Some(as_points(a.as_slice()?))
+        }
+        _ => None,
+    };
+    let nbh = neighbourhood(k, radius);
+    let res = py
+        .detach(|| -> crate::Result<_> {
+            let nrm = match given {
+                Some(g) => g,
+                None => crate::cloud::estimate_normals(&pts, nbh)?.0,
+            };
+            crate::cloud::principal_curvatures(&pts, &nrm, nbh)
+        })
+        .map_err(to_py_err)?;
+    let curv: Vec<f64> = res.iter().flat_map(|r| r.0).collect();
+    let dirs: Vec<f64> = res.iter().flat_map(|r| r.1.into_iter().flatten()).collect();
+    Ok((to_numpy(py, curv, &[n, 2])?, to_numpy(py, dirs, &[n, 2, 3])?))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(estimate_normals, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_variation, m)?)?;
+    m.add_function(wrap_pyfunction!(principal_curvatures, m)?)?;
     m.add_function(wrap_pyfunction!(voxel_downsample, m)?)?;
     m.add_function(wrap_pyfunction!(statistical_outlier_removal, m)?)?;
     m.add_function(wrap_pyfunction!(radius_outlier_removal, m)?)?;
