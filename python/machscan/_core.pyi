@@ -23,6 +23,7 @@ __all__ = [
     "level_groove_frame",
     "match_contours",
     "nearest_neighbors",
+    "octree_simplify",
     "principal_curvatures",
     "profile_to_points",
     "radius_outlier_removal",
@@ -248,6 +249,17 @@ def principal_curvatures(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Principal curvatures ``(N, 2)`` (1/mm, k1 ≥ k2, signed along the normals) and directions
     ``(N, 2, 3)`` from a local quadric fit."""
+
+def octree_simplify(
+    points: ArrayLike,
+    d_min: float,
+    normals: ArrayLike | None = None,
+    k: int = 10,
+    eps1: int | None = None,
+    eps2: int | None = None,
+) -> NDArray[np.int64]:
+    """Octree simplification keeping features and the x–y boundary (paper 002 §2); sorted unique
+    kept indices."""
 
 @final
 class KinematicChain:

@@ -253,7 +253,62 @@ fn principal_curvatures<'py>(
     Ok((to_numpy(py, curv, &[n, 2])?, to_numpy(py, dirs, &[n, 2, 3])?))
 }
 
+/// Octree simplification keeping features and the boundary (SPEC F, paper 002 §2).
+///
+/// Cube of edge L (the largest extent) on the minimum corner, depth ⌈log2(L/d_min)⌉; each
+/// occupied leaf keeps its point of largest feature degree (mean angle between its normal and
+/// its ``k`` neighbours' normals, unoriented) and its point nearest the cell centre; the x–y
+/// boundary points are kept by the paper's group rule (sorted by x, groups of ``eps1`` keep
+/// min-y and max-y; sorted by y, groups of ``eps2`` keep min-x and max-x). ``eps1``/``eps2``
+/// default to the number of points in a strip ``d_min`` wide.
+///
+/// Parameters
+/// ----------
+/// points : array_like (N, 3)
+///     mm; z is the cutting depth direction.
+/// d_min : float
+///     Smallest cell edge, mm.
+/// normals : array_like (N, 3), optional
+///     Default: :func:`estimate_normals` with ``k``.
+/// k : int
+///     Neighbours of the feature degree.
+/// eps1, eps2 : int, optional
+///
+/// Returns
+/// -------
+/// ndarray of int64: kept indices, sorted and unique.
+///
+/// Examples
+/// --------
+/// >>> keep = machscan.octree_simplify(pts, d_min=2.0)
+#[pyfunction]
+#[pyo3(signature = (points, d_min, normals=None, k=10, eps1=None, eps2=None))]
+fn octree_simplify<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    d_min: f64,
+    normals: Option<&Bound<'py, PyAny>>,
+    k: usize,
+    eps1: Option<usize>,
+    eps2: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let pts = points_arg(points)?;
+    let n = pts.len();
+    let nrm = match normals {
+        Some(o) if !o.is_none() => {
+            let a = f64_array(o, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
+            crate::error::check_finite("normals", a.as_slice()?, 3).map_err(to_py_err)?;
+            Some(as_points(a.as_slice()?))
+        }
+        _ => None,
+    };
+    let opts = crate::cloud::OctreeOptions { d_min, k, eps1, eps2 };
+    let keep = py.detach(|| crate::cloud::octree_simplify(&pts, nrm.as_deref(), &opts)).map_err(to_py_err)?;
+    indices(py, keep)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(octree_simplify, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_normals, m)?)?;
     m.add_function(wrap_pyfunction!(surface_variation, m)?)?;
     m.add_function(wrap_pyfunction!(principal_curvatures, m)?)?;
