@@ -1,0 +1,109 @@
+"""Point cloud core against Open3D, side by side on the same data (issue #4 targets):
+
+- read 1 M points: binary PLY ≥ 1.5×, ASCII PLY ≥ 3×, ASCII PCD ≥ 3×, binary PCD ≥ 2× faster
+  than open3d.io.read_point_cloud;
+- voxel grid on 1 M points, statistical and radius outlier removal on 200 k, normals (k = 20)
+  on 200 k: each ≥ 2× faster;
+- peak memory of the voxel grid on 10 M points below 2× the input array (run with --memory).
+
+    python benchmarks/bench_cloud.py [--memory]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import open3d
+
+import machscan
+
+
+def best(fn, repeat=3):
+    t = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        t.append(time.perf_counter() - t0)
+    return min(t)
+
+
+def row(name, ms, o3):
+    print(f"  {name:<34} machscan {ms * 1e3:8.1f} ms   open3d {o3 * 1e3:8.1f} ms   ratio {o3 / ms:5.1f}x")
+
+
+def scanned_surface(n, seed=0):
+    rng = np.random.default_rng(seed)
+    x, y = rng.uniform(0, 500, n), rng.uniform(0, 300, n)
+    return np.column_stack([x, y, 5 * np.sin(x / 40) * np.cos(y / 30) + rng.normal(0, 0.01, n)])
+
+
+def files(d: Path, p: np.ndarray) -> dict[str, Path]:
+    pc = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p))
+    out = {}
+    for name, kw in (("binary PLY", dict(write_ascii=False)), ("ASCII PLY", dict(write_ascii=True))):
+        path = d / (name.replace(" ", "_") + ".ply")
+        open3d.io.write_point_cloud(str(path), pc, **kw)
+        out[name] = path
+    for name, kw in (("ASCII PCD", dict(write_ascii=True)), ("binary PCD", dict(write_ascii=False)),
+                     ("binary_compressed PCD", dict(write_ascii=False, compressed=True))):
+        path = d / (name.replace(" ", "_") + ".pcd")
+        open3d.io.write_point_cloud(str(path), pc, **kw)
+        out[name] = path
+    return out
+
+
+def memory_child(n: int) -> None:
+    p = scanned_surface(n)
+    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    machscan.voxel_downsample(p, 0.5)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    print(f"  voxel grid on {n / 1e6:.0f} M points: input {p.nbytes / 2**20:.0f} MiB, process peak {peak / 2**20:.0f} MiB "
+          f"(before the call {base / 2**20:.0f} MiB): added {(peak - base) / p.nbytes:.2f}x the input")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--memory", action="store_true", help="also measure the voxel grid's peak memory on 10 M points")
+    ap.add_argument("--memory-child", type=int, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.memory_child:
+        memory_child(args.memory_child)
+        return
+    print(f"{os.cpu_count()} cores, open3d {open3d.__version__}")
+    p1m = scanned_surface(1_000_000)
+    with tempfile.TemporaryDirectory() as d:
+        print("reading 1 M points:")
+        for name, path in files(Path(d), p1m).items():
+            ms = best(lambda: machscan.read_points(path))
+            o3 = best(lambda: open3d.io.read_point_cloud(str(path)))
+            assert np.allclose(machscan.read_points(path), np.asarray(open3d.io.read_point_cloud(str(path)).points))
+            row(name, ms, o3)
+    pc1m = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p1m))
+    print("filters:")
+    row("voxel grid, 1 M points", best(lambda: machscan.voxel_downsample(p1m, 1.0)), best(lambda: pc1m.voxel_down_sample(1.0)))
+    p200 = scanned_surface(200_000, seed=1)
+    pc200 = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p200))
+    row("statistical outliers, 200 k, k=20", best(lambda: machscan.statistical_outlier_removal(p200, 20, 2.0)),
+        best(lambda: pc200.remove_statistical_outlier(20, 2.0)))
+    row("radius outliers, 200 k, r=2", best(lambda: machscan.radius_outlier_removal(p200, 2.0, 5)),
+        best(lambda: pc200.remove_radius_outlier(5, 2.0)))
+
+    def o3_normals():
+        c = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p200))
+        c.estimate_normals(open3d.geometry.KDTreeSearchParamKNN(20))
+
+    row("normals k=20, 200 k", best(lambda: machscan.estimate_normals(p200, k=20)), best(o3_normals))
+    if args.memory:
+        subprocess.run([sys.executable, __file__, "--memory-child", "10000000"], check=True)
+
+
+if __name__ == "__main__":
+    main()
