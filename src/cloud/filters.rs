@@ -138,12 +138,10 @@ pub fn statistical_outlier_removal(points: &[[f64; 3]], k: usize, std_ratio: f64
     }
     let index = PointIndex::new(points)?;
     let kk = k.min(n);
-    let avg: Vec<f64> = points
+    let avg: Vec<f64> = index
+        .knn_many(points, kk)
         .par_iter()
-        .map(|p| {
-            let nn = index.knn(p, kk);
-            nn.iter().map(|&(_, d2)| d2.sqrt()).sum::<f64>() / nn.len() as f64
-        })
+        .map(|nn| nn.iter().map(|&(_, d2)| d2.sqrt()).sum::<f64>() / nn.len() as f64)
         .collect();
     // Sequential in point order, as Open3D sums.
     let valid = n as f64;
@@ -176,20 +174,18 @@ pub fn radius_outlier_removal(points: &[[f64; 3]], radius: f64, min_neighbors: u
     }
     let index = PointIndex::new(points)?;
     let r2 = radius * radius;
-    Ok((0..points.len())
-        .into_par_iter()
-        .filter(|&i| {
-            let p = points[i];
-            let mut count = 0usize;
-            index.for_each_within(&p, radius, |j| {
-                let q = points[j];
-                if (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2) < r2 {
-                    count += 1;
-                }
-            });
-            count > min_neighbors
-        })
-        .collect())
+    let keep = PointIndex::map_in_locality_order(points, |i| {
+        let p = points[i];
+        let mut count = 0usize;
+        index.for_each_within(&p, radius, |j| {
+            let q = points[j];
+            if (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2) < r2 {
+                count += 1;
+            }
+        });
+        count > min_neighbors
+    });
+    Ok((0..points.len()).filter(|&i| keep[i]).collect())
 }
 
 /// Duplicate-point removal (paper 004): in point order, each point not yet removed removes every

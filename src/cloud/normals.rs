@@ -76,17 +76,24 @@ pub fn estimate_normals(points: &[[f64; 3]], nbh: Neighbourhood) -> Result<(Vec<
         return Ok((Vec::new(), Vec::new(), 0));
     }
     let index = PointIndex::new(points)?;
-    let out: Vec<([f64; 3], f64, bool)> = points
-        .par_iter()
-        .map(|p| match local_pca(points, &nbh.query(&index, p)) {
-            Some((vals, vecs)) => {
-                let s = vals[0] + vals[1] + vals[2];
-                let n = vecs[0].normalize();
-                ([n.x, n.y, n.z], if s > 0.0 { vals[0] / s } else { 0.0 }, false)
-            }
-            None => ([0.0, 0.0, 1.0], 0.0, true),
-        })
-        .collect();
+    let knn = match nbh {
+        Neighbourhood::Knn(k) => Some(index.knn_many(points, k)),
+        Neighbourhood::Hybrid { .. } => None,
+    };
+    let neighbours = |i: usize| -> Vec<usize> {
+        match &knn {
+            Some(all) => all[i].iter().map(|&(j, _)| j).collect(),
+            None => nbh.query(&index, &points[i]),
+        }
+    };
+    let out: Vec<([f64; 3], f64, bool)> = PointIndex::map_in_locality_order(points, |i| match local_pca(points, &neighbours(i)) {
+        Some((vals, vecs)) => {
+            let s = vals[0] + vals[1] + vals[2];
+            let n = vecs[0].normalize();
+            ([n.x, n.y, n.z], if s > 0.0 { vals[0] / s } else { 0.0 }, false)
+        }
+        None => ([0.0, 0.0, 1.0], 0.0, true),
+    });
     let degenerate = out.iter().filter(|o| o.2).count();
     Ok((out.iter().map(|o| o.0).collect(), out.iter().map(|o| o.1).collect(), degenerate))
 }

@@ -31,12 +31,13 @@ pub fn feature_degree(points: &[[f64; 3]], normals: &[[f64; 3]], k: usize) -> Re
         return Err(Error::invalid("k", "must be at least 1"));
     }
     let index = PointIndex::new(points)?;
-    Ok(points
+    let knn = index.knn_many(points, k + 1);
+    Ok(knn
         .par_iter()
         .enumerate()
-        .map(|(i, p)| {
+        .map(|(i, nn)| {
             let ni = normals[i];
-            let nb: Vec<usize> = index.knn(p, k + 1).into_iter().map(|(j, _)| j).filter(|&j| j != i).take(k).collect();
+            let nb: Vec<usize> = nn.iter().map(|&(j, _)| j).filter(|&j| j != i).take(k).collect();
             if nb.is_empty() {
                 return 0.0;
             }
