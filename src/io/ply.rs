@@ -353,31 +353,33 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
         if el.name == "vertex" {
             let cols = vertex_columns(path, el)?;
             let w = cols.names.len();
-            // Collect the element's lines, then parse them in parallel.
             let rows: Vec<(usize, &str)> = lines.by_ref().take(el.count).collect();
             if rows.len() < el.count {
                 return Err(Error::file(path, format!("truncated: the header declares {} vertices but only {} vertex lines follow", el.count, rows.len())));
             }
-            let parsed: Vec<std::result::Result<Vec<f64>, String>> = rows
-                .par_iter()
-                .map(|(k, line)| {
-                    let v: Vec<f64> = line
-                        .split_whitespace()
-                        .map(|t| t.parse::<f64>().map_err(|_| format!("body line {}: {t:?} is not a number", k + 1)))
-                        .collect::<std::result::Result<_, _>>()?;
-                    if v.len() < w {
-                        return Err(format!("body line {}: {} values, the vertex has {w} properties", k + 1, v.len()));
+            // Each line parsed straight into its row of a flat table, lines in parallel.
+            let mut flat = vec![0.0f64; el.count * w];
+            let bad: Option<String> = flat
+                .par_chunks_mut(w.max(1))
+                .zip(rows.par_iter())
+                .filter_map(|(row, (k, line))| {
+                    let mut it = line.split_ascii_whitespace();
+                    for (c, v) in row.iter_mut().enumerate() {
+                        match it.next() {
+                            Some(t) => match t.parse::<f64>() {
+                                Ok(x) => *v = x,
+                                Err(_) => return Some(format!("body line {}: {t:?} is not a number", k + 1)),
+                            },
+                            None => return Some(format!("body line {}: {c} values, the vertex has {w} properties", k + 1)),
+                        }
                     }
-                    Ok(v)
+                    None
                 })
-                .collect();
-            let mut table = vec![Vec::with_capacity(el.count); w];
-            for r in parsed {
-                let v = r.map_err(|e| Error::file(path, e))?;
-                for c in 0..w {
-                    table[c].push(v[c]);
-                }
+                .min();
+            if let Some(e) = bad {
+                return Err(Error::file(path, e));
             }
+            let table: Vec<Vec<f64>> = (0..w).into_par_iter().map(|c| flat.iter().skip(c).step_by(w).copied().collect()).collect();
             vertex = Some((cols, el.count, table));
             continue;
         }
