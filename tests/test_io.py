@@ -171,3 +171,45 @@ def test_missing_file_and_unknown_type():
         io.read("/nonexistent/cloud.ply")
     with pytest.raises(ValueError, match="unknown point file type"):
         io.read("cloud.obj")
+
+
+@pytest.mark.parametrize("ext, kw", [("pcd", dict(binary=True)), ("pcd", dict(binary=False)), ("pcd", dict(compressed=True)),
+                                      ("xyz", {}), ("csv", {}), ("ply", dict(binary=False))])
+def test_every_writer_round_trips(tmp_path, ext, kw):
+    rng = np.random.default_rng(5)
+    p = rng.normal(0, 1500, (300, 3))
+    n = rng.normal(size=(300, 3))
+    s = rng.normal(size=300)
+    path = tmp_path / f"c.{ext}"
+    rich = ext in ("pcd", "ply")
+    machscan.write_points(path, p, n if rich else None, scalars={"allowance": s} if rich else None, **kw)
+    c = io.read(path)
+    np.testing.assert_array_equal(c.points, p)  # binary exact; text written as shortest round-trip
+    if rich:
+        np.testing.assert_array_equal(c.normals, n)
+        np.testing.assert_array_equal(c.scalars["allowance"], s)
+    if ext in ("ply", "xyz"):  # Open3D reads PCD double (SIZE 8) fields as 0 and no CSV
+        np.testing.assert_array_equal(np.asarray(open3d.io.read_point_cloud(str(path)).points), p)
+
+
+def test_text_files_refuse_normals(tmp_path):
+    with pytest.raises(ValueError, match="normals"):
+        machscan.write_points(tmp_path / "a.xyz", np.zeros((2, 3)), np.zeros((2, 3)))
+
+
+def test_las_round_trip_through_laspy(tmp_path):
+    import laspy  # a test dependency (extras "test")
+    p = np.array([[1000.125, 2000.25, 30.5], [1001.0, 2001.5, 31.0], [999.875, 1999.0, 29.75]])
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales = [0.001, 0.001, 0.001]
+    header.offsets = [1000.0, 2000.0, 0.0]
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = p[:, 0], p[:, 1], p[:, 2]
+    las.intensity = np.array([10, 20, 30])
+    las.write(tmp_path / "a.las")
+    c = io.read(tmp_path / "a.las")
+    np.testing.assert_allclose(c.points, p, atol=5e-4)
+    np.testing.assert_array_equal(c.scalars["intensity"], [10, 20, 30])
+    (tmp_path / "bad.las").write_bytes(b"LASF but not really")
+    with pytest.raises(ValueError, match="bad.las"):
+        io.read(tmp_path / "bad.las")

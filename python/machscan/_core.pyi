@@ -203,8 +203,10 @@ def write_points(
     normals: ArrayLike | None = None,
     scalars: dict[str, ArrayLike] | None = None,
     binary: bool = True,
+    compressed: bool = False,
 ) -> None:
-    """Write points (mm), optional normals and named scalar properties to a ``.ply`` file."""
+    """Write points (mm), optional normals and named scalars to ``.ply``, ``.pcd`` (``compressed``:
+    binary_compressed) or x, y, z to ``.xyz``/``.csv``/``.txt``/``.pts``."""
 
 def voxel_downsample(points: ArrayLike, voxel_size: float, return_index: bool = False) -> Any:
     """Voxel grid (Open3D's ``voxel_down_sample`` definition, bit-identical centroids); voxels in

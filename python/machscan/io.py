@@ -45,8 +45,8 @@ class CloudFile:
 def read(path: str | os.PathLike[str], *, delimiter: str | None = None, columns: tuple[int, int, int] = (0, 1, 2)) -> CloudFile:
     """Read a point file, choosing the reader by the extension.
 
-    ``.ply``, ``.pcd``, and text files ``.xyz``, ``.csv``, ``.txt``, ``.pts``, ``.asc`` (one
-    point per line; ``columns`` picks x, y, z, 0-based; ``delimiter`` None splits on
+    ``.ply``, ``.pcd``, ``.las``/``.laz`` (through laspy, an optional dependency), and text
+    files ``.xyz``, ``.csv``, ``.txt``, ``.pts``, ``.asc`` (one point per line; ``columns`` picks x, y, z, 0-based; ``delimiter`` None splits on
     whitespace and commas; header lines are skipped).
 
     Bad files raise ``ValueError`` naming the file and what is wrong (truncated data, a header
@@ -58,7 +58,29 @@ def read(path: str | os.PathLike[str], *, delimiter: str | None = None, columns:
     >>> cloud = machscan.io.read("scan.pcd")
     >>> cloud.points.shape, cloud.scalars.keys()
     """
+    if os.fspath(path).lower().endswith((".las", ".laz")):
+        return _read_las(path)
     return CloudFile(**_core.read_cloud(path, delimiter, tuple(columns)))
+
+
+def _read_las(path: str | os.PathLike[str]) -> CloudFile:
+    """LAS/LAZ through laspy (optional: ``pip install laspy``; LAZ also needs ``lazrs``).
+    Coordinates are the scaled ones (x·scale + offset); every other dimension is a scalar."""
+    try:
+        import laspy
+    except ImportError:
+        raise ImportError("reading LAS needs laspy: pip install laspy (and lazrs for .laz)") from None
+    try:
+        las = laspy.read(os.fspath(path))
+    except Exception as e:  # laspy raises its own error types for bad files
+        raise ValueError(f"{os.fspath(path)}: not a readable LAS file ({e})") from None
+    pts = np.column_stack([np.asarray(las.x, dtype=np.float64), np.asarray(las.y, dtype=np.float64), np.asarray(las.z, dtype=np.float64)])
+    scalars = {}
+    for name in las.point_format.dimension_names:
+        if name.lower() in ("x", "y", "z"):
+            continue
+        scalars[name] = np.asarray(las[name], dtype=np.float64)
+    return CloudFile(points=pts, normals=None, scalars=scalars, triangles=np.zeros((0, 3), dtype=np.int64))
 
 
 def read_points(path: str | os.PathLike[str]) -> NDArray[np.float64]:
@@ -78,17 +100,20 @@ def write_points(
     binary: bool = True,
     *,
     scalars: dict[str, ArrayLike] | None = None,
+    compressed: bool = False,
 ) -> None:
-    """Write points (mm), optional normals and named scalar properties to a ``.ply`` file.
+    """Write points (mm), optional normals and named scalars; the format follows the extension.
 
-    Coordinates are written as ``double`` so machine coordinates keep full precision; binary
-    little-endian by default, ASCII with ``binary=False`` (shortest round-trip text).
+    ``.ply`` and ``.pcd``: coordinates, normals and scalars as ``double`` so machine coordinates
+    keep full precision; binary (little-endian) by default, ASCII with ``binary=False``
+    (shortest round-trip text); ``compressed=True`` writes PCD ``binary_compressed``.
+    ``.xyz``/``.csv``/``.txt``/``.pts``: x, y, z per line only.
 
     Examples
     --------
     >>> machscan.write_points("cloud.ply", pts, scalars={"allowance": a})
     """
-    _core.write_points(path, points, normals, scalars, binary)
+    _core.write_points(path, points, normals, scalars, binary, compressed)
 
 
 write = write_points

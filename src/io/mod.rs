@@ -5,10 +5,10 @@ mod ply;
 mod text;
 
 pub use lzf::{lzf_decompress, lzf_store};
-pub use pcd::{parse_pcd, read_pcd, PcdData};
+pub use pcd::{parse_pcd, read_pcd, write_pcd, PcdData, PcdEncoding};
 
 pub use ply::{parse_ply, read_ply, write_ply, PlyData, PlyScalar};
-pub use text::read_xyz;
+pub use text::{read_xyz, write_xyz};
 
 #[cfg(test)]
 mod robustness {

@@ -285,3 +285,84 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
 fn parse_pcd_number(t: &str) -> Option<f64> {
     t.parse::<f64>().ok().or_else(|| if t.eq_ignore_ascii_case("-nan") { Some(f64::NAN) } else { None })
 }
+
+/// How a PCD file stores its data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PcdEncoding {
+    Ascii,
+    Binary,
+    BinaryCompressed,
+}
+
+/// Writes x y z (and normal_x/y/z, and named scalars) as `double` (SIZE 8, TYPE F) fields.
+/// `binary_compressed` stores the columns one after the other, LZF-framed.
+pub fn write_pcd(path: &Path, points: &[f64], normals: Option<&[f64]>, scalars: &[(&str, &[f64])], data: PcdEncoding) -> Result<()> {
+    use std::io::Write;
+    let n = points.len() / 3;
+    if let Some(nr) = normals {
+        if nr.len() != points.len() {
+            return Err(Error::shape("normals", format!("({n}, 3): one normal per point"), format!("({}, 3)", nr.len() / 3)));
+        }
+    }
+    for (name, v) in scalars {
+        if v.len() != n {
+            return Err(Error::shape(name, format!("({n},): one value per point"), format!("({},)", v.len())));
+        }
+        if name.is_empty() || name.contains(char::is_whitespace) {
+            return Err(Error::invalid("scalars", format!("field name {name:?} must be one word")));
+        }
+    }
+    // Columns in field order.
+    let mut names: Vec<String> = vec!["x".into(), "y".into(), "z".into()];
+    let mut cols: Vec<Vec<f64>> = (0..3).map(|k| (0..n).map(|i| points[3 * i + k]).collect()).collect();
+    if let Some(nr) = normals {
+        for (k, name) in ["normal_x", "normal_y", "normal_z"].iter().enumerate() {
+            names.push(name.to_string());
+            cols.push((0..n).map(|i| nr[3 * i + k]).collect());
+        }
+    }
+    for (name, v) in scalars {
+        names.push(name.to_string());
+        cols.push(v.to_vec());
+    }
+    let f = names.len();
+    let kind = match data {
+        PcdEncoding::Ascii => "ascii",
+        PcdEncoding::Binary => "binary",
+        PcdEncoding::BinaryCompressed => "binary_compressed",
+    };
+    let header = format!(
+        "# .PCD v0.7 - Point Cloud Data file format (written by machscan {})\nVERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\nCOUNT {}\nWIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {kind}\n",
+        env!("CARGO_PKG_VERSION"),
+        names.join(" "),
+        vec!["8"; f].join(" "),
+        vec!["F"; f].join(" "),
+        vec!["1"; f].join(" "),
+    );
+    let io = |e: std::io::Error| Error::file(path, format!("cannot write: {e}"));
+    let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(path).map_err(io)?);
+    w.write_all(header.as_bytes()).map_err(io)?;
+    match data {
+        PcdEncoding::Ascii => {
+            for i in 0..n {
+                let line: Vec<String> = cols.iter().map(|c| format!("{}", c[i])).collect();
+                writeln!(w, "{}", line.join(" ")).map_err(io)?;
+            }
+        }
+        PcdEncoding::Binary => {
+            for i in 0..n {
+                for c in &cols {
+                    w.write_all(&c[i].to_le_bytes()).map_err(io)?;
+                }
+            }
+        }
+        PcdEncoding::BinaryCompressed => {
+            let raw: Vec<u8> = cols.iter().flat_map(|c| c.iter().flat_map(|v| v.to_le_bytes())).collect();
+            let comp = super::lzf::lzf_store(&raw);
+            w.write_all(&(comp.len() as u32).to_le_bytes()).map_err(io)?;
+            w.write_all(&(raw.len() as u32).to_le_bytes()).map_err(io)?;
+            w.write_all(&comp).map_err(io)?;
+        }
+    }
+    w.flush().map_err(io)
+}

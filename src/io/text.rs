@@ -47,3 +47,14 @@ pub fn read_xyz(path: &Path, delimiter: Option<char>, columns: [usize; 3]) -> Re
     }
     Ok(out)
 }
+
+/// Writes one point per line, `x<sep>y<sep>z`, shortest round-trip text.
+pub fn write_xyz(path: &Path, points: &[f64], delimiter: char) -> Result<()> {
+    use std::io::Write;
+    let io = |e: std::io::Error| Error::file(path, format!("cannot write: {e}"));
+    let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(path).map_err(io)?);
+    for p in points.chunks_exact(3) {
+        writeln!(w, "{}{delimiter}{}{delimiter}{}", p[0], p[1], p[2]).map_err(io)?;
+    }
+    w.flush().map_err(io)
+}

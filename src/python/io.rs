@@ -8,7 +8,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
 
-/// Write points (and optional normals and scalar properties) to a PLY file.
+/// Write points (and optional normals and scalar properties) to a PLY, PCD or text file (by the
+/// extension; ``binary`` picks binary or ASCII PLY/PCD; text files hold x, y, z only).
 ///
 /// Parameters
 /// ----------
@@ -26,7 +27,7 @@ use std::path::PathBuf;
 /// --------
 /// >>> machscan.write_points("scan.ply", points, scalars={"frame": frame_index})
 #[pyfunction]
-#[pyo3(signature = (path, points, normals=None, scalars=None, binary=true))]
+#[pyo3(signature = (path, points, normals=None, scalars=None, binary=true, compressed=false))]
 fn write_points(
     py: Python<'_>,
     path: PathBuf,
@@ -34,10 +35,11 @@ fn write_points(
     normals: Option<&Bound<'_, PyAny>>,
     scalars: Option<&Bound<'_, PyDict>>,
     binary: bool,
+    compressed: bool,
 ) -> PyResult<()> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    if ext != "ply" {
-        return Err(PyValueError::new_err(format!("path: {}: only .ply files can be written so far", path.display())));
+    if !matches!(ext.as_str(), "ply" | "pcd" | "xyz" | "csv" | "txt" | "pts") {
+        return Err(PyValueError::new_err(format!("path: {}: machscan writes .ply, .pcd, .xyz, .csv, .txt, .pts, got {ext:?}", path.display())));
     }
     let pts = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
     let n = pts.shape()[0];
@@ -60,7 +62,25 @@ fn write_points(
     };
     let slices: Vec<(String, &[f64])> = named.iter().map(|(k, a)| Ok((k.clone(), a.as_slice()?))).collect::<PyResult<_>>()?;
     let props: Vec<PlyScalar<'_>> = slices.iter().map(|(k, v)| PlyScalar { name: k, values: v }).collect();
-    py.detach(|| write_ply(&path, p, nr, &props, binary)).map_err(|e| match e {
+    py.detach(|| match ext.as_str() {
+        "ply" => write_ply(&path, p, nr, &props, binary),
+        "pcd" => {
+            let sc: Vec<(&str, &[f64])> = props.iter().map(|s| (s.name, s.values)).collect();
+            let enc = match (binary, compressed) {
+                (_, true) => crate::io::PcdEncoding::BinaryCompressed,
+                (true, false) => crate::io::PcdEncoding::Binary,
+                (false, false) => crate::io::PcdEncoding::Ascii,
+            };
+            crate::io::write_pcd(&path, p, nr, &sc, enc)
+        }
+        _ => {
+            if nr.is_some() || !props.is_empty() {
+                return Err(Error::invalid("normals", "a text point file holds x, y, z only: write .ply or .pcd to keep normals and scalars"));
+            }
+            crate::io::write_xyz(&path, p, if ext == "csv" { ',' } else { ' ' })
+        }
+    })
+    .map_err(|e| match e {
         Error::File { .. } => PyOSError::new_err(e.to_string()),
         other => to_py_err(other),
     })
