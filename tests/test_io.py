@@ -213,3 +213,25 @@ def test_las_round_trip_through_laspy(tmp_path):
     (tmp_path / "bad.las").write_bytes(b"LASF but not really")
     with pytest.raises(ValueError, match="bad.las"):
         io.read(tmp_path / "bad.las")
+
+
+def test_toolpath_round_trip(tmp_path):
+    rng = np.random.default_rng(9)
+    p = rng.normal(0, 100, (50, 3))
+    a = rng.normal(size=(50, 3))
+    f = np.repeat([1200.0, 800.0], 25)
+    seg = np.repeat([0, 1, 2], [10, 20, 20])
+    io.write_toolpath(tmp_path / "t.cl", p, a, f, seg)
+    tp = io.read_toolpath(tmp_path / "t.cl")
+    np.testing.assert_array_equal(tp.points, p)
+    np.testing.assert_array_equal(tp.axes, a)
+    np.testing.assert_array_equal(tp.feeds, f)
+    np.testing.assert_array_equal(tp.segments, seg)
+    text = (tmp_path / "t.cl").read_text()
+    assert text.count("FEDRAT") == 2 and text.count("RAPID") == 2
+
+
+def test_toolpath_errors_name_file_and_line(tmp_path):
+    (tmp_path / "b.apt").write_text("PARTNO/X" + chr(10) + "GOTO/1,2,oops" + chr(10))
+    with pytest.raises(ValueError, match=r"b[.]apt: line 2"):
+        io.read_toolpath(tmp_path / "b.apt")

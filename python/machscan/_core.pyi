@@ -29,6 +29,7 @@ __all__ = [
     "radius_outlier_removal",
     "random_downsample",
     "read_cloud",
+    "read_toolpath",
     "remove_duplicates",
     "resample_polyline",
     "scan_to_wcs",
@@ -37,6 +38,7 @@ __all__ = [
     "uniform_downsample",
     "voxel_downsample",
     "write_points",
+    "write_toolpath",
 ]
 
 __version__: str
@@ -196,6 +198,18 @@ def read_cloud(
 ) -> dict[str, Any]:
     """Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text); ``machscan.io.read`` wraps the
     dict this returns (``points``, ``normals``, ``scalars``, ``triangles``)."""
+
+def read_toolpath(path: str | PathLike[str]) -> dict[str, Any]:
+    """Read an APT/CL toolpath (points, axes, feeds, segments); ``machscan.io.read_toolpath`` wraps it."""
+
+def write_toolpath(
+    path: str | PathLike[str],
+    points: ArrayLike,
+    axes: ArrayLike | None = None,
+    feeds: ArrayLike | None = None,
+    segments: ArrayLike | None = None,
+) -> None:
+    """Write an APT/CL toolpath (GOTO per point, FEDRAT on feed changes, RAPID between segments)."""
 
 def write_points(
     path: str | PathLike[str],

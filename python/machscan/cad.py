@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import csv
 import os
-import re
 from pathlib import Path
 from typing import Iterable
 
@@ -88,15 +87,10 @@ def _is_number(s: str) -> bool:
         return False
 
 
-_GOTO = re.compile(r"^\s*GOTO\s*/\s*(.*)$", re.IGNORECASE)
-
-
 def read_contours_apt(path: str | os.PathLike[str], split_distance: float = 5.0) -> list[Polyline]:
-    """GOTO points of an APT/CL file as contours.
+    """GOTO points of an APT/CL file as contours (the reader is :func:`machscan.io.read_toolpath`).
 
-    Statements may run over several lines (a trailing ``$`` continues them); ``$$`` starts a
-    comment. A new contour starts after a ``RAPID`` statement, a ``PENUP``/``PENDOWN`` pair
-    (``PPRINT`` and other statements are ignored), or when consecutive GOTO points are more
+    A new contour starts after a ``RAPID`` statement or where consecutive GOTO points are more
     than ``split_distance`` mm apart. Only x, y, z of ``GOTO/x, y, z[, i, j, k]`` are kept.
 
     Parameters
@@ -105,41 +99,14 @@ def read_contours_apt(path: str | os.PathLike[str], split_distance: float = 5.0)
     split_distance : float
         Jump between GOTO points that starts a new contour, mm.
     """
-    p = Path(path)
-    contours: list[list[list[float]]] = [[]]
-    statement, start_line = "", 0
-    with open(p, errors="replace") as fh:
-        for k, raw in enumerate(fh, start=1):
-            line = raw.split("$$", 1)[0].rstrip()
-            if not statement:
-                start_line = k
-            if line.endswith("$"):
-                statement += line[:-1] + " "
-                continue
-            statement += line
-            s, statement = statement.strip(), ""
-            if not s:
-                continue
-            word = s.split("/", 1)[0].strip().upper()
-            if word in ("RAPID", "PENUP"):
-                if contours[-1]:
-                    contours.append([])
-                continue
-            m = _GOTO.match(s)
-            if not m:
-                continue
-            cells = [c for c in re.split(r"[,\s]+", m.group(1).strip()) if c]
-            if len(cells) < 3:
-                raise ValueError(f"{p}: line {start_line}: GOTO needs x, y, z, got {m.group(1).strip()!r}")
-            xyz = _cells_to_floats(cells[:3], p, start_line)
-            cur = contours[-1]
-            if cur and np.linalg.norm(np.subtract(xyz, cur[-1])) > split_distance:
-                contours.append([])
-            contours[-1].append(xyz)
-    out = [np.array(c, dtype=np.float64) for c in contours if len(c) > 0]
-    if not out:
-        raise ValueError(f"{p}: no GOTO points")
-    return out
+    from machscan.io import read_toolpath
+
+    tp = read_toolpath(path)
+    if len(tp.points) == 0:
+        raise ValueError(f"{os.fspath(path)}: no GOTO points")
+    jumps = np.linalg.norm(np.diff(tp.points, axis=0), axis=1) > split_distance
+    breaks = np.nonzero(jumps | (np.diff(tp.segments) != 0))[0] + 1
+    return [c for c in np.split(tp.points, breaks) if len(c) > 0]
 
 
 def read_contours(paths: Iterable[str | os.PathLike[str]]) -> list[Polyline]:

@@ -117,3 +117,58 @@ def write_points(
 
 
 write = write_points
+
+
+@dataclass(frozen=True, repr=False)
+class Toolpath:
+    """An APT/CL toolpath.
+
+    Attributes
+    ----------
+    points : ndarray (N, 3)
+        GOTO points, mm.
+    axes : ndarray (N, 3)
+        Tool axes (i, j, k) where the GOTO gave them, NaN otherwise.
+    feeds : ndarray (N,)
+        Feed in force at each point (NaN before the first FEDRAT).
+    segments : ndarray of int64 (N,)
+        Segment of each point; a new segment starts after every RAPID.
+    """
+
+    points: NDArray[np.float64]
+    axes: NDArray[np.float64]
+    feeds: NDArray[np.float64]
+    segments: NDArray[np.int64]
+
+    def __repr__(self) -> str:
+        n_seg = int(self.segments.max()) + 1 if len(self.segments) else 0
+        return f"Toolpath({len(self.points)} points in {n_seg} segments)"
+
+
+def read_toolpath(path: str | os.PathLike[str]) -> Toolpath:
+    """Read an APT/CL file: ``GOTO/x, y, z[, i, j, k]`` points, ``FEDRAT`` feeds, segments split
+    at ``RAPID``; ``$`` continues a statement, ``$$`` starts a comment, other statements are
+    skipped. Errors name the file and line.
+
+    Examples
+    --------
+    >>> tp = machscan.io.read_toolpath("engraving.apt")
+    """
+    return Toolpath(**_core.read_toolpath(path))
+
+
+def write_toolpath(
+    path: str | os.PathLike[str],
+    points: ArrayLike,
+    axes: ArrayLike | None = None,
+    feeds: ArrayLike | None = None,
+    segments: ArrayLike | None = None,
+) -> None:
+    """Write an APT/CL toolpath: ``GOTO/x,y,z[,i,j,k]`` per point (shortest round-trip numbers),
+    ``FEDRAT`` whenever the feed changes, ``RAPID`` between segments.
+
+    Examples
+    --------
+    >>> machscan.io.write_toolpath("path.cl", pts, axes=normals, feeds=f)
+    """
+    _core.write_toolpath(path, points, axes, feeds, segments)

@@ -1,9 +1,11 @@
 //! Point cloud and scan files (SPEC F formats).
+mod apt;
 mod lzf;
 mod pcd;
 mod ply;
 mod text;
 
+pub use apt::{parse_apt, read_apt, write_apt, Toolpath};
 pub use lzf::{lzf_decompress, lzf_store};
 pub use pcd::{parse_pcd, read_pcd, write_pcd, PcdData, PcdEncoding};
 

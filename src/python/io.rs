@@ -140,7 +140,56 @@ fn read_cloud<'py>(py: Python<'py>, path: PathBuf, delimiter: Option<char>, colu
     Ok(d)
 }
 
+/// Read an APT/CL toolpath: GOTO points, tool axes, feeds and segments (a new segment after every
+/// RAPID); ``machscan.io.read_toolpath`` wraps the dict.
+#[pyfunction]
+fn read_toolpath<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let tp = py.detach(|| crate::io::read_apt(&path)).map_err(file_error)?;
+    let n = tp.segments.len();
+    let d = PyDict::new(py);
+    d.set_item("points", to_numpy(py, tp.points, &[n, 3])?)?;
+    d.set_item("axes", to_numpy(py, tp.axes, &[n, 3])?)?;
+    d.set_item("feeds", to_numpy(py, tp.feeds, &[n])?)?;
+    d.set_item("segments", to_numpy(py, tp.segments.into_iter().map(|s| s as i64).collect::<Vec<_>>(), &[n])?)?;
+    Ok(d)
+}
+
+/// Write an APT/CL toolpath (``GOTO/x,y,z[,i,j,k]``, ``FEDRAT`` when the feed changes,
+/// ``RAPID`` between segments).
+#[pyfunction]
+#[pyo3(signature = (path, points, axes=None, feeds=None, segments=None))]
+fn write_toolpath(
+    py: Python<'_>,
+    path: PathBuf,
+    points: &Bound<'_, PyAny>,
+    axes: Option<&Bound<'_, PyAny>>,
+    feeds: Option<&Bound<'_, PyAny>>,
+    segments: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    let p = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
+    let n = p.shape()[0];
+    let a = match axes {
+        Some(o) if !o.is_none() => Some(f64_array(o, "axes", &[Dim::Is(n), Dim::Is(3)], "(one tool axis per point)")?),
+        _ => None,
+    };
+    let f = match feeds {
+        Some(o) if !o.is_none() => Some(f64_array(o, "feeds", &[Dim::Is(n)], "(one feed per point)")?),
+        _ => None,
+    };
+    let s: Option<Vec<u32>> = match segments {
+        Some(o) if !o.is_none() => {
+            let v = f64_array(o, "segments", &[Dim::Is(n)], "(one segment id per point)")?;
+            Some(v.as_slice()?.iter().map(|&x| x.max(0.0) as u32).collect())
+        }
+        _ => None,
+    };
+    let (ps, as_, fs) = (p.as_slice()?, a.as_ref().map(|x| x.as_slice()).transpose()?, f.as_ref().map(|x| x.as_slice()).transpose()?);
+    py.detach(|| crate::io::write_apt(&path, ps, as_, fs, s.as_deref())).map_err(file_error)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_toolpath, m)?)?;
+    m.add_function(wrap_pyfunction!(write_toolpath, m)?)?;
     m.add_function(wrap_pyfunction!(write_points, m)?)?;
     m.add_function(wrap_pyfunction!(read_cloud, m)?)?;
     Ok(())

@@ -1,0 +1,148 @@
+//! APT/CL toolpath files (SPEC F; paper 000 takes its scan path from the engraving program's
+//! APT file; SPEC P writes grinding paths as CL).
+//!
+//! Reader: statements may run over several lines (a trailing `$` continues them), `$$` starts
+//! a comment; `GOTO/x, y, z[, i, j, k]` gives a point (and a tool axis), `FEDRAT/f` the feed of
+//! what follows, `RAPID` marks the next move rapid, which starts a new segment; other statements
+//! (`PARTNO`, `MULTAX`, `PPRINT`, `CUTTER`, …) are skipped.
+use crate::error::{Error, Result};
+use std::path::Path;
+
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Toolpath {
+    /// `(N, 3)` row-major GOTO points, mm.
+    pub points: Vec<f64>,
+    /// `(N, 3)` tool axes where the GOTO gave i, j, k (NaN otherwise).
+    pub axes: Vec<f64>,
+    /// Feed in force at each point (NaN before any FEDRAT).
+    pub feeds: Vec<f64>,
+    /// Segment of each point: a new one starts after every RAPID.
+    pub segments: Vec<u32>,
+}
+
+pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
+    let mut tp = Toolpath::default();
+    let (mut feed, mut segment, mut rapid) = (f64::NAN, 0u32, false);
+    let mut statement = String::new();
+    let mut start_line = 0;
+    for (k, raw) in text.lines().enumerate() {
+        let line = raw.split("$$").next().unwrap_or("").trim_end();
+        if statement.is_empty() {
+            start_line = k + 1;
+        }
+        if let Some(body) = line.strip_suffix('$') {
+            statement.push_str(body);
+            statement.push(' ');
+            continue;
+        }
+        statement.push_str(line);
+        let s = std::mem::take(&mut statement);
+        let s = s.trim();
+        if s.is_empty() {
+            continue;
+        }
+        let (word, args) = match s.split_once('/') {
+            Some((w, a)) => (w.trim().to_ascii_uppercase(), a),
+            None => (s.to_ascii_uppercase(), ""),
+        };
+        let numbers = |what: &str| -> Result<Vec<f64>> {
+            args.split(|c: char| c == ',' || c.is_whitespace())
+                .filter(|t| !t.is_empty())
+                .map(|t| t.parse::<f64>().map_err(|_| Error::file(path, format!("line {start_line}: {what}: {t:?} is not a number"))))
+                .collect()
+        };
+        match word.as_str() {
+            "GOTO" => {
+                let v = numbers("GOTO")?;
+                if v.len() != 3 && v.len() != 6 {
+                    return Err(Error::file(path, format!("line {start_line}: GOTO needs x, y, z or x, y, z, i, j, k; got {} values", v.len())));
+                }
+                if rapid && !tp.segments.is_empty() {
+                    segment += 1;
+                }
+                rapid = false;
+                tp.points.extend_from_slice(&v[..3]);
+                tp.axes.extend_from_slice(if v.len() == 6 { &v[3..6] } else { &[f64::NAN; 3] });
+                tp.feeds.push(feed);
+                tp.segments.push(segment);
+            }
+            "FEDRAT" => {
+                // FEDRAT/f or FEDRAT/MMPM, f: the last number is the feed.
+                let v: Vec<f64> = args.split(|c: char| c == ',' || c.is_whitespace()).filter_map(|t| t.parse::<f64>().ok()).collect();
+                feed = *v.last().ok_or_else(|| Error::file(path, format!("line {start_line}: FEDRAT without a feed")))?;
+            }
+            "RAPID" => rapid = true,
+            _ => {}
+        }
+    }
+    if !statement.trim().is_empty() {
+        return Err(Error::file(path, format!("line {start_line}: the last statement is continued ($) past the end of the file")));
+    }
+    Ok(tp)
+}
+
+pub fn read_apt(path: &Path) -> Result<Toolpath> {
+    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
+    let text = String::from_utf8_lossy(&bytes);
+    parse_apt(path, &text)
+}
+
+/// Writes a CL file: `GOTO/x, y, z[, i, j, k]` per point (tool axes when given), `FEDRAT/f`
+/// whenever the feed changes, `RAPID` before the first point of every segment but the first.
+pub fn write_apt(path: &Path, points: &[f64], axes: Option<&[f64]>, feeds: Option<&[f64]>, segments: Option<&[u32]>) -> Result<()> {
+    use std::io::Write;
+    let n = points.len() / 3;
+    if axes.is_some_and(|a| a.len() != points.len()) {
+        return Err(Error::shape("axes", format!("({n}, 3): one tool axis per point"), "another length"));
+    }
+    if feeds.is_some_and(|f| f.len() != n) || segments.is_some_and(|s| s.len() != n) {
+        return Err(Error::shape("feeds", format!("({n},): one per point"), "another length"));
+    }
+    let io = |e: std::io::Error| Error::file(path, format!("cannot write: {e}"));
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
+    writeln!(w, "PARTNO/ MACHSCAN TOOLPATH\n$$ written by machscan {}", env!("CARGO_PKG_VERSION")).map_err(io)?;
+    if axes.is_some() {
+        writeln!(w, "MULTAX").map_err(io)?;
+    }
+    let mut last_feed = f64::NAN;
+    for i in 0..n {
+        if let Some(s) = segments {
+            if i > 0 && s[i] != s[i - 1] {
+                writeln!(w, "RAPID").map_err(io)?;
+            }
+        }
+        if let Some(f) = feeds {
+            if f[i].is_finite() && f[i] != last_feed {
+                writeln!(w, "FEDRAT/{}", f[i]).map_err(io)?;
+                last_feed = f[i];
+            }
+        }
+        let p = &points[3 * i..3 * i + 3];
+        match axes {
+            Some(a) => writeln!(w, "GOTO/{},{},{},{},{},{}", p[0], p[1], p[2], a[3 * i], a[3 * i + 1], a[3 * i + 2]),
+            None => writeln!(w, "GOTO/{},{},{}", p[0], p[1], p[2]),
+        }
+        .map_err(io)?;
+    }
+    writeln!(w, "FINI").map_err(io)?;
+    w.flush().map_err(io)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_what_post_processors_write() {
+        let text = "PARTNO/ DEMO $$ a comment\nMULTAX\nFEDRAT/MMPM, 1200\nGOTO/1,2,3, $\n  0,0,1\nGOTO/4,5,6,0,0,1\nRAPID\nGOTO/10,10,10\nFEDRAT/800\nGOTO/11,10,10\nFINI\n";
+        let tp = parse_apt(Path::new("t.apt"), text).unwrap();
+        assert_eq!(tp.points, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 10.0, 10.0, 10.0, 11.0, 10.0, 10.0]);
+        assert_eq!(tp.segments, vec![0, 0, 1, 1]);
+        assert_eq!(&tp.feeds[..3], &[1200.0, 1200.0, 1200.0]);
+        assert_eq!(tp.feeds[3], 800.0);
+        assert!(tp.axes[6].is_nan() && tp.axes[2] == 1.0);
+        assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2\n").is_err());
+        assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2,x\n").is_err());
+        assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2, $\n").is_err());
+    }
+}
