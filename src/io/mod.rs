@@ -93,3 +93,102 @@ mod robustness {
         sweep(&bc, |b| parse_pcd(Path::new("t.pcd"), b).is_ok());
     }
 }
+
+#[cfg(test)]
+mod fuzz {
+    //! Property-based fuzzing of the readers (proptest): arbitrary bytes, and valid files with
+    //! random truncations, byte changes and header counts replaced by huge numbers. A reader
+    //! must return `Ok` or `Err`, never panic, hang or allocate what the data cannot back.
+    use super::*;
+    use proptest::prelude::*;
+    use std::path::Path;
+
+    fn valid_ply(binary: bool) -> Vec<u8> {
+        let text = if binary { "binary_little_endian" } else { "ascii" };
+        let mut b = format!(
+            "ply\nformat {text} 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty uchar q\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+        .into_bytes();
+        if binary {
+            for i in 0..4u8 {
+                for v in [i as f32, 1.0, 2.0] {
+                    b.extend_from_slice(&v.to_le_bytes());
+                }
+                b.push(i);
+            }
+            b.push(4);
+            for v in [0i32, 1, 2, 3] {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+        } else {
+            b.extend_from_slice(b"0 1 2 0\n1 1 2 1\n2 1 2 2\n3 1 2 3\n4 0 1 2 3\n");
+        }
+        b
+    }
+
+    fn valid_pcd(kind: &str) -> Vec<u8> {
+        let mut b = format!("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA {kind}\n").into_bytes();
+        let raw: Vec<u8> = (0..9).flat_map(|i| (i as f32).to_le_bytes()).collect();
+        match kind {
+            "ascii" => b.extend_from_slice(b"0 1 2\n3 4 5\n6 7 8\n"),
+            "binary" => b.extend_from_slice(&raw),
+            _ => {
+                let comp = lzf_store(&raw);
+                b.extend_from_slice(&(comp.len() as u32).to_le_bytes());
+                b.extend_from_slice(&(raw.len() as u32).to_le_bytes());
+                b.extend_from_slice(&comp);
+            }
+        }
+        b
+    }
+
+    fn mutate(mut b: Vec<u8>, cut: usize, flips: &[(usize, u8)], huge: bool) -> Vec<u8> {
+        if huge {
+            let s = String::from_utf8_lossy(&b).replacen(" 4\n", " 4000000000\n", 1).replacen("POINTS 3", "POINTS 99999999999", 1);
+            b = s.into_bytes();
+        }
+        for &(i, v) in flips {
+            let n = b.len();
+            if n > 0 {
+                b[i % n] = v;
+            }
+        }
+        b.truncate(cut.min(b.len()));
+        b
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+        #[test]
+        fn arbitrary_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
+            let _ = parse_ply(Path::new("f.ply"), &bytes);
+            let _ = parse_pcd(Path::new("f.pcd"), &bytes);
+            let mut with_header = b"ply\nformat binary_little_endian 1.0\n".to_vec();
+            with_header.extend_from_slice(&bytes);
+            let _ = parse_ply(Path::new("f.ply"), &with_header);
+        }
+
+        #[test]
+        fn mutated_valid_files(which in 0usize..5, cut in 0usize..400, flips in proptest::collection::vec((any::<usize>(), any::<u8>()), 0..6), huge in any::<bool>()) {
+            let base = match which {
+                0 => valid_ply(true),
+                1 => valid_ply(false),
+                2 => valid_pcd("ascii"),
+                3 => valid_pcd("binary"),
+                _ => valid_pcd("binary_compressed"),
+            };
+            let b = mutate(base, cut, &flips, huge);
+            if which < 2 {
+                let _ = parse_ply(Path::new("f.ply"), &b);
+            } else {
+                let _ = parse_pcd(Path::new("f.pcd"), &b);
+            }
+        }
+
+        #[test]
+        fn lzf_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..200), out_len in 0usize..2000) {
+            let _ = lzf_decompress(&bytes, out_len);
+        }
+    }
+}
