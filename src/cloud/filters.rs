@@ -76,14 +76,7 @@ pub fn voxel_downsample(points: &[[f64; 3]], voxel: f64) -> Result<VoxelGrid> {
     if points.len() >= u32::MAX as usize {
         return Err(Error::invalid("points", "more than 2^32 − 1 points"));
     }
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
+    let (lo, hi) = crate::geom::bounds(points);
     let origin = [lo[0] - 0.5 * voxel, lo[1] - 0.5 * voxel, lo[2] - 0.5 * voxel];
     // Voxel counts per axis: keys pack three 21-bit indices into 64 bits when they fit.
     let extent: Vec<u64> = (0..3).map(|k| ((hi[k] - origin[k]) / voxel).floor() as u64 + 1).collect();

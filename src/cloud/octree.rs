@@ -84,17 +84,10 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
             return Err(Error::shape("normals", format!("({n}, 3): one per point"), format!("({}, 3)", nr.len())));
         }
     }
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        if !p.iter().all(|v| v.is_finite()) {
-            return Err(Error::invalid("points", "must be finite"));
-        }
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
+    if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
     }
+    let (lo, hi) = crate::geom::bounds(points);
     let l = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max).max(o.d_min);
     let depth = (l / o.d_min).log2().ceil().max(0.0) as u32;
     if depth > 40 {

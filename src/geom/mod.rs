@@ -8,3 +8,16 @@ pub use rotation::{
     mount_rotation, mount_rotation_angles, mount_rotation_partials, rot_x, rot_y, rot_z,
     Axis,
 };
+
+/// Axis-aligned bounds `(min, max)` of the points (±∞ when there are none).
+pub fn bounds(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}

@@ -61,14 +61,7 @@ impl PointIndex {
     /// the same tree leaves one after another instead of jumping across the cloud: scanned and
     /// merged clouds often come in no spatial order, and the cache misses then dominate.
     pub fn locality_order(points: &[[f64; 3]]) -> Vec<usize> {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in points {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = crate::geom::bounds(points);
         let scale: Vec<f64> = (0..3).map(|k| if hi[k] > lo[k] { 1023.999 / (hi[k] - lo[k]) } else { 0.0 }).collect();
         // Spread 10 bits so that three interleave into 30.
         let spread = |v: u32| -> u64 {
