@@ -235,3 +235,21 @@ def test_toolpath_errors_name_file_and_line(tmp_path):
     (tmp_path / "b.apt").write_text("PARTNO/X" + chr(10) + "GOTO/1,2,oops" + chr(10))
     with pytest.raises(ValueError, match=r"b[.]apt: line 2"):
         io.read_toolpath(tmp_path / "b.apt")
+
+
+@pytest.mark.parametrize("name, nv, nf", [("flat_triangular_mesh.txt", 121, 200), ("hedgehog_mesh.txt", 300, 596)])
+def test_geodesic_test_meshes_read(name, nv, nf):
+    c = io.read(DATA / "geodesic-flat-mesh" / name)
+    assert c.points.shape == (nv, 3) and c.triangles.shape == (nf, 3)
+    assert c.triangles.max() < nv
+    if name.startswith("flat"):
+        # The README's check: the 11 × 11 grid over [1.5, 3.5] × [-1, 1], z = 0, and
+        # |v25 − v97| = 1.2·√2.
+        assert np.allclose(c.points[:, 2], 0) and c.points[:, 0].min() == 1.5 and c.points[:, 1].max() == 1.0
+        assert np.linalg.norm(c.points[25] - c.points[97]) == pytest.approx(1.697056274847714, abs=1e-12)
+
+
+def test_mesh_txt_that_lies_is_an_error(tmp_path):
+    (tmp_path / "m.txt").write_text("3 1" + chr(10) + "0 0 0" + chr(10) + "1 0 0" + chr(10))
+    with pytest.raises(ValueError, match="m.txt"):
+        io.read(tmp_path / "m.txt")

@@ -10,7 +10,7 @@ pub use lzf::{lzf_decompress, lzf_store};
 pub use pcd::{parse_pcd, read_pcd, write_pcd, PcdData, PcdEncoding};
 
 pub use ply::{parse_ply, read_ply, write_ply, PlyData, PlyScalar};
-pub use text::{read_xyz, write_xyz};
+pub use text::{parse_mesh_txt, read_xyz, write_xyz};
 
 #[cfg(test)]
 mod robustness {

@@ -58,3 +58,41 @@ pub fn write_xyz(path: &Path, points: &[f64], delimiter: char) -> Result<()> {
     }
     w.flush().map_err(io)
 }
+
+/// The plain mesh text format of the geodesic test meshes (pygeodesic / Kirsanov): a line
+/// `n_vertices n_faces`, then n_vertices lines `x y z` and n_faces lines of three 0-based
+/// vertex indices. `None` when the text does not have that shape (it is then a point file).
+pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<(Vec<f64>, Vec<[u32; 3]>)>> {
+    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+    let Some(first) = lines.next() else { return Ok(None) };
+    let head: Vec<&str> = first.split_whitespace().collect();
+    let (Ok(nv), Ok(nf)) = (head.first().unwrap_or(&"").parse::<usize>(), head.get(1).unwrap_or(&"").parse::<usize>()) else {
+        return Ok(None);
+    };
+    if head.len() != 2 {
+        return Ok(None);
+    }
+    let rest: Vec<&str> = lines.collect();
+    if rest.len() != nv + nf {
+        return Err(Error::file(path, format!("the mesh header announces {nv} vertices and {nf} faces, but {} lines follow", rest.len())));
+    }
+    let mut points = Vec::with_capacity(3 * nv);
+    for (k, l) in rest[..nv].iter().enumerate() {
+        let v: Vec<f64> = l.split_whitespace().map(|t| t.parse::<f64>()).collect::<std::result::Result<_, _>>()
+            .map_err(|_| Error::file(path, format!("vertex {k}: {l:?} is not three numbers")))?;
+        if v.len() != 3 {
+            return Err(Error::file(path, format!("vertex {k}: {l:?} is not three numbers")));
+        }
+        points.extend_from_slice(&v);
+    }
+    let mut faces = Vec::with_capacity(nf);
+    for (k, l) in rest[nv..].iter().enumerate() {
+        let v: Vec<u32> = l.split_whitespace().map(|t| t.parse::<u32>()).collect::<std::result::Result<_, _>>()
+            .map_err(|_| Error::file(path, format!("face {k}: {l:?} is not three vertex indices")))?;
+        if v.len() != 3 || v.iter().any(|&i| i as usize >= nv) {
+            return Err(Error::file(path, format!("face {k}: {l:?} is not three vertex indices below {nv}")));
+        }
+        faces.push([v[0], v[1], v[2]]);
+    }
+    Ok(Some((points, faces)))
+}

@@ -96,7 +96,20 @@ fn file_error(e: Error) -> PyErr {
     }
 }
 
-/// Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text); ``machscan.io.read`` wraps the
+/// Whether a .txt file starts with the `n_vertices n_faces` line of the mesh text format.
+fn is_mesh_txt(path: &std::path::Path) -> bool {
+    use std::io::BufRead;
+    let Ok(f) = std::fs::File::open(path) else { return false };
+    let mut first = String::new();
+    if std::io::BufReader::new(f).read_line(&mut first).is_err() {
+        return false;
+    }
+    let w: Vec<&str> = first.split_whitespace().collect();
+    w.len() == 2 && w.iter().all(|t| t.parse::<usize>().is_ok())
+}
+
+/// Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text; a .txt starting with
+/// `n_vertices n_faces` is read as the geodesic test meshes' format); ``machscan.io.read`` wraps the
 /// dict this returns (``points``, ``normals``, ``scalars``, ``triangles``).
 #[pyfunction]
 #[pyo3(signature = (path, delimiter=None, columns=(0, 1, 2)))]
@@ -110,6 +123,11 @@ fn read_cloud<'py>(py: Python<'py>, path: PathBuf, delimiter: Option<char>, colu
         "pcd" => {
             let d = py.detach(|| crate::io::read_pcd(&path)).map_err(file_error)?;
             (d.points, d.normals, d.scalars, Vec::new())
+        }
+        "txt" if delimiter.is_none() && columns == (0, 1, 2) && is_mesh_txt(&path) => {
+            let text = std::fs::read_to_string(&path).map_err(|e| file_error(Error::file(&path, format!("cannot read: {e}"))))?;
+            let (p, t) = crate::io::parse_mesh_txt(&path, &text).map_err(file_error)?.unwrap_or_default();
+            (p, None, Vec::new(), t)
         }
         "xyz" | "csv" | "txt" | "pts" | "asc" => {
             let cols = [columns.0, columns.1, columns.2];
