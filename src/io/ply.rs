@@ -347,7 +347,7 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
 fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData> {
     let text = std::str::from_utf8(body).map_err(|_| Error::file(path, "the ASCII body is not text"))?;
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
-    let mut vertex: Option<(VertexColumns, usize, Vec<Vec<f64>>)> = None;
+    let mut vertex_rows: Option<(VertexColumns, usize, usize, Vec<f64>)> = None;
     let mut triangles = Vec::new();
     for el in elements {
         if el.name == "vertex" {
@@ -379,8 +379,7 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
             if let Some(e) = bad {
                 return Err(Error::file(path, e));
             }
-            let table: Vec<Vec<f64>> = (0..w).into_par_iter().map(|c| flat.iter().skip(c).step_by(w).copied().collect()).collect();
-            vertex = Some((cols, el.count, table));
+            vertex_rows = Some((cols, el.count, w, flat));
             continue;
         }
         for row in 0..el.count {
@@ -405,9 +404,30 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
             }
         }
     }
-    let (cols, n, table) = vertex.ok_or_else(|| Error::file(path, "no vertex element"))?;
+    let (cols, n, w, flat) = vertex_rows.ok_or_else(|| Error::file(path, "no vertex element"))?;
     check_face_indices(path, &triangles, n)?;
-    Ok(assemble(&cols, n, table, triangles))
+    Ok(assemble_rows(&cols, n, w, &flat, triangles))
+}
+
+/// [`assemble`] from a row-major `(n, w)` table: one pass per output, no transposition.
+fn assemble_rows(cols: &VertexColumns, n: usize, w: usize, flat: &[f64], triangles: Vec<[u32; 3]>) -> PlyData {
+    let pick = |c: [usize; 3]| -> Vec<f64> {
+        let mut out = vec![0.0; 3 * n];
+        out.par_chunks_mut(3).zip(flat.par_chunks(w.max(1))).for_each(|(o, r)| {
+            o[0] = r[c[0]];
+            o[1] = r[c[1]];
+            o[2] = r[c[2]];
+        });
+        out
+    };
+    let points = pick(cols.xyz);
+    let normals = cols.normal.map(pick);
+    let used: Vec<usize> = cols.xyz.iter().chain(cols.normal.iter().flatten()).copied().collect();
+    let scalars = (0..w)
+        .filter(|c| !used.contains(c))
+        .map(|c| (cols.names[c].clone(), flat.iter().skip(c).step_by(w).copied().collect()))
+        .collect();
+    PlyData { points, normals, scalars, triangles }
 }
 
 /// A named per-point scalar property (e.g. frame index, allowance, curvature).
