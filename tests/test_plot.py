@@ -224,3 +224,20 @@ def test_missing_matplotlib_says_how_to_install(run, monkeypatch):
         plot.width_depth_histograms(report)
     with pytest.raises(ImportError, match=re.escape(msg)):
         plot.contour_error_map(report)
+
+
+def test_levelled_frame_draws_the_v_template_for_v_fits():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    x = (np.arange(200) - 100) * 0.025
+    u = np.abs(x - 0.07)
+    z = np.where(u < 0.24, -0.31 * (1 - u / 0.24), 0.0) + np.random.default_rng(0).normal(0, 0.008, 200)
+    fits = machscan.fit_grooves(x, z[None, :], template="v", alpha=80.0)
+    assert fits.template == "v" and fits.select([0]).template == "v"
+    fig = machscan.plot.levelled_frame(x, z, 0, fits)
+    line = [ln for ln in fig.axes[0].get_lines() if ln.get_label() == "fitted template"][0]
+    lf = machscan.level_groove_frame(x, z)
+    # The drawn curve passes through the readings as closely as the fit's own rms.
+    resid = lf.z - np.interp(lf.x, line.get_xdata(), line.get_ydata())
+    assert abs(np.sqrt(np.mean(resid**2)) - fits.rms[0]) < 0.002

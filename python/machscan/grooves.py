@@ -54,6 +54,8 @@ class GrooveFits:
     iterations, n_used : ndarray of int32 (F,)
         LM iterations and readings used.
     status : ndarray of uint8 (F,)
+    template : str
+        The template fitted: ``"tanh"`` (paper 000) or ``"v"``.
     """
 
     x0: NDArray[np.float64]
@@ -68,6 +70,7 @@ class GrooveFits:
     iterations: NDArray[np.int32]
     n_used: NDArray[np.int32]
     status: NDArray[np.uint8]
+    template: str = "tanh"
 
     def __len__(self) -> int:
         return len(self.status)
@@ -83,7 +86,8 @@ class GrooveFits:
 
     def select(self, index: ArrayLike) -> "GrooveFits":
         """The fits of a subset of frames (boolean mask or indices)."""
-        return GrooveFits(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
+        arrays = {f.name: getattr(self, f.name)[index] for f in fields(self) if f.name != "template"}
+        return GrooveFits(**arrays, template=self.template)
 
     def summary(self) -> str:
         """Width and depth statistics over the converged frames, and the status counts."""
@@ -173,7 +177,7 @@ def fit_grooves(
         x, z, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth,
         min_valid, max_iterations, cost_tolerance, step_tolerance, gradient_tolerance, template,
     )
-    return GrooveFits(**out)
+    return GrooveFits(**out, template=template)
 
 
 @dataclass(frozen=True, repr=False)

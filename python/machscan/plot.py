@@ -485,6 +485,17 @@ def _tanh_template(x: NDArray[np.float64], x0: float, z0: float, d: float, w: fl
     return z0 + 0.5 * d * (np.tanh(a * (x - x0 - w / 4)) - np.tanh(a * (x - x0 + w / 4)))
 
 
+def _v_template(x, x0, z0, d, w, beta):
+    """The V template of ``fit_grooves(template="v")``: z0 − d·(2/w)(s(u + w/2) − 2s(u) + s(u − w/2)),
+    s(t) = ln(1 + e^(βt))/β."""
+    u = np.asarray(x, dtype=np.float64) - x0
+
+    def s(t):
+        return np.logaddexp(0.0, beta * t) / beta
+
+    return z0 - d * (2.0 / w) * (s(u + w / 2) - 2.0 * s(u) + s(u - w / 2))
+
+
 def levelled_frame(
     x: ArrayLike,
     z: ArrayLike,
@@ -579,7 +590,8 @@ def levelled_frame(
     params = np.array([x0l, z0l, d, w, a])
     if len(lf.x) and np.isfinite(params).all():
         xs = np.linspace(float(lf.x.min()), float(lf.x.max()), 1000)
-        ax.plot(xs, _tanh_template(xs, x0l, z0l, d, w, a), color="tab:red", lw=1.5, label=label)
+        shape = _v_template if (fits is not None and getattr(fits, "template", "tanh") == "v") else _tanh_template
+        ax.plot(xs, shape(xs, x0l, z0l, d, w, a), color="tab:red", lw=1.5, label=label)
         # Surface width at z0' and depth below it at x0'.
         ax.annotate("", xy=(x0l - w / 2, z0l), xytext=(x0l + w / 2, z0l),
                     arrowprops=dict(arrowstyle="<->", color="0.25", lw=0.9, shrinkA=0, shrinkB=0))
