@@ -281,11 +281,6 @@ impl<'a> TemplateProblem<'a> {
         0.5 * dot(&s.f, &s.f)
     }
 
-    #[inline(always)]
-    fn cost_of(&self, p: &[f64]) -> f64 {
-        let t = self.template(p);
-        self.residuals(&t, &mut self.scratch.borrow_mut())
-    }
 
     #[inline(always)]
     fn normal_equations_of<const P: usize>(&self, p: &[f64]) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64) {
@@ -369,9 +364,6 @@ impl LeastSquares<4> for VProblem<'_> {
     fn len(&self) -> usize {
         self.x.len()
     }
-    fn cost(&self, p: &SVector<f64, 4>) -> f64 {
-        self.eval::<4>(p.as_slice()).2
-    }
     fn normal_equations(&self, p: &SVector<f64, 4>) -> (SMatrix<f64, 4, 4>, SVector<f64, 4>, f64) {
         self.eval::<4>(p.as_slice())
     }
@@ -380,9 +372,6 @@ impl LeastSquares<4> for VProblem<'_> {
 impl LeastSquares<5> for VProblem<'_> {
     fn len(&self) -> usize {
         self.x.len()
-    }
-    fn cost(&self, p: &SVector<f64, 5>) -> f64 {
-        self.eval::<5>(p.as_slice()).2
     }
     fn normal_equations(&self, p: &SVector<f64, 5>) -> (SMatrix<f64, 5, 5>, SVector<f64, 5>, f64) {
         self.eval::<5>(p.as_slice())
@@ -412,10 +401,6 @@ impl LeastSquares<4> for TemplateProblem<'_> {
         self.x.len()
     }
     #[inline(always)]
-    fn cost(&self, p: &SVector<f64, 4>) -> f64 {
-        self.cost_of(p.as_slice())
-    }
-    #[inline(always)]
     fn normal_equations(&self, p: &SVector<f64, 4>) -> (SMatrix<f64, 4, 4>, SVector<f64, 4>, f64) {
         self.normal_equations_of::<4>(p.as_slice())
     }
@@ -424,10 +409,6 @@ impl LeastSquares<4> for TemplateProblem<'_> {
 impl LeastSquares<5> for TemplateProblem<'_> {
     fn len(&self) -> usize {
         self.x.len()
-    }
-    #[inline(always)]
-    fn cost(&self, p: &SVector<f64, 5>) -> f64 {
-        self.cost_of(p.as_slice())
     }
     #[inline(always)]
     fn normal_equations(&self, p: &SVector<f64, 5>) -> (SMatrix<f64, 5, 5>, SVector<f64, 5>, f64) {

@@ -43,11 +43,6 @@ impl LeastSquares<6> for MountProblem<'_> {
         3 * self.scs.len()
     }
 
-    fn cost(&self, x: &SVector<f64, 6>) -> f64 {
-        let r = mount_rotation(x[0], x[1], x[2]);
-        let d = Vector3::new(x[3], x[4], x[5]);
-        0.5 * (0..self.scs.len()).map(|i| self.residual(&r, &d, i).norm_squared()).sum::<f64>()
-    }
 
     fn normal_equations(&self, x: &SVector<f64, 6>) -> (SMatrix<f64, 6, 6>, SVector<f64, 6>, f64) {
         let r = mount_rotation(x[0], x[1], x[2]);

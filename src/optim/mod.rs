@@ -8,8 +8,6 @@ use nalgebra::{SMatrix, SVector};
 pub trait LeastSquares<const P: usize> {
     /// Number of residuals.
     fn len(&self) -> usize;
-    /// `½ Σ f_i²` at `x`.
-    fn cost(&self, x: &SVector<f64, P>) -> f64;
     /// `(JᵀJ, Jᵀf, ½ Σ f_i²)` at `x`, J the Jacobian of f.
     fn normal_equations(&self, x: &SVector<f64, P>) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64);
 }
@@ -156,10 +154,6 @@ mod tests {
     impl LeastSquares<2> for Rosenbrock {
         fn len(&self) -> usize {
             2
-        }
-        fn cost(&self, p: &Vector2<f64>) -> f64 {
-            let f = [10.0 * (p[1] - p[0] * p[0]), 1.0 - p[0]];
-            0.5 * (f[0] * f[0] + f[1] * f[1])
         }
         fn normal_equations(&self, p: &Vector2<f64>) -> (Matrix2<f64>, Vector2<f64>, f64) {
             let f = [10.0 * (p[1] - p[0] * p[0]), 1.0 - p[0]];

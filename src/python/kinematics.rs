@@ -10,18 +10,22 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 
 const AC_HEAD_AXES: &str = "with columns X, Y, Z, A, C, C2 (mm, rad)";
 
-fn profiler_for(n_readings: usize, pitch: f64, center: Option<f64>, valid_range: Option<(f64, f64)>) -> PyResult<Profiler> {
-    Profiler::new(pitch, n_readings, center, valid_range).map_err(to_py_err)
-}
-
-fn frames_shape(shape: &[usize]) -> PyResult<(usize, usize)> {
-    let (f, n) = (shape[0], shape[1]);
+/// The `frames (F, N)` argument with its shape checked, and the profiler for its N readings.
+fn frames_and_profiler<'py>(
+    frames: &Bound<'py, PyAny>,
+    pitch: f64,
+    center: Option<f64>,
+    valid_range: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(numpy::PyReadonlyArrayDyn<'py, f64>, usize, usize, Profiler)> {
+    let arr = f64_array(frames, "frames", &[Dim::Any("F"), Dim::Any("N")], "")?;
+    let (f, n) = (arr.shape()[0], arr.shape()[1]);
     if f == 0 || n == 0 {
         return Err(PyValueError::new_err(format!(
             "frames: expected shape (F, N) with at least one frame and one reading, got ({f}, {n})"
         )));
     }
-    Ok((f, n))
+    let profiler = Profiler::new(pitch, n, center, f64_range(valid_range, "valid_range")?).map_err(to_py_err)?;
+    Ok((arr, f, n, profiler))
 }
 
 fn points_result<'py>(py: Python<'py>, out: kin::ProfilePoints) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
@@ -67,9 +71,7 @@ fn profile_to_points<'py>(
     center: Option<f64>,
     valid_range: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let frames = f64_array(frames, "frames", &[Dim::Any("F"), Dim::Any("N")], "")?;
-    let (_, n) = frames_shape(frames.shape())?;
-    let profiler = profiler_for(n, pitch, center, f64_range(valid_range, "valid_range")?)?;
+    let (frames, _, n, profiler) = frames_and_profiler(frames, pitch, center, valid_range)?;
     let data = frames.as_slice()?;
     let out = py.detach(|| kin::profile_to_points(data, n, &profiler));
     points_result(py, out)
@@ -130,10 +132,8 @@ fn scan_points_with<'py>(
     center: Option<f64>,
     valid_range: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let frames = f64_array(frames, "frames", &[Dim::Any("F"), Dim::Any("N")], "")?;
-    let (f, n) = frames_shape(frames.shape())?;
+    let (frames, f, n, profiler) = frames_and_profiler(frames, pitch, center, valid_range)?;
     let axes = poses_array(chain, axes, Some(f))?;
-    let profiler = profiler_for(n, pitch, center, f64_range(valid_range, "valid_range")?)?;
     let (data, poses) = (frames.as_slice()?, axes.as_slice()?);
     let out = py.detach(|| kin::frames_to_points(chain, data, n, poses, &profiler)).map_err(to_py_err)?;
     points_result(py, out)
