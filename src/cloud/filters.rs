@@ -13,7 +13,7 @@
 //! Voxel keys are 64-bit and relative to the minimum bound, so clouds in machine coordinates
 //! several metres from the origin keep full precision.
 use crate::error::{Error, Result};
-use crate::spatial::PointIndex;
+use crate::spatial::{CloudNeighbours, PointIndex};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -129,13 +129,8 @@ pub fn statistical_outlier_removal(points: &[[f64; 3]], k: usize, std_ratio: f64
     if n == 0 {
         return Ok(Vec::new());
     }
-    let index = PointIndex::new(points)?;
-    let kk = k.min(n);
-    let avg: Vec<f64> = index
-        .knn_many(points, kk)
-        .par_iter()
-        .map(|nn| nn.iter().map(|&(_, d2)| d2.sqrt()).sum::<f64>() / nn.len() as f64)
-        .collect();
+    // Summed nearest first, as Open3D: bit-identical means.
+    let avg: Vec<f64> = CloudNeighbours::new(points)?.map_knn(k, None, |_, nn| nn.iter().map(|n| n.dist2.sqrt()).sum::<f64>() / nn.len() as f64);
     // Sequential in point order, as Open3D sums.
     let valid = n as f64;
     let mut total = 0.0;
@@ -165,20 +160,8 @@ pub fn radius_outlier_removal(points: &[[f64; 3]], radius: f64, min_neighbors: u
     if points.is_empty() {
         return Ok(Vec::new());
     }
-    let index = PointIndex::new(points)?;
-    let r2 = radius * radius;
-    let keep = PointIndex::map_in_locality_order(points, |i| {
-        let p = points[i];
-        let mut count = 0usize;
-        index.for_each_within(&p, radius, |j| {
-            let q = points[j];
-            if (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2) < r2 {
-                count += 1;
-            }
-        });
-        count > min_neighbors
-    });
-    Ok((0..points.len()).filter(|&i| keep[i]).collect())
+    let counts = CloudNeighbours::new(points)?.count_within(radius);
+    Ok((0..points.len()).filter(|&i| counts[i] > min_neighbors).collect())
 }
 
 /// Duplicate-point removal (paper 004): in point order, each point not yet removed removes every

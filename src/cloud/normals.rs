@@ -1,7 +1,7 @@
 //! Normals and curvature (SPEC F): PCA of each point's neighbourhood, orientation, surface
 //! variation, and principal curvatures from a local quadric fit.
 use crate::error::{Error, Result};
-use crate::spatial::PointIndex;
+use crate::spatial::{CloudNeighbours, Neighbour};
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
 use std::cmp::Ordering;
@@ -29,33 +29,31 @@ impl Neighbourhood {
         }
     }
 
-    fn query(&self, index: &PointIndex, p: &[f64; 3]) -> Vec<usize> {
+    /// `f(i, neighbours)` for every point, in point order.
+    fn map<T: Send + Default>(&self, tree: &CloudNeighbours, f: impl Fn(usize, &[Neighbour]) -> T + Sync) -> Vec<T> {
         match *self {
-            Neighbourhood::Knn(k) => index.knn(p, k).into_iter().map(|(i, _)| i).collect(),
-            Neighbourhood::Hybrid { radius, max_nn } => {
-                let r2 = radius * radius;
-                index.knn(p, max_nn).into_iter().filter(|&(_, d2)| d2 < r2).map(|(i, _)| i).collect()
-            }
+            Neighbourhood::Knn(k) => tree.map_knn(k, None, f),
+            Neighbourhood::Hybrid { radius, max_nn } => tree.map_knn(max_nn, Some(radius), f),
         }
     }
 }
 
 /// Eigen-decomposition of the neighbourhood covariance: eigenvalues ascending and their vectors.
 /// `None` with fewer than 3 neighbours.
-fn local_pca(points: &[[f64; 3]], nbrs: &[usize]) -> Option<([f64; 3], [Vector3<f64>; 3])> {
+fn local_pca(nbrs: &[Neighbour]) -> Option<([f64; 3], [Vector3<f64>; 3])> {
     if nbrs.len() < 3 {
         return None;
     }
     // Centred sums: Open3D's raw-moment form loses digits far from the origin.
     let n = nbrs.len() as f64;
     let mut c = Vector3::zeros();
-    for &j in nbrs {
-        c += Vector3::from(points[j]);
+    for nb in nbrs {
+        c += Vector3::from(nb.point);
     }
     c /= n;
     let mut m = Matrix3::zeros();
-    for &j in nbrs {
-        let d = Vector3::from(points[j]) - c;
+    for nb in nbrs {
+        let d = Vector3::from(nb.point) - c;
         m += d * d.transpose();
     }
     m /= n;
@@ -75,18 +73,8 @@ pub fn estimate_normals(points: &[[f64; 3]], nbh: Neighbourhood) -> Result<(Vec<
     if points.is_empty() {
         return Ok((Vec::new(), Vec::new(), 0));
     }
-    let index = PointIndex::new(points)?;
-    let knn = match nbh {
-        Neighbourhood::Knn(k) => Some(index.knn_many(points, k)),
-        Neighbourhood::Hybrid { .. } => None,
-    };
-    let neighbours = |i: usize| -> Vec<usize> {
-        match &knn {
-            Some(all) => all[i].iter().map(|&(j, _)| j).collect(),
-            None => nbh.query(&index, &points[i]),
-        }
-    };
-    let out: Vec<([f64; 3], f64, bool)> = PointIndex::map_in_locality_order(points, |i| match local_pca(points, &neighbours(i)) {
+    let tree = CloudNeighbours::new(points)?;
+    let out: Vec<([f64; 3], f64, bool)> = nbh.map(&tree, |_, nbrs| match local_pca(nbrs) {
         Some((vals, vecs)) => {
             let s = vals[0] + vals[1] + vals[2];
             let n = vecs[0].normalize();
@@ -144,8 +132,9 @@ pub fn orient_consistent(points: &[[f64; 3]], normals: &mut [[f64; 3]], k: usize
     if n == 0 {
         return Ok(());
     }
-    let index = PointIndex::new(points)?;
-    let knn: Vec<Vec<usize>> = points.par_iter().enumerate().map(|(i, p)| index.knn(p, k + 1).into_iter().map(|(j, _)| j).filter(|&j| j != i).collect()).collect();
+    // k + 1: the point itself is its own nearest neighbour (unless an exact duplicate with a
+    // lower index comes first).
+    let knn: Vec<Vec<usize>> = CloudNeighbours::new(points)?.map_knn(k + 1, None, |i, nb| nb.iter().map(|n| n.index).filter(|&j| j != i).take(k).collect());
     // Symmetric adjacency.
     let mut adj: Vec<Vec<usize>> = knn.clone();
     for (i, js) in knn.iter().enumerate() {
@@ -205,12 +194,9 @@ pub fn principal_curvatures(points: &[[f64; 3]], normals: &[[f64; 3]], nbh: Neig
     if points.is_empty() {
         return Ok(Vec::new());
     }
-    let index = PointIndex::new(points)?;
-    Ok(points
-        .par_iter()
-        .zip(normals)
-        .map(|(p, nrm)| {
-            let nb = nbh.query(&index, p);
+    let tree = CloudNeighbours::new(points)?;
+    Ok(nbh.map(&tree, |i, nb| {
+            let (p, nrm) = (&points[i], &normals[i]);
             let nv = Vector3::from(*nrm).normalize();
             // A tangent basis.
             let helper = if nv.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
@@ -222,8 +208,8 @@ pub fn principal_curvatures(points: &[[f64; 3]], normals: &[[f64; 3]], nbh: Neig
             // Least squares on the 6 quadric coefficients.
             let mut ata = nalgebra::Matrix6::<f64>::zeros();
             let mut atb = nalgebra::Vector6::<f64>::zeros();
-            for &j in &nb {
-                let d = Vector3::from(points[j]) - Vector3::from(*p);
+            for n in nb {
+                let d = Vector3::from(n.point) - Vector3::from(*p);
                 let (x, y, h) = (d.dot(&u), d.dot(&v), d.dot(&nv));
                 let row = nalgebra::Vector6::new(x * x, x * y, y * y, x, y, 1.0);
                 ata += row * row.transpose();
@@ -257,6 +243,5 @@ pub fn principal_curvatures(points: &[[f64; 3]], normals: &[[f64; 3]], nbh: Neig
                 [t3.x, t3.y, t3.z]
             };
             ([k1, k2], [dir(k1), dir(k2)])
-        })
-        .collect())
+        }))
 }

@@ -12,8 +12,7 @@
 //! 5. Q = Q0 ∪ Q1 ∪ Q2 as sorted unique indices.
 use super::normals::{estimate_normals, Neighbourhood};
 use crate::error::{Error, Result};
-use crate::spatial::PointIndex;
-use rayon::prelude::*;
+use crate::spatial::CloudNeighbours;
 use std::collections::HashMap;
 
 pub struct OctreeOptions {
@@ -30,26 +29,25 @@ pub fn feature_degree(points: &[[f64; 3]], normals: &[[f64; 3]], k: usize) -> Re
     if k == 0 {
         return Err(Error::invalid("k", "must be at least 1"));
     }
-    let index = PointIndex::new(points)?;
-    let knn = index.knn_many(points, k + 1);
-    Ok(knn
-        .par_iter()
-        .enumerate()
-        .map(|(i, nn)| {
-            let ni = normals[i];
-            let nb: Vec<usize> = nn.iter().map(|&(j, _)| j).filter(|&j| j != i).take(k).collect();
-            if nb.is_empty() {
-                return 0.0;
-            }
-            nb.iter()
-                .map(|&j| {
-                    let nj = normals[j];
-                    (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2]).abs().min(1.0).acos()
-                })
-                .sum::<f64>()
-                / nb.len() as f64
-        })
-        .collect())
+    if normals.len() != points.len() {
+        return Err(Error::shape("normals", format!("({}, 3): one per point", points.len()), format!("({}, 3)", normals.len())));
+    }
+    // k + 1: the point itself is its own nearest neighbour.
+    Ok(CloudNeighbours::new(points)?.map_knn(k + 1, None, |i, nn| {
+        let ni = normals[i];
+        let mut sum = 0.0;
+        let mut count = 0;
+        for j in nn.iter().map(|n| n.index).filter(|&j| j != i).take(k) {
+            let nj = normals[j];
+            sum += (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2]).abs().min(1.0).acos();
+            count += 1;
+        }
+        if count == 0 {
+            0.0
+        } else {
+            sum / count as f64
+        }
+    }))
 }
 
 /// The boundary rule of step 4; `eps1`, `eps2` ≥ 1.
