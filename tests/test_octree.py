@@ -2,36 +2,11 @@
 Open3D's voxel grid at the same number of points on a part with steps and a free boundary."""
 
 import numpy as np
-import open3d
 import pytest
-from scipy.interpolate import LinearNDInterpolator
-from scipy.spatial import Delaunay
+from octree_quality import compare
 
 import machscan
-
-
-def pocket_plate(seed=0, spacing=0.25, noise=0.003):
-    """120 × 80 mm plate with a notch in its outline, a 3 mm pocket with vertical walls and a
-    boss inside it."""
-    rng = np.random.default_rng(seed)
-    x, y = np.meshgrid(np.arange(0, 120, spacing), np.arange(0, 80, spacing))
-    x = x.ravel() + rng.uniform(-0.3, 0.3, x.size) * spacing
-    y = y.ravel() + rng.uniform(-0.3, 0.3, y.size) * spacing
-    keep = ~((x > 90) & (y > 55))
-    x, y = x[keep], y[keep]
-    z = np.zeros_like(x)
-    z[(x > 20) & (x < 70) & (y > 15) & (y < 60)] = -3.0
-    z[(x - 45) ** 2 + (y - 37) ** 2 < 64] = -1.0
-    return np.column_stack([x, y, z + rng.normal(0, noise, x.size)])
-
-
-def rebuilt_deviation(kept, full):
-    """xy-Delaunay of the kept points, barycentric height at every original point:
-    (max |dz|, rms dz, share of original points outside the rebuilt surface)."""
-    z = LinearNDInterpolator(Delaunay(kept[:, :2]), kept[:, 2])(full[:, :2])
-    inside = np.isfinite(z)
-    e = np.abs(z[inside] - full[inside, 2])
-    return e.max(), np.sqrt(np.mean(e**2)), 1 - inside.mean()
+from machscan.synth import pocket_plate
 
 
 @pytest.fixture(scope="module")
@@ -60,29 +35,61 @@ def test_boundary_rule_keeps_each_groups_extremes(plate):
             assert g[np.argmax(plate[g, other])] in keep
 
 
-def test_measured_against_voxel_grid_at_equal_point_count(plate):
-    keep = machscan.octree_simplify(plate, 2.0)
-    pc = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(plate))
-    lo, hi = 0.01, 20.0
-    for _ in range(60):
-        mid = np.sqrt(lo * hi)
-        lo, hi = (mid, hi) if len(pc.voxel_down_sample(mid).points) > len(keep) else (lo, mid)
-    vox = np.asarray(pc.voxel_down_sample(hi).points)
-    assert abs(len(vox) - len(keep)) <= 0.02 * len(keep)
-    o_max, o_rms, o_out = rebuilt_deviation(plate[keep], plate)
-    v_max, v_rms, v_out = rebuilt_deviation(vox, plate)
-    # Measured (see the issue note): the octree keeps the free boundary — almost no original
-    # point falls outside its rebuilt surface, the voxel grid's centroids pull the outline in.
-    assert o_out < 0.001 < v_out
-    # Both step errors are bounded by the 3 mm wall; at this resolution the voxel grid's RMS is
-    # lower (0.16 vs 0.20 mm): paper 002's advantage does not show in vertical deviation here.
-    assert o_max < 3.5 and v_max < 3.5
-    assert o_rms < 1.5 * v_rms
+@pytest.fixture(scope="module")
+def drafted_plate():
+    return pocket_plate(wall_angle=45.0)
+
+
+@pytest.mark.parametrize("d_min", [1.0, 2.0, 4.0])
+@pytest.mark.parametrize("wall", ["vertical", "drafted"])
+def test_refined_octree_beats_the_voxel_grid_at_equal_point_count(plate, drafted_plate, wall, d_min):
+    """Issue #4 §4, with the options beyond the paper: closer to the original points than
+    Open3D's voxel grid at the same count, in max and RMS, and keeping the outline."""
+    points = plate if wall == "vertical" else drafted_plate
+    octree, voxel = compare(points, d_min, neighbours="xy", refine=2)
+    assert abs(octree.count - voxel.count) <= 0.005 * octree.count
+    assert octree.max < voxel.max and octree.rms < voxel.rms
+    assert octree.outside < 0.001 < voxel.outside
+
+
+@pytest.mark.parametrize("d_min", [1.0, 2.0])
+def test_paper_rule_at_equal_point_count(plate, drafted_plate, d_min):
+    """The rule as written (measured, see BENCHMARKS.md): it keeps creases — on the drafted
+    plate its surface is closer in RMS than the voxel grid's — and the outline, but not height
+    steps: on the vertical walls its RMS is worse (1.2–1.5× the voxel grid's) because 3D
+    neighbourhoods never reach across a 3 mm step, so no leaf there knows it holds a feature."""
+    octree, voxel = compare(drafted_plate, d_min)
+    assert octree.rms < voxel.rms
+    assert octree.outside < 0.001 < voxel.outside
+    octree, voxel = compare(plate, d_min)
+    assert octree.outside < 0.001 < voxel.outside
+    assert octree.max < 3.5 and voxel.max < 3.5
+
+
+def test_refine_keeps_the_paper_points_away_from_features(plate):
+    """Refinement only adds points in feature leaves: away from the walls the kept set equals the
+    paper's rule with the same neighbours."""
+    paper = set(machscan.octree_simplify(plate, 2.0, neighbours="xy").tolist())
+    refined = set(machscan.octree_simplify(plate, 2.0, neighbours="xy", refine=2).tolist())
+    x, y = plate[:, 0], plate[:, 1]
+    # Far (> 6 mm, three leaves) from the pocket walls and the boss.
+    far = ((x < 14) | (x > 76) | (y < 9) | (y > 66)) | (
+        (x > 26) & (x < 64) & (y > 21) & (y < 54) & (np.hypot(x - 45, y - 37) > 14)
+    )
+    assert {i for i in paper if far[i]} == {i for i in refined if far[i]}
+    assert len(refined) > len(paper)
 
 
 @pytest.mark.parametrize(
     "kwargs, name",
-    [(dict(d_min=0.0), "d_min"), (dict(d_min=1.0, eps1=0), "eps1"), (dict(d_min=1.0, normals=np.zeros((3, 3))), "normals")],
+    [
+        (dict(d_min=0.0), "d_min"),
+        (dict(d_min=1.0, eps1=0), "eps1"),
+        (dict(d_min=1.0, normals=np.zeros((3, 3))), "normals"),
+        (dict(d_min=1.0, neighbours="z"), "neighbours"),
+        (dict(d_min=1.0, refine=2, feature_threshold=-1.0), "feature_threshold"),
+        (dict(d_min=1e-12, refine=8), "d_min"),
+    ],
 )
 def test_bad_input(plate, kwargs, name):
     with pytest.raises(ValueError) as exc:

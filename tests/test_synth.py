@@ -14,6 +14,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import machscan
+from machscan import synth
 from machscan.scan import SENTINEL, Scan
 from machscan.synth import (
     DEFAULT_MOUNT,
@@ -437,3 +438,27 @@ def test_rust_interpolated_poses_of_synthetic_scan(noisy):
     exp = interpolate_poses_np(scan.axis_times, scan.axis_samples, scan.frame_times)
     np.testing.assert_allclose(got, exp, rtol=0, atol=1e-9)
     np.testing.assert_allclose(got[:, 5], scan.poses[:, 5], atol=2e-3)
+
+
+# --------------------------------------------------------------------------------------------
+# pocket plate (simplification studies)
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("wall_angle", [90.0, 45.0])
+def test_pocket_plate_heights(wall_angle):
+    p = synth.pocket_plate(wall_angle=wall_angle, noise=0.0)
+    x, y, z = p.T
+    assert not np.any((x > 90) & (y > 55))  # the notch
+    assert np.all(z[(x < 19) | (y < 14)] == 0.0)  # plate top, outside the pocket
+    assert np.all(z[(x > 30) & (x < 60) & (y > 25) & (y < 50) & (np.hypot(x - 45, y - 37) > 12)] == -3.0)
+    assert np.all(z[np.hypot(x - 45, y - 37) < 7.9] == -1.0)  # boss top
+    if wall_angle == 45.0:
+        # On the drafted wall z follows the 45° flank: 1 mm in, 1 mm down.
+        band = (np.abs(x - 21) < 0.01) & (y > 25) & (y < 50)
+        assert band.any() and np.allclose(z[band], -(x[band] - 20), atol=1e-9)
+
+
+def test_pocket_plate_bad_angle():
+    with pytest.raises(ValueError, match="wall_angle"):
+        synth.pocket_plate(wall_angle=0.0)

@@ -273,9 +273,13 @@ def octree_simplify(
     k: int = 10,
     eps1: int | None = None,
     eps2: int | None = None,
+    neighbours: str = "xyz",
+    refine: int = 0,
+    feature_threshold: float = 0.05,
 ) -> NDArray[np.int64]:
     """Octree simplification keeping features and the x–y boundary (paper 002 §2); sorted unique
-    kept indices."""
+    kept indices. ``neighbours="xy"`` and ``refine`` go beyond the paper (feature leaves split
+    deeper)."""
 
 @final
 class KinematicChain:

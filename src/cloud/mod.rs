@@ -9,4 +9,4 @@ pub use filters::{
     uniform_downsample, voxel_downsample, VoxelGrid,
 };
 pub use normals::{estimate_normals, orient_along, orient_consistent, orient_towards, principal_curvatures, Neighbourhood};
-pub use octree::{boundary_points, feature_degree, octree_simplify, OctreeOptions};
+pub use octree::{boundary_points, feature_degree, octree_simplify, NeighbourSpace, OctreeOptions};

@@ -15,12 +15,16 @@ pub enum Neighbourhood {
     /// The nearest `max_nn` points strictly closer than `radius` (Open3D's
     /// `KDTreeSearchParamHybrid(radius, max_nn)`).
     Hybrid { radius: f64, max_nn: usize },
+    /// The k nearest in the x–y projection, the point itself included. For height-field scans
+    /// (z the cutting depth): the two sides of a vertical step are then neighbours, as they are
+    /// on the part, while in 3D a step higher than the neighbourhood separates them.
+    KnnXy(usize),
 }
 
 impl Neighbourhood {
     fn check(&self) -> Result<()> {
         match *self {
-            Neighbourhood::Knn(k) if k < 3 => Err(Error::invalid("k", format!("a plane needs at least 3 neighbours, got {k}"))),
+            Neighbourhood::Knn(k) | Neighbourhood::KnnXy(k) if k < 3 => Err(Error::invalid("k", format!("a plane needs at least 3 neighbours, got {k}"))),
             Neighbourhood::Hybrid { radius, .. } if !(radius.is_finite() && radius > 0.0) => {
                 Err(Error::invalid("radius", format!("must be a positive distance in mm, got {radius}")))
             }
@@ -29,12 +33,20 @@ impl Neighbourhood {
         }
     }
 
-    /// `f(i, neighbours)` for every point, in point order.
-    fn map<T: Send + Default>(&self, tree: &CloudNeighbours, f: impl Fn(usize, &[Neighbour]) -> T + Sync) -> Vec<T> {
-        match *self {
-            Neighbourhood::Knn(k) => tree.map_knn(k, None, f),
-            Neighbourhood::Hybrid { radius, max_nn } => tree.map_knn(max_nn, Some(radius), f),
-        }
+    /// `f(i, neighbours)` for every point, in point order; neighbour positions are 3D (the
+    /// squared distances of `KnnXy` are in x–y).
+    pub(crate) fn map<T: Send + Default>(&self, points: &[[f64; 3]], f: impl Fn(usize, &[Neighbour]) -> T + Sync) -> Result<Vec<T>> {
+        Ok(match *self {
+            Neighbourhood::Knn(k) => CloudNeighbours::new(points)?.map_knn(k, None, f),
+            Neighbourhood::Hybrid { radius, max_nn } => CloudNeighbours::new(points)?.map_knn(max_nn, Some(radius), f),
+            Neighbourhood::KnnXy(k) => {
+                let flat: Vec<[f64; 3]> = points.par_iter().map(|p| [p[0], p[1], 0.0]).collect();
+                CloudNeighbours::new(&flat)?.map_knn(k, None, |i, nb| {
+                    let lifted: Vec<Neighbour> = nb.iter().map(|n| Neighbour { point: points[n.index], ..*n }).collect();
+                    f(i, &lifted)
+                })
+            }
+        })
     }
 }
 
@@ -73,15 +85,14 @@ pub fn estimate_normals(points: &[[f64; 3]], nbh: Neighbourhood) -> Result<(Vec<
     if points.is_empty() {
         return Ok((Vec::new(), Vec::new(), 0));
     }
-    let tree = CloudNeighbours::new(points)?;
-    let out: Vec<([f64; 3], f64, bool)> = nbh.map(&tree, |_, nbrs| match local_pca(nbrs) {
+    let out: Vec<([f64; 3], f64, bool)> = nbh.map(points, |_, nbrs| match local_pca(nbrs) {
         Some((vals, vecs)) => {
             let s = vals[0] + vals[1] + vals[2];
             let n = vecs[0].normalize();
             ([n.x, n.y, n.z], if s > 0.0 { vals[0] / s } else { 0.0 }, false)
         }
         None => ([0.0, 0.0, 1.0], 0.0, true),
-    });
+    })?;
     let degenerate = out.iter().filter(|o| o.2).count();
     Ok((out.iter().map(|o| o.0).collect(), out.iter().map(|o| o.1).collect(), degenerate))
 }
@@ -194,8 +205,7 @@ pub fn principal_curvatures(points: &[[f64; 3]], normals: &[[f64; 3]], nbh: Neig
     if points.is_empty() {
         return Ok(Vec::new());
     }
-    let tree = CloudNeighbours::new(points)?;
-    Ok(nbh.map(&tree, |i, nb| {
+    nbh.map(points, |i, nb| {
             let (p, nrm) = (&points[i], &normals[i]);
             let nv = Vector3::from(*nrm).normalize();
             // A tangent basis.
@@ -243,5 +253,5 @@ pub fn principal_curvatures(points: &[[f64; 3]], normals: &[[f64; 3]], nbh: Neig
                 [t3.x, t3.y, t3.z]
             };
             ([k1, k2], [dir(k1), dir(k2)])
-        }))
+        })
 }
