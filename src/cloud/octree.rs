@@ -238,4 +238,45 @@ mod tests {
         let ridge_kept = keep.iter().filter(|&&i| pts[i][0] == 25.0).count();
         assert!(ridge_kept >= 6, "{ridge_kept}");
     }
+
+    /// A plate with a 3 mm step at x = 25 (jittered grid, as a height-field scan sees it).
+    fn stepped_plate() -> Vec<[f64; 3]> {
+        let mut pts = Vec::new();
+        for i in 0..200 {
+            for j in 0..120 {
+                let jitter = ((i * 7 + j * 13) % 11) as f64 * 0.005;
+                let x = i as f64 * 0.25 + jitter;
+                pts.push([x, j as f64 * 0.25 + jitter, if x < 25.0 { 0.0 } else { -3.0 }]);
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn xy_neighbours_see_the_step_and_refine_spends_points_on_it() {
+        let pts = stepped_plate();
+        let near_step = |p: &[f64; 3]| (p[0] - 25.0).abs() < 1.0;
+        // In 3D, 10 neighbours never reach over 3 mm: the feature degree is 0 at the step.
+        let n3 = estimate_normals(&pts, Neighbourhood::Knn(10)).unwrap().0;
+        let f3 = feature_degree(&pts, &n3, 10, NeighbourSpace::Xyz).unwrap();
+        assert!(f3.iter().all(|&f| f < 1e-6), "{:?}", f3.iter().cloned().fold(0.0, f64::max));
+        // In x–y they do: the points at the step stand out, the rest stays flat.
+        let nxy = estimate_normals(&pts, Neighbourhood::KnnXy(10)).unwrap().0;
+        let fxy = feature_degree(&pts, &nxy, 10, NeighbourSpace::Xy).unwrap();
+        assert!(pts.iter().zip(&fxy).all(|(p, &f)| near_step(p) || f < 1e-6));
+        assert!(pts.iter().zip(&fxy).filter(|(p, _)| near_step(p)).any(|(_, &f)| f > 0.5));
+        let paper = octree_simplify(&pts, None, &OctreeOptions { neighbours: NeighbourSpace::Xy, ..OctreeOptions::new(4.0) }).unwrap();
+        let refined =
+            octree_simplify(&pts, None, &OctreeOptions { neighbours: NeighbourSpace::Xy, refine: 2, ..OctreeOptions::new(4.0) }).unwrap();
+        let at_step = |keep: &[usize]| keep.iter().filter(|&&i| near_step(&pts[i])).count();
+        // Cells of 3.125 mm → sub-cells of 0.78 mm along the step's 30 mm: many more points
+        // there, and the same points elsewhere.
+        assert!(at_step(&refined) >= 3 * at_step(&paper), "{} vs {}", at_step(&refined), at_step(&paper));
+        let far = |keep: &[usize]| keep.iter().copied().filter(|&i| (pts[i][0] - 25.0).abs() > 8.0).collect::<Vec<_>>();
+        assert_eq!(far(&refined), far(&paper));
+        // Both sides of the step keep points right at its edge.
+        for side in [-1.0, 1.0] {
+            assert!(refined.iter().any(|&i| (pts[i][0] - 25.0) * side > 0.0 && (pts[i][0] - 25.0).abs() < 0.3));
+        }
+    }
 }
