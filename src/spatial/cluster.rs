@@ -151,14 +151,21 @@ fn union_within_radius_grid(points: &[[f64; 3]], radius: f64, parent: &mut [u32]
 fn union_knn(points: &[[f64; 3]], radius: f64, k: usize, parent: &mut [u32]) -> Result<()> {
     let n = points.len();
     let index = PointIndex::new(points)?;
+    let r2 = radius * radius;
     let mut start = 0;
     while start < n {
         let end = (start + BLOCK).min(n);
         let edges: Vec<Vec<u32>> = (start..end)
             .into_par_iter()
             .map(|i| {
-                // k + 1: the point itself is its own nearest neighbour.
-                index.knn_within(&points[i], k + 1, radius).into_iter().filter(|&(j, _)| j != i).map(|(j, _)| j as u32).collect()
+                // k + 1: the point itself is its own nearest neighbour. kiddo's radius is
+                // inclusive, ours strict: points at exactly `radius` come last and are dropped.
+                index
+                    .knn_within(&points[i], k + 1, radius)
+                    .into_iter()
+                    .filter(|&(j, d2)| j != i && d2 < r2)
+                    .map(|(j, _)| j as u32)
+                    .collect()
             })
             .collect();
         for (i, js) in (start..end).zip(edges) {
@@ -207,6 +214,16 @@ mod tests {
         let pts: Vec<[f64; 3]> = order.iter().map(|&i| [i as f64 * 0.1, 0.0, 0.0]).collect();
         let labels = euclidean_clusters(&pts, 0.15, None).unwrap();
         assert!(labels.iter().all(|&l| l == 0));
+    }
+
+    #[test]
+    fn radius_is_strict_in_both_forms() {
+        // Neighbours exactly `radius` apart are not joined; a hair closer they are.
+        let pts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        assert_eq!(euclidean_clusters(&pts, 1.0, None).unwrap(), vec![0, 1, 2]);
+        assert_eq!(euclidean_clusters(&pts, 1.0, Some(2)).unwrap(), vec![0, 1, 2]);
+        assert_eq!(euclidean_clusters(&pts, 1.0 + 1e-12, None).unwrap(), vec![0, 0, 0]);
+        assert_eq!(euclidean_clusters(&pts, 1.0 + 1e-12, Some(2)).unwrap(), vec![0, 0, 0]);
     }
 
     #[test]

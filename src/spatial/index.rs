@@ -58,7 +58,8 @@ impl PointIndex {
         }
     }
 
-    /// The `k` nearest points within `radius`, nearest first: (index, squared distance).
+    /// The `k` nearest points within `radius` (inclusive), nearest first: (index, squared
+    /// distance).
     pub fn knn_within(&self, q: &[f64; 3], k: usize, radius: f64) -> Vec<(usize, f64)> {
         let Some(kk) = NonZeroUsize::new(k) else { return Vec::new() };
         self.tree
