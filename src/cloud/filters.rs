@@ -3,8 +3,9 @@
 //!
 //! - voxel grid: origin = min bound − voxel/2, voxel = ⌊(p − origin)/voxel⌋, centroid = sum in
 //!   point order / count (`voxel_down_sample`);
-//! - statistical outlier removal: k nearest including the point itself, mean of the distances,
-//!   cloud mean over N and sample standard deviation over the points with a non-zero mean,
+//! - statistical outlier removal: k nearest including the point itself, mean of the distances
+//!   (summed nearest first); over the points with a non-zero mean, the sum of the means and of
+//!   their squared deviations, both divided as Open3D does by N and N − 1 for all N points;
 //!   kept when 0 < mean_i < mean + ratio·std (`remove_statistical_outlier`);
 //! - radius outlier removal: points strictly within the radius, the point itself included,
 //!   kept when more than `min_neighbors` (`remove_radius_outlier(nb_points, radius)`);

@@ -128,12 +128,9 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
     let (lo, hi) = crate::geom::bounds(points);
     let l = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max).max(o.d_min);
     let depth = (l / o.d_min).log2().ceil().max(0.0) as u32;
-    if depth + o.refine > 40 {
-        return Err(Error::invalid(
-            "d_min",
-            format!("{} mm over {l} mm with refine = {} needs an octree {} levels deep (at most 40)", o.d_min, o.refine, depth + o.refine),
-        ));
-    }
+    let deepest = depth.checked_add(o.refine).filter(|&d| d <= 40).ok_or_else(|| {
+        Error::invalid("d_min", format!("{} mm over {l} mm with refine = {} needs an octree deeper than 40 levels", o.d_min, o.refine))
+    })?;
     let owned;
     let normals = match normals {
         Some(nr) => nr,
@@ -157,7 +154,7 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
         let coarse = cell_indexer(lo, l, depth);
         let hot = |i: usize| leaves[&coarse(&points[i])].feature.0 > o.feature_threshold;
         keep.extend(leaves.values().filter(|b| b.feature.0 <= o.feature_threshold).flat_map(|b| [b.feature.1, b.centre.1]));
-        let fine = best_per_cell(points, &f, lo, l, depth + o.refine, hot);
+        let fine = best_per_cell(points, &f, lo, l, deepest, hot);
         keep.extend(fine.values().flat_map(|b| [b.feature.1, b.centre.1]));
     }
     let strip = |axis: usize| -> usize {

@@ -124,7 +124,9 @@ impl CloudNeighbours {
 
     /// `f(i, neighbours)` for every point i, returned in point order. The neighbours are the
     /// `k` nearest points (the point itself included), nearest first; with `radius` only those
-    /// strictly closer than it, so there may be fewer (Open3D's hybrid search).
+    /// strictly closer than it, so there may be fewer (Open3D's hybrid search; a NaN radius
+    /// finds none). Squared distances overflow beyond about 1e154 mm: such points are nobody's
+    /// neighbours.
     pub fn map_knn<T, F>(&self, k: usize, radius: Option<f64>, f: F) -> Vec<T>
     where
         T: Send + Default,
@@ -132,6 +134,7 @@ impl CloudNeighbours {
     {
         let k = k.min(self.len());
         let cap2 = radius.map_or(f64::INFINITY, |r| r * r);
+        let cap2 = if cap2.is_nan() { 0.0 } else { cap2 };
         self.map_leaves(|leaf, s, guess, out| self.leaf_knn(leaf, k, cap2, s, guess, &f, out))
     }
 
@@ -259,8 +262,9 @@ impl CloudNeighbours {
             // as more points are gathered, so the loop ends; a query that did not find k points
             // needs a wider gather.
             let worst = failed.iter().map(|&qi| s.kth2[qi]).fold(0.0f64, f64::max);
-            reach2 = if worst.is_finite() { worst } else { (4.0 * reach2).max(diag2).max(self.extent2 * 1e-6) };
-            reach2 = reach2.min(cap2);
+            let wider = if worst.is_finite() { worst } else { (4.0 * reach2).max(diag2).max(self.extent2 * 1e-6) };
+            // A radius that does not grow (all of it below the smallest float) takes everything.
+            reach2 = if wider > reach2 { wider } else { f64::INFINITY }.min(cap2);
             s.pending = failed;
         }
         let mut widest = 0.0f64;
@@ -512,6 +516,15 @@ mod tests {
         let tree = CloudNeighbours::new(&two).unwrap();
         assert_eq!(tree.map_knn(10, None, |_, nb| nb.len()), vec![2, 2]);
         assert!(CloudNeighbours::new(&[[0.0, f64::NAN, 0.0]]).is_err());
+        // Two clusters of identical points closer than any squared distance can tell: every
+        // gather radius rounds to 0, and the search must still end.
+        let mut tiny = vec![[0.0; 3]; 32];
+        for p in &mut tiny[16..] {
+            p[0] = 1e-160;
+        }
+        let tree = CloudNeighbours::new(&tiny).unwrap();
+        assert!(tree.map_knn(20, None, |_, nb| nb.len()).iter().all(|&n| n == 20));
+        assert!(tree.map_knn(5, Some(f64::NAN), |_, nb| nb.len()).iter().all(|&n| n == 0));
     }
 
     #[test]
