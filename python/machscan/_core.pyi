@@ -72,6 +72,12 @@ def profile_to_points(
         SCS points in mm, frame by frame, readings in order.
     frame_index : ndarray of int64, shape (M,)
         Frame of each point. ``frames.size - M`` readings were dropped.
+
+    Examples
+    --------
+    >>> pts, idx = machscan.profile_to_points([[0.1, float("nan"), 0.3]], pitch=0.025)
+    >>> pts.shape
+    (2, 3)
     """
 
 def scan_to_wcs(
@@ -85,33 +91,114 @@ def scan_to_wcs(
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Frames and AC-head poses to workpiece (WCS) points in one parallel call (SPEC K1–K3, K7).
 
-    Every valid reading of frame ``k`` is mapped by ``ac_head_transforms(axes)[k]``; the GIL is
-    released and the result is identical for any thread count. ``axes (F, 6)``: X, Y, Z (mm),
-    A, C, C2 (rad); ``c2_offset`` (Lx, Ly, Lz) mm; ``mount`` (theta, psi, phi, dx, dy, dz).
-    Returns ``(points (M, 3) WCS mm, frame_index (M,))``.
+    Every valid reading of frame ``k`` is mapped by ``ac_head_transforms(axes)[k]``. The work is
+    spread over all cores with the GIL released; the result is identical for any thread count.
+
+    Parameters
+    ----------
+    frames : array_like, shape (F, N)
+        Readings in mm.
+    axes : array_like, shape (F, 6)
+        X, Y, Z (mm), A, C, C2 (rad) at each frame.
+    pitch : float
+        Reading spacing, mm.
+    c2_offset : array_like, shape (3,)
+        (Lx, Ly, Lz) of the C2 axis from the tool tip, mm.
+    mount : array_like, shape (6,)
+        (theta, psi, phi, dx, dy, dz): mount Euler angles (rad) and translation (mm).
+    center, valid_range
+        As in :func:`profile_to_points`.
+
+    Returns
+    -------
+    points : ndarray, shape (M, 3)
+        WCS points, mm.
+    frame_index : ndarray of int64, shape (M,)
+
+    Examples
+    --------
+    >>> pts, idx = machscan.scan_to_wcs(frames, axes, 0.025, (0, 0, 150), (0, 0, 0, 30, 0, -100))
     """
 
 def ac_head_transforms(axes: ArrayLike, c2_offset: ArrayLike, mount: ArrayLike) -> NDArray[np.float64]:
-    """WCS ← SCS transforms ``(F, 4, 4)`` of the AC double-swing head with C2 and sensor mount.
+    """WCS ← SCS transforms of the AC double-swing head with C2 and sensor mount (SPEC K2, K3).
 
-    ``T = [Rz(C)·Rx(A), (X, Y, Z)] · [Rz(C2), (Lx, Ly, Lz)] · [Rz(phi)·Ry(theta)·Rx(psi), (dx, dy, dz)]``
-    (SPEC K2, K3; paper 000 prints eq 4 and eq 8 with sign errors). ``axes (F, 6)``: X, Y, Z, A, C, C2.
+    ``T = [Rz(C)·Rx(A), (X, Y, Z)] · [Rz(C2), (Lx, Ly, Lz)] · [Rz(phi)·Ry(theta)·Rx(psi), (dx, dy, dz)]``.
+    The rotations are the proper ones; paper 000 prints eq (4) and eq (8) with sign errors.
+
+    Parameters
+    ----------
+    axes : array_like, shape (F, 6)
+        X, Y, Z (mm), A, C, C2 (rad) per frame.
+    c2_offset : array_like, shape (3,)
+        (Lx, Ly, Lz), mm.
+    mount : array_like, shape (6,)
+        (theta, psi, phi, dx, dy, dz), rad and mm.
+
+    Returns
+    -------
+    ndarray, shape (F, 4, 4)
+
+    Examples
+    --------
+    >>> T = machscan.ac_head_transforms([[0, 0, 0, 0, 0, 0]], (0, 0, 0), (0, 0, 0, 0, 0, 0))
+    >>> T[0]  # identity
     """
 
 def ab_mirror_support_points(
     tool_points: ArrayLike, axes: ArrayLike, lat: ArrayLike, lba: ArrayLike
 ) -> NDArray[np.float64]:
-    """Tool points ``(N, 3)`` to support-side workpiece points of mirror milling (paper 002 eq 6).
+    """Tool points of the milling side to workpiece points of the mirror-milling support side
+    (SPEC K5, paper 002 eq 1–6), each point with its own AB-head pose.
 
-    ``axes (N, 5)``: X, Y, Z (mm), A, B (rad) per point; ``lat``, ``lba``: tool→A and A→B offsets, mm.
+    Evaluates the chain ``p1 = p + Lat; p2 = Rx(A)·p1; p3 = p2 + Lba; p4 = Ry(B)·p3;
+    p5 = p4 + (X, Y, Z) − Lba − Lat; W = (−p5x, p5y, −p5z)``, which is paper 002 eq (6).
+
+    Parameters
+    ----------
+    tool_points : array_like, shape (N, 3)
+        Points in the tool frame, mm.
+    axes : array_like, shape (N, 5)
+        X, Y, Z (mm), A, B (rad) for each point.
+    lat, lba : array_like, shape (3,)
+        Tool→A-axis and A→B-axis offsets, mm.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        Support-side points, mm.
+
+    Examples
+    --------
+    >>> machscan.ab_mirror_support_points([[0, 0, 0]], [[0, 0, 0, 0, 0]], (0, 0, 200), (0, 0, 150))
     """
 
 def ac_table_rotate(
     points: ArrayLike, normals: ArrayLike | None, a: float, c: float, center: ArrayLike
 ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
-    """Turn points and normals with an AC cradle table (paper 003 eq 1).
+    """Turn CAD points and normals with an AC cradle table (SPEC K6, paper 003 eq 1).
 
-    ``P' = Rx(a)·Rz(c)·(P − center) + center``, ``n' = Rx(a)·Rz(c)·n``; angles in rad, mm.
+    ``P' = Rx(a)·Rz(c)·(P − center) + center``, ``n' = Rx(a)·Rz(c)·n`` (C turns first, then A).
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        Points, mm.
+    normals : array_like, shape (N, 3) or None
+        Normals (turned, not moved).
+    a, c : float
+        Table angles, rad.
+    center : array_like, shape (3,)
+        Rotation centre in measurement coordinates ``t = O'_w − O_w``, mm.
+
+    Returns
+    -------
+    points : ndarray, shape (N, 3)
+    normals : ndarray, shape (N, 3) or None
+
+    Examples
+    --------
+    >>> p, n = machscan.ac_table_rotate([[1, 0, 0]], [[0, 0, 1]], 0.0, np.pi / 2, (0, 0, 0))
     """
 
 def interpolate_poses(
@@ -120,9 +207,30 @@ def interpolate_poses(
     frame_times: ArrayLike,
     rotary: Sequence[int] = ...,
 ) -> NDArray[np.float64]:
-    """Axis positions ``(F, n_axes)`` at frame times from CNC samples on their own clock.
+    """Axis positions at frame times from CNC samples on their own clock (SPEC K7).
 
-    Linear; rotary columns (default 3, 4, 5) unwrapped first; no extrapolation (ValueError).
+    Linear interpolation; rotary columns are unwrapped first (a C axis crossing ±π turns the
+    short way). Frames outside the sampled time span raise: poses are never extrapolated.
+
+    Parameters
+    ----------
+    sample_times : array_like, shape (S,)
+        CNC sample times, s, strictly increasing.
+    samples : array_like, shape (S, n_axes)
+        Axis positions (mm, rad).
+    frame_times : array_like, shape (F,)
+        Profiler frame times on the same clock, s.
+    rotary : sequence of int
+        Columns holding rotary axes in rad; default (3, 4, 5) for X, Y, Z, A, C, C2.
+
+    Returns
+    -------
+    ndarray, shape (F, n_axes)
+
+    Examples
+    --------
+    >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
+    array([[0.5]])
     """
 
 def calibrate_mount(
@@ -131,7 +239,9 @@ def calibrate_mount(
     axes: ArrayLike | None = None,
     c2_offset: ArrayLike | None = None,
 ) -> dict[str, Any]:
-    """Sensor mount calibration (SPEC K4); ``machscan.calibrate_mount`` wraps the dict it returns."""
+    """Sensor mount calibration from SCS ↔ WCS correspondences (SPEC K4); the Python function
+    ``machscan.calibrate_mount`` wraps this in a result object.
+    """
 
 def fit_grooves(
     x: ArrayLike,
@@ -150,8 +260,9 @@ def fit_grooves(
     gradient_tolerance: float = 1e-13,
     template: str = "tanh",
 ) -> dict[str, Any]:
-    """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict
-    of per-frame arrays this returns in a result object."""
+    """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict of
+    per-frame arrays this returns in a result object.
+    """
 
 def level_groove_frame(
     x: ArrayLike,
@@ -174,33 +285,92 @@ def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -
     Clusters are the connected components of the neighbour graph: every neighbour within
     ``radius`` (the same partition as Open3D's ``cluster_dbscan(eps=radius, min_points=1)``), or
     with ``k`` the paper's form, the k nearest within ``radius`` (made symmetric so the result
-    does not depend on the seed order). Returns labels ``(N,)`` 0..n_clusters−1 numbered in the
-    order of their first point. Memory O(N); queries in parallel.
+    does not depend on the seed order). Memory is O(N); queries run in parallel.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        Points, mm.
+    radius : float
+        Neighbour distance threshold, mm (paper: 5 mm).
+    k : int, optional
+        Number of nearest neighbours considered (paper: 5); default all within ``radius``.
+
+    Returns
+    -------
+    ndarray of int64, shape (N,)
+        Cluster of every point, 0..n_clusters−1, numbered in the order of their first point.
+
+    Examples
+    --------
+    >>> labels = machscan.euclidean_clusters(centres, radius=5.0, k=5)
     """
 
 def nearest_neighbors(points: ArrayLike, queries: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-    """Nearest point of ``points (N, 3)`` for every query ``(M, 3)``: ``(index (M,), distance (M,))``, mm."""
+    """Nearest point of ``points`` for every query (kd-tree, parallel over queries).
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        The cloud searched, mm.
+    queries : array_like, shape (M, 3)
+        Query points, mm.
+
+    Returns
+    -------
+    index : ndarray of int64, shape (M,)
+    distance : ndarray, shape (M,)
+        Euclidean distance, mm.
+
+    Examples
+    --------
+    >>> idx, dist = machscan.nearest_neighbors(model, measured)
+    """
 
 def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0, delta2: float = 1.0) -> dict[str, Any]:
     """Contour error of one contour (SPEC C3–C5); ``machscan.contour_error`` wraps the dict."""
 
 def resample_polyline(vertices: ArrayLike, spacing: float, closed: bool = True) -> NDArray[np.float64]:
-    """Points along a polyline ``(n, 3)`` every ``spacing`` mm (corners kept), ``(M, 3)``."""
+    """Points along a polyline every ``spacing`` mm (corners kept), ``(M, 3)``.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (n, 3)
+        Polyline vertices, mm.
+    spacing : float
+        Largest distance between consecutive points, mm.
+    closed : bool
+        Add the segment from the last vertex back to the first.
+
+    Examples
+    --------
+    >>> pts = machscan.resample_polyline(cad_vertices, spacing=0.5, closed=True)
+    """
 
 def match_contours(
     actual_centroids: ArrayLike, theoretical_centroids: ArrayLike, max_distance: float = ...
 ) -> NDArray[np.int64]:
-    """One-to-one matching of actual to theoretical contour centroids (minimal summed distance);
-    indices into the theoretical centroids, −1 where none lies within ``max_distance`` mm."""
+    """Match actual contour centroids to theoretical ones one to one (minimal summed distance);
+    ``(n_actual,)`` indices into the theoretical centroids, −1 where none lies within
+    ``max_distance`` mm.
+
+    Examples
+    --------
+    >>> idx = machscan.match_contours(actual_centroids, cad_centroids, max_distance=10.0)
+    """
 
 def read_cloud(
     path: str | PathLike[str], delimiter: str | None = None, columns: tuple[int, int, int] = ...
 ) -> dict[str, Any]:
-    """Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text); ``machscan.io.read`` wraps the
-    dict this returns (``points``, ``normals``, ``scalars``, ``triangles``)."""
+    """Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text; a .txt starting with
+    `n_vertices n_faces` is read as the geodesic test meshes' format); ``machscan.io.read`` wraps the
+    dict this returns (``points``, ``normals``, ``scalars``, ``triangles``).
+    """
 
 def read_toolpath(path: str | PathLike[str]) -> dict[str, Any]:
-    """Read an APT/CL toolpath (points, axes, feeds, segments); ``machscan.io.read_toolpath`` wraps it."""
+    """Read an APT/CL toolpath: GOTO points, tool axes, feeds and segments (a new segment after every
+    RAPID); ``machscan.io.read_toolpath`` wraps the dict.
+    """
 
 def write_toolpath(
     path: str | PathLike[str],
@@ -209,7 +379,9 @@ def write_toolpath(
     feeds: ArrayLike | None = None,
     segments: ArrayLike | None = None,
 ) -> None:
-    """Write an APT/CL toolpath (GOTO per point, FEDRAT on feed changes, RAPID between segments)."""
+    """Write an APT/CL toolpath (``GOTO/x,y,z[,i,j,k]``, ``FEDRAT`` when the feed changes,
+    ``RAPID`` between segments).
+    """
 
 def write_points(
     path: str | PathLike[str],
@@ -219,31 +391,99 @@ def write_points(
     binary: bool = True,
     compressed: bool = False,
 ) -> None:
-    """Write points (mm), optional normals and named scalars to ``.ply``, ``.pcd`` (``compressed``:
-    binary_compressed) or x, y, z to ``.xyz``/``.csv``/``.txt``/``.pts``."""
+    """Write points (and optional normals and scalar properties) to a PLY, PCD or text file (by the
+    extension; ``binary`` picks binary or ASCII PLY/PCD; text files hold x, y, z only).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file (``.ply``).
+    points : array_like, shape (N, 3)
+        Points, mm; written as ``double`` so machine coordinates keep full precision.
+    normals : array_like, shape (N, 3), optional
+    scalars : dict of str to array_like (N,), optional
+        Extra per-point properties, e.g. ``{"frame": frame_index}``.
+    binary : bool
+        Binary little-endian (default) or ASCII.
+
+    Examples
+    --------
+    >>> machscan.write_points("scan.ply", points, scalars={"frame": frame_index})
+    """
 
 def voxel_downsample(points: ArrayLike, voxel_size: float, return_index: bool = False) -> Any:
-    """Voxel grid (Open3D's ``voxel_down_sample`` definition, bit-identical centroids); voxels in
-    the order of their first point. Returns ``centroids (M, 3)``, or ``(centroids,
-    voxel_of_point (N,))`` with ``return_index``."""
+    """Voxel grid: every occupied voxel replaced by the centroid of its points (Open3D's
+    ``voxel_down_sample``: origin at the minimum bound less half a voxel, centroids summed in
+    point order, so the centroids are bit-identical). Voxels come in the order of their first
+    point; keys are 64-bit and relative to the minimum bound (no precision loss far from the
+    origin).
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        mm.
+    voxel_size : float
+        Voxel edge, mm.
+    return_index : bool
+        Also return the voxel of every input point.
+
+    Returns
+    -------
+    centroids : ndarray (M, 3)
+    voxel_of_point : ndarray of int64 (N,), only with ``return_index``
+
+    Examples
+    --------
+    >>> c = machscan.voxel_downsample(pts, 0.5)
+    """
 
 def statistical_outlier_removal(points: ArrayLike, k: int, std_ratio: float) -> NDArray[np.int64]:
-    """Kept indices of Open3D's ``remove_statistical_outlier(nb_neighbors=k, std_ratio)``."""
+    """Statistical outlier removal (Open3D's ``remove_statistical_outlier(nb_neighbors=k,
+    std_ratio)``): the mean distance of each point to its k nearest points (itself included);
+    points whose mean is at least ``mean + std_ratio · std`` over the cloud are dropped
+    (paper 004's "3σ" rule with ``std_ratio = 3``).
+
+    Returns
+    -------
+    ndarray of int64: kept indices, ascending.
+
+    Examples
+    --------
+    >>> keep = machscan.statistical_outlier_removal(pts, k=20, std_ratio=2.0)
+    """
 
 def radius_outlier_removal(points: ArrayLike, radius: float, min_neighbors: int) -> NDArray[np.int64]:
-    """Kept indices of Open3D's ``remove_radius_outlier(nb_points=min_neighbors, radius)``."""
+    """Radius outlier removal (Open3D's ``remove_radius_outlier(nb_points=min_neighbors,
+    radius)``): a point is kept when more than ``min_neighbors`` points, itself included, lie
+    strictly closer than ``radius`` mm.
+
+    Returns
+    -------
+    ndarray of int64: kept indices, ascending.
+
+    Examples
+    --------
+    >>> keep = machscan.radius_outlier_removal(pts, radius=0.5, min_neighbors=5)
+    """
 
 def remove_duplicates(points: ArrayLike, tolerance: float) -> NDArray[np.int64]:
-    """Kept indices after duplicate removal without chain deletion (paper 004)."""
+    """Duplicate-point removal (paper 004): in point order, each point not yet removed removes every
+    other point within ``tolerance`` mm; removed points never remove others, so chains of close
+    points do not open holes. Returns the kept indices, ascending.
+    """
 
 def crop_box(points: ArrayLike, min_bound: ArrayLike, max_bound: ArrayLike) -> NDArray[np.int64]:
-    """Indices of the points inside ``[min_bound, max_bound]`` (bounds included)."""
+    """Indices of the points inside the box ``[min_bound, max_bound]`` (bounds included): crop box /
+    pass-through filter (a pass-through on one axis is a box infinite on the others).
+    """
 
 def random_downsample(n_points: int, count: int, seed: int = 0) -> NDArray[np.int64]:
-    """``count`` indices drawn without replacement from ``n_points``, reproducibly; ascending."""
+    """``count`` points drawn at random without replacement, reproducibly from ``seed``; ascending
+    indices.
+    """
 
 def uniform_downsample(n_points: int, every_k: int) -> NDArray[np.int64]:
-    """Every ``every_k``-th index from 0 (Open3D's ``uniform_down_sample``)."""
+    """Every ``every_k``-th point from the first (Open3D's ``uniform_down_sample``)."""
 
 def estimate_normals(
     points: ArrayLike,
@@ -253,18 +493,49 @@ def estimate_normals(
     along: ArrayLike | None = None,
     consistent: bool = False,
 ) -> NDArray[np.float64]:
-    """PCA normals ``(N, 3)``: smallest eigenvector of each k-nearest (itself included) or hybrid
-    radius neighbourhood covariance; oriented ``towards`` a viewpoint, ``along`` a direction,
-    or ``consistent`` (MST propagation from the highest point, turned to +z)."""
+    """PCA normals (SPEC F): the eigenvector of the smallest eigenvalue of each point's
+    neighbourhood covariance — the k nearest points, the point itself included (Open3D's
+    ``KDTreeSearchParamKNN(k)``), or with ``radius`` the nearest ``k`` strictly closer than it
+    (``KDTreeSearchParamHybrid(radius, k)``). Unit length.
+
+    Orientation (at most one): ``towards`` a viewpoint (n·(v − p) ≥ 0), ``along`` a direction
+    (n·d ≥ 0), or ``consistent=True``: propagation over a minimum spanning tree of the k-nearest
+    graph from the highest point, turned to +z (Hoppe et al. 1992). Without one the sign is the
+    solver's. A point with fewer than 3 neighbours gets (0, 0, 1), as in Open3D.
+
+    Examples
+    --------
+    >>> n = machscan.estimate_normals(pts, k=20, towards=(0, 0, 500))
+    """
 
 def surface_variation(points: ArrayLike, k: int = 20, radius: float | None = None) -> NDArray[np.float64]:
-    """λ0 / (λ0 + λ1 + λ2) of each neighbourhood covariance, ``(N,)``."""
+    """Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighbourhood covariance (0 on a
+    plane, up to 1/3 for isotropic scatter); neighbourhoods as in :func:`estimate_normals`.
+    """
 
 def principal_curvatures(
     points: ArrayLike, normals: ArrayLike | None = None, k: int = 20, radius: float | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Principal curvatures ``(N, 2)`` (1/mm, k1 ≥ k2, signed along the normals) and directions
-    ``(N, 2, 3)`` from a local quadric fit."""
+    """Principal curvatures and directions from a local quadric fit (SPEC F).
+
+    In each point's frame (tangents u, v; normal n) the neighbours are fitted by
+    ``h = a u² + b uv + c v² + d u + e v + f``; the shape operator at the point gives
+    ``k1 ≥ k2`` (1/mm) and their directions. Signs follow the normals: positive where the
+    surface bends towards the normal (a sphere with outward normals: −1/R). ``normals`` default
+    to :func:`estimate_normals` with the same neighbourhood. Points with fewer than 6
+    neighbours get NaN.
+
+    Returns
+    -------
+    curvatures : ndarray (N, 2)
+        k1, k2 in 1/mm.
+    directions : ndarray (N, 2, 3)
+        Unit principal directions.
+
+    Examples
+    --------
+    >>> k, d = machscan.principal_curvatures(pts, k=30)
+    """
 
 def octree_simplify(
     points: ArrayLike,
@@ -277,29 +548,138 @@ def octree_simplify(
     refine: int = 0,
     feature_threshold: float = 0.05,
 ) -> NDArray[np.int64]:
-    """Octree simplification keeping features and the x–y boundary (paper 002 §2); sorted unique
-    kept indices. ``neighbours="xy"`` and ``refine`` go beyond the paper (feature leaves split
-    deeper)."""
+    """Octree simplification keeping features and the boundary (SPEC F, paper 002 §2).
+
+    Cube of edge L (the largest extent) on the minimum corner, depth ⌈log2(L/d_min)⌉; each
+    occupied leaf keeps its point of largest feature degree (mean angle between its normal and
+    its ``k`` neighbours' normals, unoriented) and its point nearest the cell centre; the x–y
+    boundary points are kept by the paper's group rule (sorted by x, groups of ``eps1`` keep
+    min-y and max-y; sorted by y, groups of ``eps2`` keep min-x and max-x). ``eps1``/``eps2``
+    default to the number of points in a strip ``d_min`` wide.
+
+    Beyond the paper (off by default): ``neighbours="xy"`` takes the neighbours of the normals
+    and the feature degree in the x–y projection, so both sides of a vertical step see each
+    other (height-field scans); ``refine=r`` splits every leaf whose largest feature degree
+    exceeds ``feature_threshold`` r levels deeper, each occupied sub-cell keeping its own two
+    points. On a pocket plate with 3 mm steps the paper's rule rebuilds a worse surface than a
+    voxel grid of the same point count; ``neighbours="xy", refine=2`` a better one
+    (tests/test_octree.py, figures in BENCHMARKS.md).
+
+    Parameters
+    ----------
+    points : array_like (N, 3)
+        mm; z is the cutting depth direction.
+    d_min : float
+        Smallest cell edge, mm.
+    normals : array_like (N, 3), optional
+        Default: :func:`estimate_normals` with ``k``.
+    k : int
+        Neighbours of the feature degree.
+    eps1, eps2 : int, optional
+    neighbours : {"xyz", "xy"}
+    refine : int
+        Extra octree levels on feature leaves (0: the paper's rule).
+    feature_threshold : float
+        Radians; a leaf is a feature leaf when its largest feature degree exceeds it. The
+        default 0.05 (about 3°) is some 4× the 99th percentile of the feature degree of a flat
+        scan with 3 µm noise at 0.25 mm spacing; raise it for noisier scans.
+
+    Returns
+    -------
+    ndarray of int64: kept indices, sorted and unique.
+
+    Examples
+    --------
+    >>> keep = machscan.octree_simplify(pts, d_min=2.0)
+    """
 
 @final
 class KinematicChain:
-    """A machine model: a chain of elementary transforms mapping the last link into the WCS.
+    """A machine model: a chain of elementary transforms mapping the last link (sensor, tool,
+    part) into the WCS (SPEC K7).
 
-    Steps, composed left to right: ``("translate", (x, y, z))``, ``("translate_axes", (ix, iy, iz))``,
-    ``("rotate", "x"|"y"|"z", angle)``, ``("rotate_axis", "x"|"y"|"z", column)``,
-    ``("rotation", R)``, ``("mirror", (sx, sy, sz))``.
+    Parameters
+    ----------
+    steps : list of tuple
+        Composed left to right, each one of
+        ``("translate", (x, y, z))`` mm;
+        ``("translate_axes", (ix, iy, iz))`` translation by pose columns (None for 0);
+        ``("rotate", "x"|"y"|"z", angle)`` constant angle, rad;
+        ``("rotate_axis", "x"|"y"|"z", column)`` angle from a pose column (index or axis name);
+        ``("rotation", R)`` a constant 3×3 rotation; ``("mirror", (sx, sy, sz))`` with ±1.
+    axis_names : list of str
+        Names of the pose columns, e.g. ``["X", "Y", "Z", "A", "C"]``.
+
+    Examples
+    --------
+    >>> head = machscan.KinematicChain.ac_head((0, 0, 150), (0, 0, 0, 30, 0, -100))
+    >>> T = head.transforms(axes)          # (F, 4, 4)
     """
 
     def __new__(cls, steps: list[Any], axis_names: Sequence[str]) -> KinematicChain: ...
     @staticmethod
     def ac_head(c2_offset: ArrayLike, mount: ArrayLike) -> KinematicChain:
-        """AC double-swing head with C2 and sensor mount (SPEC K2, K3); poses X, Y, Z, A, C, C2."""
+        """staticmethod(function) -> method
+
+        Convert a function to be a static method.
+
+        A static method does not receive an implicit first argument.
+        To declare a static method, use this idiom:
+
+             class C:
+                 @staticmethod
+                 def f(arg1, arg2, argN):
+                     ...
+
+        It can be called either on the class (e.g. C.f()) or on an instance
+        (e.g. C().f()). Both the class and the instance are ignored, and
+        neither is passed implicitly as the first argument to the method.
+
+        Static methods in Python are similar to those found in Java or C++.
+        For a more advanced concept, see the classmethod builtin.
+        """
     @staticmethod
     def ab_mirror_support(lat: ArrayLike, lba: ArrayLike) -> KinematicChain:
-        """AB head, support side of mirror milling (SPEC K5); poses X, Y, Z, A, B."""
+        """staticmethod(function) -> method
+
+        Convert a function to be a static method.
+
+        A static method does not receive an implicit first argument.
+        To declare a static method, use this idiom:
+
+             class C:
+                 @staticmethod
+                 def f(arg1, arg2, argN):
+                     ...
+
+        It can be called either on the class (e.g. C.f()) or on an instance
+        (e.g. C().f()). Both the class and the instance are ignored, and
+        neither is passed implicitly as the first argument to the method.
+
+        Static methods in Python are similar to those found in Java or C++.
+        For a more advanced concept, see the classmethod builtin.
+        """
     @staticmethod
     def ac_table(center: ArrayLike) -> KinematicChain:
-        """AC cradle table about ``center`` (SPEC K6); poses A, C."""
+        """staticmethod(function) -> method
+
+        Convert a function to be a static method.
+
+        A static method does not receive an implicit first argument.
+        To declare a static method, use this idiom:
+
+             class C:
+                 @staticmethod
+                 def f(arg1, arg2, argN):
+                     ...
+
+        It can be called either on the class (e.g. C.f()) or on an instance
+        (e.g. C().f()). Both the class and the instance are ignored, and
+        neither is passed implicitly as the first argument to the method.
+
+        Static methods in Python are similar to those found in Java or C++.
+        For a more advanced concept, see the classmethod builtin.
+        """
     @property
     def n_axes(self) -> int:
         """Number of pose columns."""
