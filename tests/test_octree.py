@@ -99,7 +99,7 @@ def test_refine_keeps_the_paper_points_away_from_features(plate):
         (dict(d_min=1.0, neighbours="z"), "neighbours"),
         (dict(d_min=1.0, refine=2, feature_threshold=-1.0), "feature_threshold"),
         (dict(d_min=1e-12, refine=8), "d_min"),
-        (dict(d_min=1.0, refine=2**32 - 1), "d_min"),
+        (dict(d_min=1.0, refine=2**32 - 1), "refine"),
     ],
 )
 def test_bad_input(plate, kwargs, name):

@@ -1,6 +1,6 @@
 //! Bindings of `crate::cloud`: filters. Every filter returns the kept indices, so attributes
 //! (normals, scalars, frame numbers) can be carried along with `array[indices]`.
-use super::convert::{f64_array, to_numpy, to_py_err, Dim};
+use super::convert::{count, count_opt, f64_array, to_numpy, to_py_err, Dim};
 use super::spatial::as_points;
 use pyo3::prelude::*;
 
@@ -67,7 +67,8 @@ fn voxel_downsample<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, voxel_size
 /// --------
 /// >>> keep = machscan.statistical_outlier_removal(pts, k=20, std_ratio=2.0)
 #[pyfunction]
-fn statistical_outlier_removal<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: usize, std_ratio: f64) -> PyResult<Bound<'py, PyAny>> {
+fn statistical_outlier_removal<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: i64, std_ratio: f64) -> PyResult<Bound<'py, PyAny>> {
+    let k = count("k", k)?;
     let pts = points_arg(points)?;
     let keep = py.detach(|| crate::cloud::statistical_outlier_removal(&pts, k, std_ratio)).map_err(to_py_err)?;
     indices(py, keep)
@@ -85,7 +86,8 @@ fn statistical_outlier_removal<'py>(py: Python<'py>, points: &Bound<'py, PyAny>,
 /// --------
 /// >>> keep = machscan.radius_outlier_removal(pts, radius=0.5, min_neighbors=5)
 #[pyfunction]
-fn radius_outlier_removal<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: f64, min_neighbors: usize) -> PyResult<Bound<'py, PyAny>> {
+fn radius_outlier_removal<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: f64, min_neighbors: i64) -> PyResult<Bound<'py, PyAny>> {
+    let min_neighbors = count("min_neighbors", min_neighbors)?;
     let pts = points_arg(points)?;
     let keep = py.detach(|| crate::cloud::radius_outlier_removal(&pts, radius, min_neighbors)).map_err(to_py_err)?;
     indices(py, keep)
@@ -118,13 +120,15 @@ fn crop_box<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, min_bound: &Bound<
 /// indices.
 #[pyfunction]
 #[pyo3(signature = (n_points, count, seed=0))]
-fn random_downsample<'py>(py: Python<'py>, n_points: usize, count: usize, seed: u64) -> PyResult<Bound<'py, PyAny>> {
-    indices(py, crate::cloud::random_downsample(n_points, count, seed))
+fn random_downsample<'py>(py: Python<'py>, n_points: i64, count: i64, seed: i64) -> PyResult<Bound<'py, PyAny>> {
+    let (n_points, how_many, seed) = (self::count("n_points", n_points)?, self::count("count", count)?, self::count("seed", seed)?);
+    indices(py, crate::cloud::random_downsample(n_points, how_many, seed as u64))
 }
 
 /// Every ``every_k``-th point from the first (Open3D's ``uniform_down_sample``).
 #[pyfunction]
-fn uniform_downsample<'py>(py: Python<'py>, n_points: usize, every_k: usize) -> PyResult<Bound<'py, PyAny>> {
+fn uniform_downsample<'py>(py: Python<'py>, n_points: i64, every_k: i64) -> PyResult<Bound<'py, PyAny>> {
+    let (n_points, every_k) = (count("n_points", n_points)?, count("every_k", every_k)?);
     indices(py, crate::cloud::uniform_downsample(n_points, every_k).map_err(to_py_err)?)
 }
 
@@ -160,12 +164,13 @@ fn vec3(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<[f64; 3]>
 fn estimate_normals<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
-    k: usize,
+    k: i64,
     radius: Option<f64>,
     towards: Option<&Bound<'py, PyAny>>,
     along: Option<&Bound<'py, PyAny>>,
     consistent: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let k = count("k", k)?;
     let pts = points_arg(points)?;
     let (towards, along) = (vec3(towards, "towards")?, vec3(along, "along")?);
     if [towards.is_some(), along.is_some(), consistent].iter().filter(|b| **b).count() > 1 {
@@ -193,7 +198,8 @@ fn estimate_normals<'py>(
 /// plane, up to 1/3 for isotropic scatter); neighbourhoods as in :func:`estimate_normals`.
 #[pyfunction]
 #[pyo3(signature = (points, k=20, radius=None))]
-fn surface_variation<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: usize, radius: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+fn surface_variation<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: i64, radius: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+    let k = count("k", k)?;
     let pts = points_arg(points)?;
     let (_, var, _) = py.detach(|| crate::cloud::estimate_normals(&pts, neighbourhood(k, radius))).map_err(to_py_err)?;
     let n = var.len();
@@ -225,9 +231,10 @@ fn principal_curvatures<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
     normals: Option<&Bound<'py, PyAny>>,
-    k: usize,
+    k: i64,
     radius: Option<f64>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let k = count("k", k)?;
     let pts = points_arg(points)?;
     let n = pts.len();
     let given = match normals {
@@ -304,13 +311,18 @@ fn octree_simplify<'py>(
     points: &Bound<'py, PyAny>,
     d_min: f64,
     normals: Option<&Bound<'py, PyAny>>,
-    k: usize,
-    eps1: Option<usize>,
-    eps2: Option<usize>,
+    k: i64,
+    eps1: Option<i64>,
+    eps2: Option<i64>,
     neighbours: &str,
-    refine: u32,
+    refine: i64,
     feature_threshold: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let (k, eps1, eps2) = (count("k", k)?, count_opt("eps1", eps1)?, count_opt("eps2", eps2)?);
+    let refine = u32::try_from(count("refine", refine)?)
+        .ok()
+        .filter(|&r| r <= 40)
+        .ok_or_else(|| pyo3::exceptions::PyValueError::new_err(format!("refine: at most 40 extra levels, got {refine}")))?;
     let neighbours = match neighbours {
         "xyz" => crate::cloud::NeighbourSpace::Xyz,
         "xy" => crate::cloud::NeighbourSpace::Xy,

@@ -15,6 +15,17 @@ pub fn to_py_err(e: Error) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
+/// A count or index argument (k, window, …). Taken from Python as a signed int and checked here:
+/// for an unsigned parameter pyo3 refuses a negative int with a bare OverflowError that names
+/// no argument.
+pub fn count(name: &str, value: i64) -> PyResult<usize> {
+    usize::try_from(value).map_err(|_| PyValueError::new_err(format!("{name}: must be a count >= 0, got {value}")))
+}
+
+pub fn count_opt(name: &str, value: Option<i64>) -> PyResult<Option<usize>> {
+    value.map(|v| count(name, v)).transpose()
+}
+
 /// One dimension of an expected shape.
 #[derive(Clone, Copy)]
 pub enum Dim {

@@ -1,5 +1,5 @@
 //! Bindings of `crate::groove`: the batch groove fit.
-use super::convert::{f64_array, to_numpy, to_py_err, Dim};
+use super::convert::{count, count_opt, f64_array, to_numpy, to_py_err, Dim};
 use crate::groove::{fit_frames, level_frame, GrooveOptions, TemplateKind};
 use pyo3::exceptions::PyValueError;
 use numpy::PyUntypedArrayMethods;
@@ -19,18 +19,20 @@ fn fit_grooves<'py>(
     z: &Bound<'py, PyAny>,
     alpha: f64,
     nominal_width: f64,
-    window: Option<usize>,
-    window_center: Option<usize>,
+    window: Option<i64>,
+    window_center: Option<i64>,
     fit_alpha: bool,
     spike_threshold: Option<f64>,
     min_depth: f64,
-    min_valid: usize,
-    max_iterations: usize,
+    min_valid: i64,
+    max_iterations: i64,
     cost_tolerance: f64,
     step_tolerance: f64,
     gradient_tolerance: f64,
     template: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let (window, window_center) = (count_opt("window", window)?, count_opt("window_center", window_center)?);
+    let (min_valid, max_iterations) = (count("min_valid", min_valid)?, count("max_iterations", max_iterations)?);
     let template = match template {
         "tanh" => TemplateKind::Tanh,
         "v" => TemplateKind::V,
@@ -86,12 +88,14 @@ fn level_groove_frame<'py>(
     z: &Bound<'py, PyAny>,
     alpha: f64,
     nominal_width: f64,
-    window: Option<usize>,
-    window_center: Option<usize>,
+    window: Option<i64>,
+    window_center: Option<i64>,
     spike_threshold: Option<f64>,
     min_depth: f64,
-    min_valid: usize,
+    min_valid: i64,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let (window, window_center) = (count_opt("window", window)?, count_opt("window_center", window_center)?);
+    let min_valid = count("min_valid", min_valid)?;
     let xa = f64_array(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
     let n = xa.shape()[0];
     let za = f64_array(z, "z", &[Dim::Is(n)], "(one frame, one value per x, mm)")?;

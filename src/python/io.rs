@@ -113,7 +113,8 @@ fn is_mesh_txt(path: &std::path::Path) -> bool {
 /// dict this returns (``points``, ``normals``, ``scalars``, ``triangles``).
 #[pyfunction]
 #[pyo3(signature = (path, delimiter=None, columns=(0, 1, 2)))]
-fn read_cloud<'py>(py: Python<'py>, path: PathBuf, delimiter: Option<char>, columns: (usize, usize, usize)) -> PyResult<Bound<'py, PyDict>> {
+fn read_cloud<'py>(py: Python<'py>, path: PathBuf, delimiter: Option<char>, columns: (i64, i64, i64)) -> PyResult<Bound<'py, PyDict>> {
+    let columns = (super::convert::count("columns", columns.0)?, super::convert::count("columns", columns.1)?, super::convert::count("columns", columns.2)?);
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let (points, normals, scalars, triangles) = match ext.as_str() {
         "ply" => {

@@ -348,8 +348,9 @@ fn interpolate_poses<'py>(
     sample_times: &Bound<'py, PyAny>,
     samples: &Bound<'py, PyAny>,
     frame_times: &Bound<'py, PyAny>,
-    rotary: Vec<usize>,
+    rotary: Vec<i64>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let rotary = rotary.into_iter().map(|c| super::convert::count("rotary", c)).collect::<PyResult<Vec<usize>>>()?;
     let ts = f64_array(sample_times, "sample_times", &[Dim::Any("S")], "")?;
     let s = ts.shape()[0];
     let smp = f64_array(samples, "samples", &[Dim::Is(s), Dim::Any("n_axes")], "(one row per sample time)")?;

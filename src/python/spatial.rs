@@ -33,7 +33,8 @@ pub(crate) fn as_points(s: &[f64]) -> Vec<[f64; 3]> {
 /// >>> labels = machscan.euclidean_clusters(centres, radius=5.0, k=5)
 #[pyfunction]
 #[pyo3(signature = (points, radius, k=None))]
-fn euclidean_clusters<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: f64, k: Option<usize>) -> PyResult<Bound<'py, PyAny>> {
+fn euclidean_clusters<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: f64, k: Option<i64>) -> PyResult<Bound<'py, PyAny>> {
+    let k = super::convert::count_opt("k", k)?;
     let arr = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
     let n = arr.shape()[0];
     let pts = as_points(arr.as_slice()?);
