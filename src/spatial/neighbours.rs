@@ -201,9 +201,8 @@ impl CloudNeighbours {
             return;
         }
         let diag2 = (hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2);
-        // Squared gather radius.
-        // The previous leaf's widest k-th distance, with a margin: a second pass costs more
-        // than a few more candidates.
+        // Squared gather radius: the previous leaf's widest k-th distance, with a margin (a
+        // second pass costs more than a few more candidates).
         let mut reach2 = if guess.is_finite() { *guess * GUESS_MARGIN2 } else { diag2 }.min(cap2);
         // Slack on the filter bound, far above the rounding of a squared distance.
         let scale = lo.iter().chain(hi.iter()).fold(1.0f64, |acc, v| acc.max(v.abs()));
@@ -223,11 +222,11 @@ impl CloudNeighbours {
                 let qi = s.pending[pi];
                 let q = self.position(a + qi);
                 squared_distances(&q, &s.cand, &mut s.d2);
-                // Every neighbour of an answered query p lies within its k-th distance plus
-                // |q − p| of q: the nearest answered query gives a bound that lets few points
-                // into the selection.
-                // Any bound is exact as long as k points pass it (otherwise all are taken);
-                // the first query takes the gather radius.
+                // A filter on the candidates before the selection. Any bound gives the exact
+                // answer as long as k points pass it (otherwise all are taken again). Every
+                // neighbour of an answered query p lies within its k-th distance plus |q − p|
+                // of q, so the nearest answered query gives a tight one; the first query of a
+                // pass takes the gather radius.
                 let mut bound = reach2.sqrt();
                 for &(p, kth) in &s.answered {
                     let step = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
