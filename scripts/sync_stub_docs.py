@@ -33,7 +33,8 @@ def documented(tree: ast.Module, core: object):
             if isinstance(node, ast.ClassDef):
                 for member in node.body:
                     if isinstance(member, ast.FunctionDef) and not member.name.startswith("__") and member.name in vars(owner):
-                        yield member, runtime_doc(vars(owner)[member.name])
+                        # getattr, not vars(): a static method's own doc is staticmethod's.
+                        yield member, runtime_doc(getattr(owner, member.name))
 
 
 def quoted(doc: str, indent: str) -> list[str]:

@@ -619,67 +619,13 @@ class KinematicChain:
     def __new__(cls, steps: list[Any], axis_names: Sequence[str]) -> KinematicChain: ...
     @staticmethod
     def ac_head(c2_offset: ArrayLike, mount: ArrayLike) -> KinematicChain:
-        """staticmethod(function) -> method
-
-        Convert a function to be a static method.
-
-        A static method does not receive an implicit first argument.
-        To declare a static method, use this idiom:
-
-             class C:
-                 @staticmethod
-                 def f(arg1, arg2, argN):
-                     ...
-
-        It can be called either on the class (e.g. C.f()) or on an instance
-        (e.g. C().f()). Both the class and the instance are ignored, and
-        neither is passed implicitly as the first argument to the method.
-
-        Static methods in Python are similar to those found in Java or C++.
-        For a more advanced concept, see the classmethod builtin.
-        """
+        """AC double-swing head with C2 and sensor mount (SPEC K2, K3); poses X, Y, Z, A, C, C2."""
     @staticmethod
     def ab_mirror_support(lat: ArrayLike, lba: ArrayLike) -> KinematicChain:
-        """staticmethod(function) -> method
-
-        Convert a function to be a static method.
-
-        A static method does not receive an implicit first argument.
-        To declare a static method, use this idiom:
-
-             class C:
-                 @staticmethod
-                 def f(arg1, arg2, argN):
-                     ...
-
-        It can be called either on the class (e.g. C.f()) or on an instance
-        (e.g. C().f()). Both the class and the instance are ignored, and
-        neither is passed implicitly as the first argument to the method.
-
-        Static methods in Python are similar to those found in Java or C++.
-        For a more advanced concept, see the classmethod builtin.
-        """
+        """AB head, support side of mirror milling (SPEC K5); poses X, Y, Z, A, B."""
     @staticmethod
     def ac_table(center: ArrayLike) -> KinematicChain:
-        """staticmethod(function) -> method
-
-        Convert a function to be a static method.
-
-        A static method does not receive an implicit first argument.
-        To declare a static method, use this idiom:
-
-             class C:
-                 @staticmethod
-                 def f(arg1, arg2, argN):
-                     ...
-
-        It can be called either on the class (e.g. C.f()) or on an instance
-        (e.g. C().f()). Both the class and the instance are ignored, and
-        neither is passed implicitly as the first argument to the method.
-
-        Static methods in Python are similar to those found in Java or C++.
-        For a more advanced concept, see the classmethod builtin.
-        """
+        """AC cradle table about ``center`` (SPEC K6); poses A, C."""
     @property
     def n_axes(self) -> int:
         """Number of pose columns."""
