@@ -6,6 +6,9 @@
   on 200 k: each ≥ 2× faster;
 - peak memory of the voxel grid on 10 M points below 2× the input array (run with --memory).
 
+Also, without a target: the k-nearest graph of 200 k points against Open3D's tensor
+NearestNeighborSearch and scipy's cKDTree.
+
     python benchmarks/bench_cloud.py [--memory]
 """
 
@@ -22,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import open3d
+from scipy.spatial import cKDTree
 
 import machscan
 
@@ -35,8 +39,8 @@ def best(fn, repeat=3):
     return min(t)
 
 
-def row(name, ms, o3):
-    print(f"  {name:<34} machscan {ms * 1e3:8.1f} ms   open3d {o3 * 1e3:8.1f} ms   ratio {o3 / ms:5.1f}x")
+def row(name, ms, ref, ref_name="open3d"):
+    print(f"  {name:<34} machscan {ms * 1e3:8.1f} ms   {ref_name} {ref * 1e3:8.1f} ms   ratio {ref / ms:5.1f}x")
 
 
 def scanned_surface(n, seed=0):
@@ -101,6 +105,16 @@ def main() -> None:
         c.estimate_normals(open3d.geometry.KDTreeSearchParamKNN(20))
 
     row("normals k=20, 200 k", best(lambda: machscan.estimate_normals(p200, k=20)), best(o3_normals))
+
+    def o3_knn():
+        nns = open3d.core.nns.NearestNeighborSearch(open3d.core.Tensor(p200))
+        nns.knn_index()
+        return nns.knn_search(open3d.core.Tensor(p200), 20)
+
+    print("neighbour search (tree built in the call):")
+    row("k-nearest graph k=20, 200 k", best(lambda: machscan.knn_graph(p200, 20)), best(o3_knn))
+    row("k-nearest graph k=20, 200 k", best(lambda: machscan.knn_graph(p200, 20)),
+        best(lambda: cKDTree(p200).query(p200, 20, workers=-1)), "scipy cKDTree (2 workers)")
     if args.memory:
         subprocess.run([sys.executable, __file__, "--memory-child", "10000000"], check=True)
 

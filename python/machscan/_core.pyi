@@ -21,6 +21,7 @@ __all__ = [
     "fit_grooves",
     "interpolate_poses",
     "level_groove_frame",
+    "knn_graph",
     "match_contours",
     "nearest_neighbors",
     "octree_simplify",
@@ -304,6 +305,33 @@ def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -
     Examples
     --------
     >>> labels = machscan.euclidean_clusters(centres, radius=5.0, k=5)
+    """
+
+def knn_graph(points: ArrayLike, k: int, radius: float | None = None) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """The k nearest points of every point of a cloud (its k-nearest graph), the point itself
+    included and first unless an exact duplicate with a lower index precedes it; nearest first,
+    ties by index. With ``radius`` only neighbours strictly closer than it (Open3D's hybrid
+    search), the rows padded with index −1 and distance ``inf``.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        mm.
+    k : int
+        Neighbours per point (at most N).
+    radius : float, optional
+        mm.
+
+    Returns
+    -------
+    index : ndarray of int64, shape (N, k)
+    distance : ndarray, shape (N, k)
+        Euclidean distance, mm.
+
+    Examples
+    --------
+    >>> idx, dist = machscan.knn_graph(pts, k=20)
+    >>> spacing = np.median(dist[:, 1])
     """
 
 def nearest_neighbors(points: ArrayLike, queries: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.float64]]:

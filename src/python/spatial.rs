@@ -80,7 +80,56 @@ fn nearest_neighbors<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, queries: 
     Ok((to_numpy(py, idx, &[m])?, to_numpy(py, dist, &[m])?))
 }
 
+/// The k nearest points of every point of a cloud (its k-nearest graph), the point itself
+/// included and first unless an exact duplicate with a lower index precedes it; nearest first,
+/// ties by index. With ``radius`` only neighbours strictly closer than it (Open3D's hybrid
+/// search), the rows padded with index −1 and distance ``inf``.
+///
+/// Parameters
+/// ----------
+/// points : array_like, shape (N, 3)
+///     mm.
+/// k : int
+///     Neighbours per point (at most N).
+/// radius : float, optional
+///     mm.
+///
+/// Returns
+/// -------
+/// index : ndarray of int64, shape (N, k)
+/// distance : ndarray, shape (N, k)
+///     Euclidean distance, mm.
+///
+/// Examples
+/// --------
+/// >>> idx, dist = machscan.knn_graph(pts, k=20)
+/// >>> spacing = np.median(dist[:, 1])
+#[pyfunction]
+#[pyo3(signature = (points, k, radius=None))]
+fn knn_graph<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: i64, radius: Option<f64>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let k = super::convert::count("k", k)?;
+    if let Some(r) = radius {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!("radius: must be a positive distance in mm, got {r}")));
+        }
+    }
+    let p = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
+    let n = p.shape()[0];
+    let k = k.min(n);
+    let pp = as_points(p.as_slice()?);
+    let (idx, dist): (Vec<i64>, Vec<f64>) = py
+        .detach(|| -> crate::Result<_> {
+            use rayon::prelude::*;
+            let (index, dist2) = crate::spatial::CloudNeighbours::new(&pp)?.knn_graph(k, radius);
+            let idx = index.par_iter().map(|&j| if j == u32::MAX { -1 } else { j as i64 }).collect();
+            Ok((idx, dist2.par_iter().map(|d| d.sqrt()).collect()))
+        })
+        .map_err(to_py_err)?;
+    Ok((to_numpy(py, idx, &[n, k])?, to_numpy(py, dist, &[n, k])?))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(knn_graph, m)?)?;
     m.add_function(wrap_pyfunction!(euclidean_clusters, m)?)?;
     m.add_function(wrap_pyfunction!(nearest_neighbors, m)?)?;
     Ok(())

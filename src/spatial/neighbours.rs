@@ -9,7 +9,7 @@
 //! is guessed from the previous leaf's largest k-th distance (leaves are visited in tree order,
 //! so the previous leaf is a spatial neighbour); a query whose k-th distance exceeds it is
 //! answered again with a gather radius that is certain to be enough, so every answer is exact.
-//! On 200 k scanned points, k = 20, one thread: 0.8 µs per point against kiddo's 3.2 µs.
+//! Measured in benchmarks/bench_cloud.py (`knn_graph`, SOR, ROR, normals against Open3D).
 //!
 //! Neighbours are sorted by (squared distance, index): results do not depend on the tree, the
 //! order of evaluation or the thread count.
@@ -135,7 +135,51 @@ impl CloudNeighbours {
         let k = k.min(self.len());
         let cap2 = radius.map_or(f64::INFINITY, |r| r * r);
         let cap2 = if cap2.is_nan() { 0.0 } else { cap2 };
-        self.map_leaves(|leaf, s, guess, out| self.leaf_knn(leaf, k, cap2, s, guess, &f, out))
+        self.map_leaves(|leaf, s, guess, out| self.leaf_knn(leaf, k, cap2, s, guess, &mut |i, nb| f(i, nb), out))
+    }
+
+    /// The k-nearest graph as flat rows in point order: row i holds the neighbours of point i
+    /// as in `map_knn`, (index, squared distance), padded with (u32::MAX, ∞) when `radius`
+    /// leaves fewer than k. Without a vector per point: the rows of a task are written in tree
+    /// order into one buffer, then gathered into point order in parallel.
+    pub fn knn_graph(&self, k: usize, radius: Option<f64>) -> (Vec<u32>, Vec<f64>) {
+        let k = k.min(self.len());
+        if k == 0 {
+            return (Vec::new(), Vec::new());
+        }
+        let cap2 = radius.map_or(f64::INFINITY, |r| r * r);
+        let cap2 = if cap2.is_nan() { 0.0 } else { cap2 };
+        let tasks: Vec<Vec<(u32, f64)>> = self
+            .leaves
+            .par_chunks(LEAVES_PER_TASK)
+            .map(|leaves| {
+                let (mut scratch, mut guess, mut unit) = (Scratch::default(), f64::NAN, Vec::new());
+                let mut rows: Vec<(u32, f64)> = Vec::with_capacity(leaves.len() * LEAF_SIZE * k);
+                for &leaf in leaves {
+                    let mut write = |_: usize, nb: &[Neighbour]| {
+                        rows.extend(nb.iter().map(|n| (n.index as u32, n.dist2)));
+                        rows.extend(std::iter::repeat_n((u32::MAX, f64::INFINITY), k - nb.len()));
+                    };
+                    self.leaf_knn(leaf, k, cap2, &mut scratch, &mut guess, &mut write, &mut unit);
+                    unit.clear();
+                }
+                rows
+            })
+            .collect();
+        let rows: Vec<(u32, f64)> = tasks.concat();
+        let mut position = vec![0usize; self.len()];
+        for (t, &i) in self.order.iter().enumerate() {
+            position[i as usize] = t;
+        }
+        let mut index = vec![u32::MAX; self.len() * k];
+        let mut dist2 = vec![f64::INFINITY; self.len() * k];
+        index.par_chunks_mut(k).zip(dist2.par_chunks_mut(k)).enumerate().for_each(|(i, (ri, rd))| {
+            for (r, &(j, d)) in rows[position[i] * k..(position[i] + 1) * k].iter().enumerate() {
+                ri[r] = j;
+                rd[r] = d;
+            }
+        });
+        (index, dist2)
     }
 
     /// How many points lie strictly closer than `radius` to each point (itself included).
@@ -193,7 +237,7 @@ impl CloudNeighbours {
 
     /// The k nearest (strictly within `cap2` when finite) of every point of one leaf.
     #[allow(clippy::too_many_arguments)]
-    fn leaf_knn<T>(&self, leaf: u32, k: usize, cap2: f64, s: &mut Scratch, guess: &mut f64, f: &impl Fn(usize, &[Neighbour]) -> T, out: &mut Vec<T>) {
+    fn leaf_knn<T>(&self, leaf: u32, k: usize, cap2: f64, s: &mut Scratch, guess: &mut f64, f: &mut impl FnMut(usize, &[Neighbour]) -> T, out: &mut Vec<T>) {
         let (a, b, lo, hi) = self.leaf(leaf);
         let m = b - a;
         if k == 0 {
@@ -487,6 +531,23 @@ mod tests {
                 assert_eq!(g, &brute_knn(&pts, i, k, r * r), "k {k} r {r} point {i}");
             }
         }
+    }
+
+    #[test]
+    fn graph_rows_equal_map_knn() {
+        let pts = cloud(3000, 5);
+        let tree = CloudNeighbours::new(&pts).unwrap();
+        for (k, radius) in [(7, None), (25, Some(0.4))] {
+            let (index, dist2) = tree.knn_graph(k, radius);
+            let lists = tree.map_knn(k, radius, |_, nb| nb.iter().map(|n| (n.index as u32, n.dist2)).collect::<Vec<_>>());
+            for (i, list) in lists.iter().enumerate() {
+                let mut row: Vec<(u32, f64)> = (0..k).map(|r| (index[i * k + r], dist2[i * k + r])).collect();
+                assert!(row[list.len()..].iter().all(|&(j, d)| j == u32::MAX && d == f64::INFINITY));
+                row.truncate(list.len());
+                assert_eq!(&row, list, "k {k} point {i}");
+            }
+        }
+        assert_eq!(tree.knn_graph(0, None), (Vec::new(), Vec::new()));
     }
 
     #[test]
