@@ -34,6 +34,16 @@ pub enum NeighbourSpace {
     Xy,
 }
 
+impl NeighbourSpace {
+    /// The k nearest in this space.
+    fn knn(self, k: usize) -> Neighbourhood {
+        match self {
+            NeighbourSpace::Xyz => Neighbourhood::Knn(k),
+            NeighbourSpace::Xy => Neighbourhood::KnnXy(k),
+        }
+    }
+}
+
 pub struct OctreeOptions {
     pub d_min: f64,
     /// Neighbours for the feature degree (and for normals when none are given).
@@ -66,11 +76,7 @@ pub fn feature_degree(points: &[[f64; 3]], normals: &[[f64; 3]], k: usize, space
         return Err(Error::shape("normals", format!("({}, 3): one per point", points.len()), format!("({}, 3)", normals.len())));
     }
     // k + 1: the point itself is its own nearest neighbour.
-    let nbh = match space {
-        NeighbourSpace::Xyz => Neighbourhood::Knn(k + 1),
-        NeighbourSpace::Xy => Neighbourhood::KnnXy(k + 1),
-    };
-    nbh.map(points, |i, nn| {
+    space.knn(k + 1).map(points, |i, nn| {
         let ni = normals[i];
         let mut sum = 0.0;
         let mut count = 0;
@@ -135,12 +141,7 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
     let normals = match normals {
         Some(nr) => nr,
         None => {
-            let k = o.k.max(3);
-            let nbh = match o.neighbours {
-                NeighbourSpace::Xyz => Neighbourhood::Knn(k),
-                NeighbourSpace::Xy => Neighbourhood::KnnXy(k),
-            };
-            owned = estimate_normals(points, nbh)?.0;
+            owned = estimate_normals(points, o.neighbours.knn(o.k.max(3)))?.0;
             &owned
         }
     };

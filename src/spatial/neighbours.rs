@@ -132,51 +132,48 @@ impl CloudNeighbours {
         T: Send + Default,
         F: Fn(usize, &[Neighbour]) -> T + Sync,
     {
-        let k = k.min(self.len());
-        let cap2 = radius.map_or(f64::INFINITY, |r| r * r);
-        let cap2 = if cap2.is_nan() { 0.0 } else { cap2 };
+        let (k, cap2) = (k.min(self.len()), cap_squared(radius));
         self.map_leaves(|leaf, s, guess, out| self.leaf_knn(leaf, k, cap2, s, guess, &mut |i, nb| f(i, nb), out))
     }
 
     /// The k-nearest graph as flat rows in point order: row i holds the neighbours of point i
     /// as in `map_knn`, (index, squared distance), padded with (u32::MAX, ∞) when `radius`
-    /// leaves fewer than k. Without a vector per point: the rows of a task are written in tree
-    /// order into one buffer, then gathered into point order in parallel.
+    /// leaves fewer than k. Without a vector per point: each task writes its rows in tree order
+    /// into one buffer, and the rows are gathered from there into point order in parallel.
     pub fn knn_graph(&self, k: usize, radius: Option<f64>) -> (Vec<u32>, Vec<f64>) {
-        let k = k.min(self.len());
+        let (k, cap2) = (k.min(self.len()), cap_squared(radius));
         if k == 0 {
             return (Vec::new(), Vec::new());
         }
-        let cap2 = radius.map_or(f64::INFINITY, |r| r * r);
-        let cap2 = if cap2.is_nan() { 0.0 } else { cap2 };
-        let tasks: Vec<Vec<(u32, f64)>> = self
-            .leaves
-            .par_chunks(LEAVES_PER_TASK)
-            .map(|leaves| {
-                let (mut scratch, mut guess, mut unit) = (Scratch::default(), f64::NAN, Vec::new());
-                let mut rows: Vec<(u32, f64)> = Vec::with_capacity(leaves.len() * LEAF_SIZE * k);
-                for &leaf in leaves {
-                    let mut write = |_: usize, nb: &[Neighbour]| {
-                        rows.extend(nb.iter().map(|n| (n.index as u32, n.dist2)));
-                        rows.extend(std::iter::repeat_n((u32::MAX, f64::INFINITY), k - nb.len()));
-                    };
-                    self.leaf_knn(leaf, k, cap2, &mut scratch, &mut guess, &mut write, &mut unit);
-                    unit.clear();
-                }
-                rows
-            })
-            .collect();
-        let rows: Vec<(u32, f64)> = tasks.concat();
-        let mut position = vec![0usize; self.len()];
-        for (t, &i) in self.order.iter().enumerate() {
-            position[i as usize] = t;
+        let tasks: Vec<Vec<(u32, f64)>> = self.run_tasks(|leaves, scratch, guess| {
+            let mut rows: Vec<(u32, f64)> = Vec::with_capacity(leaves.len() * LEAF_SIZE * k);
+            let mut unit = Vec::new();
+            for &leaf in leaves {
+                let mut write = |_: usize, nb: &[Neighbour]| {
+                    rows.extend(nb.iter().map(|n| (n.index as u32, n.dist2)));
+                    rows.extend(std::iter::repeat_n((u32::MAX, f64::INFINITY), k - nb.len()));
+                };
+                self.leaf_knn(leaf, k, cap2, scratch, guess, &mut write, &mut unit);
+                unit.clear();
+            }
+            rows
+        });
+        // Tree position → (task, row in the task).
+        let mut row_of = vec![(0u32, 0u32); self.len()];
+        let mut t = 0;
+        for (task, rows) in tasks.iter().enumerate() {
+            for r in 0..rows.len() / k {
+                row_of[self.order[t] as usize] = (task as u32, r as u32);
+                t += 1;
+            }
         }
         let mut index = vec![u32::MAX; self.len() * k];
         let mut dist2 = vec![f64::INFINITY; self.len() * k];
-        index.par_chunks_mut(k).zip(dist2.par_chunks_mut(k)).enumerate().for_each(|(i, (ri, rd))| {
-            for (r, &(j, d)) in rows[position[i] * k..(position[i] + 1) * k].iter().enumerate() {
-                ri[r] = j;
-                rd[r] = d;
+        index.par_chunks_mut(k).zip(dist2.par_chunks_mut(k)).zip(&row_of).for_each(|((ri, rd), &(task, r))| {
+            let row = &tasks[task as usize][r as usize * k..(r as usize + 1) * k];
+            for (c, &(j, d)) in row.iter().enumerate() {
+                ri[c] = j;
+                rd[c] = d;
             }
         });
         (index, dist2)
@@ -209,25 +206,31 @@ impl CloudNeighbours {
         }
     }
 
+    /// Runs `per_task` on runs of LEAVES_PER_TASK consecutive leaves in parallel, each with its
+    /// own scratch buffers and gather-radius guess; results in tree order.
+    fn run_tasks<R: Send>(&self, per_task: impl Fn(&[u32], &mut Scratch, &mut f64) -> R + Sync) -> Vec<R> {
+        self.leaves
+            .par_chunks(LEAVES_PER_TASK)
+            .map(|leaves| {
+                let (mut scratch, mut guess) = (Scratch::default(), f64::NAN);
+                per_task(leaves, &mut scratch, &mut guess)
+            })
+            .collect()
+    }
+
     /// Runs `per_leaf` over all leaves in parallel tasks and returns its outputs in point order.
     fn map_leaves<T, G>(&self, per_leaf: G) -> Vec<T>
     where
         T: Send + Default,
         G: Fn(u32, &mut Scratch, &mut f64, &mut Vec<T>) + Sync,
     {
-        let in_tree_order: Vec<Vec<T>> = self
-            .leaves
-            .par_chunks(LEAVES_PER_TASK)
-            .map(|leaves| {
-                let mut scratch = Scratch::default();
-                let mut guess = f64::NAN;
-                let mut out = Vec::with_capacity(leaves.len() * LEAF_SIZE);
-                for &leaf in leaves {
-                    per_leaf(leaf, &mut scratch, &mut guess, &mut out);
-                }
-                out
-            })
-            .collect();
+        let in_tree_order: Vec<Vec<T>> = self.run_tasks(|leaves, scratch, guess| {
+            let mut out = Vec::with_capacity(leaves.len() * LEAF_SIZE);
+            for &leaf in leaves {
+                per_leaf(leaf, scratch, guess, &mut out);
+            }
+            out
+        });
         let mut out: Vec<T> = std::iter::repeat_with(T::default).take(self.len()).collect();
         for (t, v) in in_tree_order.into_iter().flatten().enumerate() {
             out[self.order[t] as usize] = v;
@@ -402,6 +405,16 @@ fn split(items: &mut [([f64; 3], u32)], lo: [f64; 3], hi: [f64; 3]) {
     } else {
         split(left, lo, left_hi);
         split(right, right_lo, hi);
+    }
+}
+
+/// The squared cap of a neighbour search: ∞ without a radius; a NaN radius finds nothing.
+fn cap_squared(radius: Option<f64>) -> f64 {
+    let cap2 = radius.map_or(f64::INFINITY, |r| r * r);
+    if cap2.is_nan() {
+        0.0
+    } else {
+        cap2
     }
 }
 
