@@ -6,11 +6,7 @@ use thiserror::Error;
 pub enum Error {
     /// An array argument has the wrong shape.
     #[error("{name}: expected {expected}, got {actual}")]
-    Shape {
-        name: String,
-        expected: String,
-        actual: String,
-    },
+    Shape { name: String, expected: String, actual: String },
     /// An argument has an unusable value (NaN, out of range, inconsistent with another).
     #[error("{name}: {reason}")]
     Invalid { name: String, reason: String },
@@ -21,27 +17,17 @@ pub enum Error {
 
 impl Error {
     pub fn shape(name: &str, expected: impl Into<String>, actual: impl Into<String>) -> Self {
-        Error::Shape {
-            name: name.to_string(),
-            expected: expected.into(),
-            actual: actual.into(),
-        }
+        Error::Shape { name: name.to_string(), expected: expected.into(), actual: actual.into() }
     }
 
     pub fn invalid(name: &str, reason: impl Into<String>) -> Self {
-        Error::Invalid {
-            name: name.to_string(),
-            reason: reason.into(),
-        }
+        Error::Invalid { name: name.to_string(), reason: reason.into() }
     }
 }
 
 impl Error {
     pub fn file(path: &std::path::Path, reason: impl Into<String>) -> Self {
-        Error::File {
-            path: path.display().to_string(),
-            reason: reason.into(),
-        }
+        Error::File { path: path.display().to_string(), reason: reason.into() }
     }
 }
 
@@ -54,10 +40,7 @@ pub fn check_finite(name: &str, values: &[f64], width: usize) -> Result<()> {
         let (row, col) = if width > 0 { (pos / width, pos % width) } else { (pos, 0) };
         return Err(Error::invalid(
             name,
-            format!(
-                "must be finite, found {} at row {}, column {}",
-                values[pos], row, col
-            ),
+            format!("must be finite, found {} at row {}, column {}", values[pos], row, col),
         ));
     }
     Ok(())

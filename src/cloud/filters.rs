@@ -29,7 +29,10 @@ fn check_points(points: &[[f64; 3]]) -> Result<()> {
 /// Indices of the points inside the axis-aligned box `[min, max]` (bounds included).
 pub fn crop_box(points: &[[f64; 3]], min: [f64; 3], max: [f64; 3]) -> Result<Vec<usize>> {
     if (0..3).any(|k| !(min[k] <= max[k])) {
-        return Err(Error::invalid("min_bound", format!("must be <= max_bound in every axis, got {min:?} and {max:?}")));
+        return Err(Error::invalid(
+            "min_bound",
+            format!("must be <= max_bound in every axis, got {min:?} and {max:?}"),
+        ));
     }
     Ok((0..points.len())
         .into_par_iter()
@@ -85,7 +88,10 @@ pub fn voxel_downsample(points: &[[f64; 3]], voxel: f64) -> Result<VoxelGrid> {
     if max_extent >= 1 << 21 {
         return Err(Error::invalid(
             "voxel_size",
-            format!("{voxel} mm over a cloud {:.6} mm across makes more than 2^21 voxels per axis", (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)),
+            format!(
+                "{voxel} mm over a cloud {:.6} mm across makes more than 2^21 voxels per axis",
+                (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)
+            ),
         ));
     }
     let keys: Vec<u64> = points
@@ -131,7 +137,8 @@ pub fn statistical_outlier_removal(points: &[[f64; 3]], k: usize, std_ratio: f64
         return Ok(Vec::new());
     }
     // Summed nearest first, as Open3D: bit-identical means.
-    let avg: Vec<f64> = CloudNeighbours::new(points)?.map_knn(k, None, |_, nn| nn.iter().map(|n| n.dist2.sqrt()).sum::<f64>() / nn.len() as f64);
+    let avg: Vec<f64> = CloudNeighbours::new(points)?
+        .map_knn(k, None, |_, nn| nn.iter().map(|n| n.dist2.sqrt()).sum::<f64>() / nn.len() as f64);
     // Sequential in point order, as Open3D sums.
     let valid = n as f64;
     let mut total = 0.0;

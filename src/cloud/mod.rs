@@ -8,5 +8,7 @@ pub use filters::{
     crop_box, radius_outlier_removal, random_downsample, remove_duplicates, statistical_outlier_removal,
     uniform_downsample, voxel_downsample, VoxelGrid,
 };
-pub use normals::{estimate_normals, orient_along, orient_consistent, orient_towards, principal_curvatures, Neighbourhood};
+pub use normals::{
+    estimate_normals, orient_along, orient_consistent, orient_towards, principal_curvatures, Neighbourhood,
+};
 pub use octree::{boundary_points, feature_degree, octree_simplify, NeighbourSpace, OctreeOptions};

@@ -24,25 +24,34 @@ pub enum Neighbourhood {
 impl Neighbourhood {
     fn check(&self) -> Result<()> {
         match *self {
-            Neighbourhood::Knn(k) | Neighbourhood::KnnXy(k) if k < 3 => Err(Error::invalid("k", format!("a plane needs at least 3 neighbours, got {k}"))),
+            Neighbourhood::Knn(k) | Neighbourhood::KnnXy(k) if k < 3 => {
+                Err(Error::invalid("k", format!("a plane needs at least 3 neighbours, got {k}")))
+            }
             Neighbourhood::Hybrid { radius, .. } if !(radius.is_finite() && radius > 0.0) => {
                 Err(Error::invalid("radius", format!("must be a positive distance in mm, got {radius}")))
             }
-            Neighbourhood::Hybrid { max_nn, .. } if max_nn < 3 => Err(Error::invalid("max_nn", format!("must be at least 3, got {max_nn}"))),
+            Neighbourhood::Hybrid { max_nn, .. } if max_nn < 3 => {
+                Err(Error::invalid("max_nn", format!("must be at least 3, got {max_nn}")))
+            }
             _ => Ok(()),
         }
     }
 
     /// `f(i, neighbours)` for every point, in point order; neighbour positions are 3D (the
     /// squared distances of `KnnXy` are in x–y).
-    pub(crate) fn map<T: Send + Default>(&self, points: &[[f64; 3]], f: impl Fn(usize, &[Neighbour]) -> T + Sync) -> Result<Vec<T>> {
+    pub(crate) fn map<T: Send + Default>(
+        &self,
+        points: &[[f64; 3]],
+        f: impl Fn(usize, &[Neighbour]) -> T + Sync,
+    ) -> Result<Vec<T>> {
         Ok(match *self {
             Neighbourhood::Knn(k) => CloudNeighbours::new(points)?.map_knn(k, None, f),
             Neighbourhood::Hybrid { radius, max_nn } => CloudNeighbours::new(points)?.map_knn(max_nn, Some(radius), f),
             Neighbourhood::KnnXy(k) => {
                 let flat: Vec<[f64; 3]> = points.par_iter().map(|p| [p[0], p[1], 0.0]).collect();
                 CloudNeighbours::new(&flat)?.map_knn(k, None, |i, nb| {
-                    let lifted: Vec<Neighbour> = nb.iter().map(|n| Neighbour { point: points[n.index], ..*n }).collect();
+                    let lifted: Vec<Neighbour> =
+                        nb.iter().map(|n| Neighbour { point: points[n.index], ..*n }).collect();
                     f(i, &lifted)
                 })
             }
@@ -145,7 +154,8 @@ pub fn orient_consistent(points: &[[f64; 3]], normals: &mut [[f64; 3]], k: usize
     }
     // k + 1: the point itself is its own nearest neighbour (unless an exact duplicate with a
     // lower index comes first).
-    let knn: Vec<Vec<usize>> = CloudNeighbours::new(points)?.map_knn(k + 1, None, |i, nb| nb.iter().map(|n| n.index).filter(|&j| j != i).take(k).collect());
+    let knn: Vec<Vec<usize>> = CloudNeighbours::new(points)?
+        .map_knn(k + 1, None, |i, nb| nb.iter().map(|n| n.index).filter(|&j| j != i).take(k).collect());
     // Symmetric adjacency.
     let mut adj: Vec<Vec<usize>> = knn.clone();
     for (i, js) in knn.iter().enumerate() {
@@ -197,61 +207,69 @@ pub fn orient_consistent(points: &[[f64; 3]], normals: &mut [[f64; 3]], k: usize
 /// at its foot (u, v) = (0, 0), corrected for the fitted slope (d, e). Signs follow the normal:
 /// positive where the surface bends towards it (a sphere with inward normals has k1 = k2 = 1/R,
 /// with outward normals −1/R); a point with fewer than 6 neighbours gets NaN.
-pub fn principal_curvatures(points: &[[f64; 3]], normals: &[[f64; 3]], nbh: Neighbourhood) -> Result<Vec<([f64; 2], [[f64; 3]; 2])>> {
+pub fn principal_curvatures(
+    points: &[[f64; 3]],
+    normals: &[[f64; 3]],
+    nbh: Neighbourhood,
+) -> Result<Vec<([f64; 2], [[f64; 3]; 2])>> {
     nbh.check()?;
     if normals.len() != points.len() {
-        return Err(Error::shape("normals", format!("({}, 3): one per point", points.len()), format!("({}, 3)", normals.len())));
+        return Err(Error::shape(
+            "normals",
+            format!("({}, 3): one per point", points.len()),
+            format!("({}, 3)", normals.len()),
+        ));
     }
     if points.is_empty() {
         return Ok(Vec::new());
     }
     nbh.map(points, |i, nb| {
-            let (p, nrm) = (&points[i], &normals[i]);
-            let nv = Vector3::from(*nrm).normalize();
-            // A tangent basis.
-            let helper = if nv.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
-            let u = nv.cross(&helper).normalize();
-            let v = nv.cross(&u);
-            if nb.len() < 6 {
-                return ([f64::NAN, f64::NAN], [[f64::NAN; 3]; 2]);
-            }
-            // Least squares on the 6 quadric coefficients.
-            let mut ata = nalgebra::Matrix6::<f64>::zeros();
-            let mut atb = nalgebra::Vector6::<f64>::zeros();
-            for n in nb {
-                let d = Vector3::from(n.point) - Vector3::from(*p);
-                let (x, y, h) = (d.dot(&u), d.dot(&v), d.dot(&nv));
-                let row = nalgebra::Vector6::new(x * x, x * y, y * y, x, y, 1.0);
-                ata += row * row.transpose();
-                atb += row * h;
-            }
-            let Some(sol) = ata.cholesky().map(|c| c.solve(&atb)) else {
-                return ([f64::NAN, f64::NAN], [[f64::NAN; 3]; 2]);
-            };
-            let (a, b, c, d, e) = (sol[0], sol[1], sol[2], sol[3], sol[4]);
-            // First and second fundamental forms of the graph h(x, y) at the origin.
-            let (hx, hy, hxx, hxy, hyy) = (d, e, 2.0 * a, b, 2.0 * c);
-            let w = (1.0 + hx * hx + hy * hy).sqrt();
-            let first = nalgebra::Matrix2::new(1.0 + hx * hx, hx * hy, hx * hy, 1.0 + hy * hy);
-            let second = nalgebra::Matrix2::new(hxx, hxy, hxy, hyy) / w;
-            let Some(inv) = first.try_inverse() else {
-                return ([f64::NAN, f64::NAN], [[f64::NAN; 3]; 2]);
-            };
-            let shape = inv * second;
-            // The shape operator is symmetric in the metric; eigen-decompose it directly.
-            let tr = shape.trace();
-            let det = shape.determinant();
-            let disc = (tr * tr / 4.0 - det).max(0.0).sqrt();
-            let (k1, k2) = (tr / 2.0 + disc, tr / 2.0 - disc);
-            let dir = |k: f64| -> [f64; 3] {
-                // (shape − k I) t = 0 → t ⟂ first row.
-                let (r0, r1) = (shape[(0, 0)] - k, shape[(0, 1)]);
-                let (s0, s1) = (shape[(1, 0)], shape[(1, 1)] - k);
-                let t = if r0.abs() + r1.abs() >= s0.abs() + s1.abs() { (-r1, r0) } else { (-s1, s0) };
-                let t = if t.0 == 0.0 && t.1 == 0.0 { (1.0, 0.0) } else { t };
-                let t3 = (u * t.0 + v * t.1 + nv * (hx * t.0 + hy * t.1)).normalize();
-                [t3.x, t3.y, t3.z]
-            };
-            ([k1, k2], [dir(k1), dir(k2)])
-        })
+        let (p, nrm) = (&points[i], &normals[i]);
+        let nv = Vector3::from(*nrm).normalize();
+        // A tangent basis.
+        let helper = if nv.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let u = nv.cross(&helper).normalize();
+        let v = nv.cross(&u);
+        if nb.len() < 6 {
+            return ([f64::NAN, f64::NAN], [[f64::NAN; 3]; 2]);
+        }
+        // Least squares on the 6 quadric coefficients.
+        let mut ata = nalgebra::Matrix6::<f64>::zeros();
+        let mut atb = nalgebra::Vector6::<f64>::zeros();
+        for n in nb {
+            let d = Vector3::from(n.point) - Vector3::from(*p);
+            let (x, y, h) = (d.dot(&u), d.dot(&v), d.dot(&nv));
+            let row = nalgebra::Vector6::new(x * x, x * y, y * y, x, y, 1.0);
+            ata += row * row.transpose();
+            atb += row * h;
+        }
+        let Some(sol) = ata.cholesky().map(|c| c.solve(&atb)) else {
+            return ([f64::NAN, f64::NAN], [[f64::NAN; 3]; 2]);
+        };
+        let (a, b, c, d, e) = (sol[0], sol[1], sol[2], sol[3], sol[4]);
+        // First and second fundamental forms of the graph h(x, y) at the origin.
+        let (hx, hy, hxx, hxy, hyy) = (d, e, 2.0 * a, b, 2.0 * c);
+        let w = (1.0 + hx * hx + hy * hy).sqrt();
+        let first = nalgebra::Matrix2::new(1.0 + hx * hx, hx * hy, hx * hy, 1.0 + hy * hy);
+        let second = nalgebra::Matrix2::new(hxx, hxy, hxy, hyy) / w;
+        let Some(inv) = first.try_inverse() else {
+            return ([f64::NAN, f64::NAN], [[f64::NAN; 3]; 2]);
+        };
+        let shape = inv * second;
+        // The shape operator is symmetric in the metric; eigen-decompose it directly.
+        let tr = shape.trace();
+        let det = shape.determinant();
+        let disc = (tr * tr / 4.0 - det).max(0.0).sqrt();
+        let (k1, k2) = (tr / 2.0 + disc, tr / 2.0 - disc);
+        let dir = |k: f64| -> [f64; 3] {
+            // (shape − k I) t = 0 → t ⟂ first row.
+            let (r0, r1) = (shape[(0, 0)] - k, shape[(0, 1)]);
+            let (s0, s1) = (shape[(1, 0)], shape[(1, 1)] - k);
+            let t = if r0.abs() + r1.abs() >= s0.abs() + s1.abs() { (-r1, r0) } else { (-s1, s0) };
+            let t = if t.0 == 0.0 && t.1 == 0.0 { (1.0, 0.0) } else { t };
+            let t3 = (u * t.0 + v * t.1 + nv * (hx * t.0 + hy * t.1)).normalize();
+            [t3.x, t3.y, t3.z]
+        };
+        ([k1, k2], [dir(k1), dir(k2)])
+    })
 }

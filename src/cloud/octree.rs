@@ -62,7 +62,15 @@ pub struct OctreeOptions {
 impl OctreeOptions {
     /// The paper's rule with cells of edge `d_min`.
     pub fn new(d_min: f64) -> Self {
-        OctreeOptions { d_min, k: 10, eps1: None, eps2: None, neighbours: NeighbourSpace::Xyz, refine: 0, feature_threshold: 0.05 }
+        OctreeOptions {
+            d_min,
+            k: 10,
+            eps1: None,
+            eps2: None,
+            neighbours: NeighbourSpace::Xyz,
+            refine: 0,
+            feature_threshold: 0.05,
+        }
     }
 }
 
@@ -73,7 +81,11 @@ pub fn feature_degree(points: &[[f64; 3]], normals: &[[f64; 3]], k: usize, space
         return Err(Error::invalid("k", "must be at least 1"));
     }
     if normals.len() != points.len() {
-        return Err(Error::shape("normals", format!("({}, 3): one per point", points.len()), format!("({}, 3)", normals.len())));
+        return Err(Error::shape(
+            "normals",
+            format!("({}, 3): one per point", points.len()),
+            format!("({}, 3)", normals.len()),
+        ));
     }
     // k + 1: the point itself is its own nearest neighbour.
     space.knn(k + 1).map(points, |i, nn| {
@@ -100,8 +112,10 @@ pub fn boundary_points(points: &[[f64; 3]], eps1: usize, eps2: usize) -> Vec<usi
         let mut order: Vec<usize> = (0..points.len()).collect();
         order.sort_by(|&a, &b| points[a][sort_axis].total_cmp(&points[b][sort_axis]).then(a.cmp(&b)));
         for group in order.chunks(eps.max(1)) {
-            let lo = group.iter().copied().min_by(|&a, &b| points[a][other].total_cmp(&points[b][other]).then(a.cmp(&b)));
-            let hi = group.iter().copied().max_by(|&a, &b| points[a][other].total_cmp(&points[b][other]).then(b.cmp(&a)));
+            let lo =
+                group.iter().copied().min_by(|&a, &b| points[a][other].total_cmp(&points[b][other]).then(a.cmp(&b)));
+            let hi =
+                group.iter().copied().max_by(|&a, &b| points[a][other].total_cmp(&points[b][other]).then(b.cmp(&a)));
             out.extend(lo);
             out.extend(hi);
         }
@@ -129,13 +143,19 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
         return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
     }
     if !(o.feature_threshold.is_finite() && o.feature_threshold >= 0.0) {
-        return Err(Error::invalid("feature_threshold", format!("must be an angle >= 0 in radians, got {}", o.feature_threshold)));
+        return Err(Error::invalid(
+            "feature_threshold",
+            format!("must be an angle >= 0 in radians, got {}", o.feature_threshold),
+        ));
     }
     let (lo, hi) = crate::geom::bounds(points);
     let l = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max).max(o.d_min);
     let depth = (l / o.d_min).log2().ceil().max(0.0) as u32;
     let deepest = depth.checked_add(o.refine).filter(|&d| d <= 40).ok_or_else(|| {
-        Error::invalid("d_min", format!("{} mm over {l} mm with refine = {} needs an octree deeper than 40 levels", o.d_min, o.refine))
+        Error::invalid(
+            "d_min",
+            format!("{} mm over {l} mm with refine = {} needs an octree deeper than 40 levels", o.d_min, o.refine),
+        )
     })?;
     let owned;
     let normals = match normals {
@@ -154,7 +174,9 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
         // Feature leaves give way to their occupied sub-cells `refine` levels down.
         let coarse = cell_indexer(lo, l, depth);
         let hot = |i: usize| leaves[&coarse(&points[i])].feature.0 > o.feature_threshold;
-        keep.extend(leaves.values().filter(|b| b.feature.0 <= o.feature_threshold).flat_map(|b| [b.feature.1, b.centre.1]));
+        keep.extend(
+            leaves.values().filter(|b| b.feature.0 <= o.feature_threshold).flat_map(|b| [b.feature.1, b.centre.1]),
+        );
         let fine = best_per_cell(points, &f, lo, l, deepest, hot);
         keep.extend(fine.values().flat_map(|b| [b.feature.1, b.centre.1]));
     }
@@ -184,7 +206,14 @@ fn cell_indexer(lo: [f64; 3], l: f64, depth: u32) -> impl Fn(&[f64; 3]) -> [u64;
 
 /// Per occupied cell at `depth` (among the points `take` accepts): the Q1 and Q2 candidates.
 /// Strictly better only, points in index order: ties keep the lowest index.
-fn best_per_cell(points: &[[f64; 3]], f: &[f64], lo: [f64; 3], l: f64, depth: u32, take: impl Fn(usize) -> bool) -> HashMap<[u64; 3], CellBest> {
+fn best_per_cell(
+    points: &[[f64; 3]],
+    f: &[f64],
+    lo: [f64; 3],
+    l: f64,
+    depth: u32,
+    take: impl Fn(usize) -> bool,
+) -> HashMap<[u64; 3], CellBest> {
     let cell = l / (1u64 << depth) as f64;
     let cell_of = cell_indexer(lo, l, depth);
     let mut cells: HashMap<[u64; 3], CellBest> = HashMap::new();
@@ -263,9 +292,15 @@ mod tests {
         let fxy = feature_degree(&pts, &nxy, 10, NeighbourSpace::Xy).unwrap();
         assert!(pts.iter().zip(&fxy).all(|(p, &f)| near_step(p) || f < 1e-6));
         assert!(pts.iter().zip(&fxy).filter(|(p, _)| near_step(p)).any(|(_, &f)| f > 0.5));
-        let paper = octree_simplify(&pts, None, &OctreeOptions { neighbours: NeighbourSpace::Xy, ..OctreeOptions::new(4.0) }).unwrap();
-        let refined =
-            octree_simplify(&pts, None, &OctreeOptions { neighbours: NeighbourSpace::Xy, refine: 2, ..OctreeOptions::new(4.0) }).unwrap();
+        let paper =
+            octree_simplify(&pts, None, &OctreeOptions { neighbours: NeighbourSpace::Xy, ..OctreeOptions::new(4.0) })
+                .unwrap();
+        let refined = octree_simplify(
+            &pts,
+            None,
+            &OctreeOptions { neighbours: NeighbourSpace::Xy, refine: 2, ..OctreeOptions::new(4.0) },
+        )
+        .unwrap();
         let at_step = |keep: &[usize]| keep.iter().filter(|&&i| near_step(&pts[i])).count();
         // Cells of 3.125 mm → sub-cells of 0.78 mm along the step's 30 mm: many more points
         // there, and the same points elsewhere.

@@ -87,7 +87,8 @@ pub fn contour_error(theoretical: &[[f64; 3]], actual: &[[f64; 3]], delta1: f64,
         }
     }
     let n = theoretical.len();
-    let (mut errors, mut deviations, mut matched, mut cases) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+    let (mut errors, mut deviations, mut matched, mut cases) =
+        (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
     for i in 0..n {
         let (j, dj) = m_p[i];
         let (m, d, case) = match reverse[i] {

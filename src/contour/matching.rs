@@ -21,13 +21,7 @@ fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 pub fn nearest_centroid(actual: &[[f64; 3]], theoretical: &[[f64; 3]]) -> Vec<Option<usize>> {
     actual
         .iter()
-        .map(|a| {
-            theoretical
-                .iter()
-                .enumerate()
-                .min_by(|x, y| dist(a, x.1).total_cmp(&dist(a, y.1)))
-                .map(|(i, _)| i)
-        })
+        .map(|a| theoretical.iter().enumerate().min_by(|x, y| dist(a, x.1).total_cmp(&dist(a, y.1))).map(|(i, _)| i))
         .collect()
 }
 
@@ -51,7 +45,11 @@ pub fn assign_one_to_one(actual: &[[f64; 3]], theoretical: &[[f64; 3]], max_dist
     let cost = |i: usize, j: usize| -> f64 {
         if i < n && j < m {
             let d = dist(&actual[i], &theoretical[j]);
-            if d <= max_distance { d } else { 2.0 * big + d }
+            if d <= max_distance {
+                d
+            } else {
+                2.0 * big + d
+            }
         } else {
             big
         }
@@ -134,7 +132,13 @@ mod tests {
     fn permutation_is_recovered() {
         let theo: Vec<[f64; 3]> = (0..12).map(|i| [(i * 37 % 11) as f64 * 30.0, (i / 4) as f64 * 40.0, 0.0]).collect();
         let perm = [5, 2, 9, 0, 11, 7, 3, 1, 10, 4, 8, 6];
-        let act: Vec<[f64; 3]> = perm.iter().map(|&j| { let t: [f64; 3] = theo[j]; [t[0] + 0.3, t[1] - 0.2, 0.1] }).collect();
+        let act: Vec<[f64; 3]> = perm
+            .iter()
+            .map(|&j| {
+                let t: [f64; 3] = theo[j];
+                [t[0] + 0.3, t[1] - 0.2, 0.1]
+            })
+            .collect();
         let got = assign_one_to_one(&act, &theo, 5.0);
         assert_eq!(got, perm.iter().map(|&j| Some(j)).collect::<Vec<_>>());
     }

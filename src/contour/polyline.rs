@@ -16,7 +16,11 @@ pub fn resample_polyline(vertices: &[[f64; 3]], spacing: f64, closed: bool) -> R
     }
     let min = if closed { 3 } else { 2 };
     if vertices.len() < min {
-        return Err(Error::shape("vertices", format!("(n, 3) with n >= {min} for a {} polyline", if closed { "closed" } else { "open" }), format!("({}, 3)", vertices.len())));
+        return Err(Error::shape(
+            "vertices",
+            format!("(n, 3) with n >= {min} for a {} polyline", if closed { "closed" } else { "open" }),
+            format!("({}, 3)", vertices.len()),
+        ));
     }
     if let Some(i) = vertices.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
         return Err(Error::invalid("vertices", format!("must be finite, found {:?} at row {i}", vertices[i])));
@@ -24,8 +28,14 @@ pub fn resample_polyline(vertices: &[[f64; 3]], spacing: f64, closed: bool) -> R
     let n = vertices.len();
     let segments = if closed { n } else { n - 1 };
     let seg = |s: usize| (vertices[s], vertices[(s + 1) % n]);
-    let length = |a: [f64; 3], b: [f64; 3]| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt();
-    let total: f64 = (0..segments).map(|s| { let (a, b) = seg(s); length(a, b) }).sum();
+    let length =
+        |a: [f64; 3], b: [f64; 3]| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt();
+    let total: f64 = (0..segments)
+        .map(|s| {
+            let (a, b) = seg(s);
+            length(a, b)
+        })
+        .sum();
     if total <= 0.0 {
         return Err(Error::invalid("vertices", "the polyline has zero length"));
     }

@@ -72,11 +72,7 @@ pub fn kabsch(src: &[[f64; 3]], dst: &[[f64; 3]]) -> Option<RigidFit> {
     for (s, dpt) in src.iter().zip(dst) {
         ss += (rotation * Vector3::from(*s) + translation - Vector3::from(*dpt)).norm_squared();
     }
-    Some(RigidFit {
-        rotation,
-        translation,
-        rms: (ss / n as f64).sqrt(),
-    })
+    Some(RigidFit { rotation, translation, rms: (ss / n as f64).sqrt() })
 }
 
 #[cfg(test)]
@@ -87,15 +83,10 @@ mod tests {
     #[test]
     fn kabsch_recovers_transform_from_coplanar_points() {
         // Profiler-like points: all in the SCS plane y = 0.
-        let src: Vec<[f64; 3]> = (0..40)
-            .map(|i| [(i as f64 - 20.0) * 0.5, 0.0, ((i * 7) % 11) as f64 * 0.1])
-            .collect();
+        let src: Vec<[f64; 3]> = (0..40).map(|i| [(i as f64 - 20.0) * 0.5, 0.0, ((i * 7) % 11) as f64 * 0.1]).collect();
         let r = mount_rotation(0.3, -0.2, 1.1);
         let t = Vector3::new(10.0, -4.0, 2.5);
-        let dst: Vec<[f64; 3]> = src
-            .iter()
-            .map(|p| (r * Vector3::from(*p) + t).into())
-            .collect();
+        let dst: Vec<[f64; 3]> = src.iter().map(|p| (r * Vector3::from(*p) + t).into()).collect();
         let fit = kabsch(&src, &dst).unwrap();
         assert!((fit.rotation - r).abs().max() < 1e-12);
         assert!((fit.translation - t).abs().max() < 1e-12);
@@ -105,10 +96,7 @@ mod tests {
     #[test]
     fn kabsch_rejects_collinear_points() {
         let src: Vec<[f64; 3]> = (0..10).map(|i| [i as f64, 0.0, 0.0]).collect();
-        let dst: Vec<[f64; 3]> = src
-            .iter()
-            .map(|p| (rot_z(0.5) * Vector3::from(*p)).into())
-            .collect();
+        let dst: Vec<[f64; 3]> = src.iter().map(|p| (rot_z(0.5) * Vector3::from(*p)).into()).collect();
         assert!(kabsch(&src, &dst).is_none());
     }
 }

@@ -78,11 +78,7 @@ pub fn mount_rotation_partials(theta: f64, psi: f64, phi: f64) -> [Matrix3<f64>;
         m
     };
     let (rz, ry, rx) = (rot_z(phi), rot_y(theta), rot_x(psi));
-    [
-        rz * d(Axis::Y, theta) * rx,
-        rz * ry * d(Axis::X, psi),
-        d(Axis::Z, phi) * ry * rx,
-    ]
+    [rz * d(Axis::Y, theta) * rx, rz * ry * d(Axis::X, psi), d(Axis::Z, phi) * ry * rx]
 }
 
 /// Inverse of [`mount_rotation`]: (theta, psi, phi) with theta in [-pi/2, pi/2].
@@ -117,22 +113,11 @@ mod tests {
     #[case(0.3, -1.2, 2.5)]
     #[case(1.5707, 0.1, -3.0)]
     #[case(-0.7, 3.1, 0.01)]
-    fn mount_rotation_is_orthonormal_and_matches_spec(
-        #[case] theta: f64,
-        #[case] psi: f64,
-        #[case] phi: f64,
-    ) {
+    fn mount_rotation_is_orthonormal_and_matches_spec(#[case] theta: f64, #[case] psi: f64, #[case] phi: f64) {
         let r = mount_rotation(theta, psi, phi);
         assert_orthonormal(&r);
         // The corrected closed form of SPEC K3 (paper 000 eq 8 without its sign error).
-        let (st, ct, ss, cs, sf, cf) = (
-            theta.sin(),
-            theta.cos(),
-            psi.sin(),
-            psi.cos(),
-            phi.sin(),
-            phi.cos(),
-        );
+        let (st, ct, ss, cs, sf, cf) = (theta.sin(), theta.cos(), psi.sin(), psi.cos(), phi.sin(), phi.cos());
         let spec = Matrix3::new(
             ct * cf,
             ss * st * cf - cs * sf,
@@ -153,8 +138,7 @@ mod tests {
     fn printed_eq8_is_not_a_rotation() {
         // Paper 000 eq (8) as printed: entry (2,3) reads cψ sθ sφ + sψ cφ. It is not orthonormal.
         let (theta, psi, phi) = (0.4_f64, 0.7_f64, -0.9_f64);
-        let (st, ct, ss, cs, sf, cf) =
-            (theta.sin(), theta.cos(), psi.sin(), psi.cos(), phi.sin(), phi.cos());
+        let (st, ct, ss, cs, sf, cf) = (theta.sin(), theta.cos(), psi.sin(), psi.cos(), phi.sin(), phi.cos());
         let printed = Matrix3::new(
             ct * cf,
             ss * st * cf - cs * sf,

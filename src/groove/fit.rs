@@ -125,7 +125,11 @@ impl GrooveOptions {
         if self.window == Some(0) {
             return Err(Error::invalid("window", "must hold at least one reading"));
         }
-        for (name, v) in [("step_tolerance", self.step_tolerance), ("gradient_tolerance", self.gradient_tolerance), ("cost_tolerance", self.cost_tolerance)] {
+        for (name, v) in [
+            ("step_tolerance", self.step_tolerance),
+            ("gradient_tolerance", self.gradient_tolerance),
+            ("cost_tolerance", self.cost_tolerance),
+        ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::invalid(name, format!("must be >= 0, got {v}")));
             }
@@ -265,7 +269,13 @@ impl<'a> TemplateProblem<'a> {
 
     #[inline(always)]
     fn template(&self, p: &[f64]) -> TanhTemplate {
-        TanhTemplate { x0: p[0], z0: p[1], depth: p[2], width: p[3], alpha: if p.len() > 4 { p[4] } else { self.alpha } }
+        TanhTemplate {
+            x0: p[0],
+            z0: p[1],
+            depth: p[2],
+            width: p[3],
+            alpha: if p.len() > 4 { p[4] } else { self.alpha },
+        }
     }
 
     /// Fills `a`, `b` with `tanh(α(x − x0 ∓ w/4))` and `f` with the residuals; returns ½Σf².
@@ -280,7 +290,6 @@ impl<'a> TemplateProblem<'a> {
         }
         0.5 * dot(&s.f, &s.f)
     }
-
 
     #[inline(always)]
     fn normal_equations_of<const P: usize>(&self, p: &[f64]) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64) {
@@ -306,7 +315,13 @@ impl<'a> TemplateProblem<'a> {
             }
         }
         let n = self.x.len() as f64;
-        let col = |k: usize| -> Option<&[f64]> { if k == 1 { None } else { Some(&s.grad[k][..]) } };
+        let col = |k: usize| -> Option<&[f64]> {
+            if k == 1 {
+                None
+            } else {
+                Some(&s.grad[k][..])
+            }
+        };
         let mut jtj = SMatrix::<f64, P, P>::zeros();
         let mut g = SVector::<f64, P>::zeros();
         for r in 0..P {
@@ -339,7 +354,13 @@ struct VProblem<'a> {
 
 impl VProblem<'_> {
     fn template(&self, p: &[f64]) -> VTemplate {
-        VTemplate { x0: p[0], z0: p[1], depth: p[2], width: p[3], sharpness: if p.len() > 4 { p[4] } else { self.sharpness } }
+        VTemplate {
+            x0: p[0],
+            z0: p[1],
+            depth: p[2],
+            width: p[3],
+            sharpness: if p.len() > 4 { p[4] } else { self.sharpness },
+        }
     }
 
     fn eval<const P: usize>(&self, p: &[f64]) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64) {
@@ -381,7 +402,12 @@ impl LeastSquares<5> for VProblem<'_> {
 /// Runs LM with 4 or 5 parameters: `(params [x0, z0, d, w, shape], cost, iterations, stop,
 /// var(d), var(w))` with the variances from (JᵀJ)⁻¹ (to be scaled by σ̂²).
 #[inline(always)]
-fn solve<Prob: LeastSquares<4> + LeastSquares<5>>(problem: &Prob, start: [f64; 5], fit_shape: bool, lm: &LmOptions) -> (Vec<f64>, f64, usize, LmStop, f64, f64) {
+fn solve<Prob: LeastSquares<4> + LeastSquares<5>>(
+    problem: &Prob,
+    start: [f64; 5],
+    fit_shape: bool,
+    lm: &LmOptions,
+) -> (Vec<f64>, f64, usize, LmStop, f64, f64) {
     if fit_shape {
         let r = levenberg_marquardt::<5, _>(problem, SVector::from(start), lm);
         let (cd, cw) = r.jtj.try_inverse().map_or((f64::INFINITY, f64::INFINITY), |m| (m[(2, 2)], m[(3, 3)]));
@@ -447,7 +473,11 @@ pub struct LevelledFrame {
 /// levelling, initial guess. `Err` carries the status of a frame that cannot be fitted and the
 /// number of readings it had.
 #[inline(always)]
-pub fn level_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> std::result::Result<LevelledFrame, (GrooveStatus, usize)> {
+pub fn level_frame(
+    x: &[f64],
+    z: &[f64],
+    o: &GrooveOptions,
+) -> std::result::Result<LevelledFrame, (GrooveStatus, usize)> {
     let n = x.len().min(z.len());
     // 1. Window of t readings around the centre, valid readings only.
     let (lo, hi) = match o.window {
@@ -682,7 +712,10 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<G
     }
     if let Some(c) = options.window_center {
         if c >= n {
-            return Err(Error::invalid("window_center", format!("reading {c} does not exist: the frames have {n} readings")));
+            return Err(Error::invalid(
+                "window_center",
+                format!("reading {c} does not exist: the frames have {n} readings"),
+            ));
         }
     }
     if z.len() % n != 0 {
@@ -785,7 +818,11 @@ mod tests {
         }
         let o = GrooveOptions::default();
         let run = |threads| {
-            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| fit_frames(&x, &z, &o).unwrap())
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| fit_frames(&x, &z, &o).unwrap())
         };
         let (a, b) = (run(1), run(2));
         for (p, q) in a.iter().zip(&b) {

@@ -3,5 +3,7 @@
 mod fit;
 mod template;
 
-pub use fit::{fit_frame, fit_frames, level_frame, GrooveFit, GrooveOptions, GrooveStatus, LevelledFrame, TemplateKind};
+pub use fit::{
+    fit_frame, fit_frames, level_frame, GrooveFit, GrooveOptions, GrooveStatus, LevelledFrame, TemplateKind,
+};
 pub use template::{TanhTemplate, VTemplate};

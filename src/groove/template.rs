@@ -175,7 +175,8 @@ mod tests {
                 let (mut up, mut dn) = (p, p);
                 up[k] += h;
                 dn[k] -= h;
-                let f = |q: [f64; 5]| VTemplate { x0: q[0], z0: q[1], depth: q[2], width: q[3], sharpness: q[4] }.value(x);
+                let f =
+                    |q: [f64; 5]| VTemplate { x0: q[0], z0: q[1], depth: q[2], width: q[3], sharpness: q[4] }.value(x);
                 let fd = (f(up) - f(dn)) / (2.0 * h);
                 assert!((fd - g[k]).abs() < 1e-5 * (1.0 + fd.abs()), "x={x} k={k}: {fd} vs {}", g[k]);
             }
@@ -231,7 +232,8 @@ mod tests {
                 let (mut up, mut dn) = (p, p);
                 up[k] += h;
                 dn[k] -= h;
-                let f = |q: [f64; 5]| TanhTemplate { x0: q[0], z0: q[1], depth: q[2], width: q[3], alpha: q[4] }.value(x);
+                let f =
+                    |q: [f64; 5]| TanhTemplate { x0: q[0], z0: q[1], depth: q[2], width: q[3], alpha: q[4] }.value(x);
                 let fd = (f(up) - f(dn)) / (2.0 * h);
                 assert!((fd - g[k]).abs() < 1e-6 * (1.0 + fd.abs()), "x={x} k={k}: {fd} vs {}", g[k]);
             }

@@ -48,14 +48,20 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
         let numbers = |what: &str| -> Result<Vec<f64>> {
             args.split(|c: char| c == ',' || c.is_whitespace())
                 .filter(|t| !t.is_empty())
-                .map(|t| t.parse::<f64>().map_err(|_| Error::file(path, format!("line {start_line}: {what}: {t:?} is not a number"))))
+                .map(|t| {
+                    t.parse::<f64>()
+                        .map_err(|_| Error::file(path, format!("line {start_line}: {what}: {t:?} is not a number")))
+                })
                 .collect()
         };
         match word.as_str() {
             "GOTO" => {
                 let v = numbers("GOTO")?;
                 if v.len() != 3 && v.len() != 6 {
-                    return Err(Error::file(path, format!("line {start_line}: GOTO needs x, y, z or x, y, z, i, j, k; got {} values", v.len())));
+                    return Err(Error::file(
+                        path,
+                        format!("line {start_line}: GOTO needs x, y, z or x, y, z, i, j, k; got {} values", v.len()),
+                    ));
                 }
                 if rapid && !tp.segments.is_empty() {
                     segment += 1;
@@ -68,15 +74,20 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
             }
             "FEDRAT" => {
                 // FEDRAT/f or FEDRAT/MMPM, f: the last number is the feed.
-                let v: Vec<f64> = args.split(|c: char| c == ',' || c.is_whitespace()).filter_map(|t| t.parse::<f64>().ok()).collect();
-                feed = *v.last().ok_or_else(|| Error::file(path, format!("line {start_line}: FEDRAT without a feed")))?;
+                let v: Vec<f64> =
+                    args.split(|c: char| c == ',' || c.is_whitespace()).filter_map(|t| t.parse::<f64>().ok()).collect();
+                feed =
+                    *v.last().ok_or_else(|| Error::file(path, format!("line {start_line}: FEDRAT without a feed")))?;
             }
             "RAPID" => rapid = true,
             _ => {}
         }
     }
     if !statement.trim().is_empty() {
-        return Err(Error::file(path, format!("line {start_line}: the last statement is continued ($) past the end of the file")));
+        return Err(Error::file(
+            path,
+            format!("line {start_line}: the last statement is continued ($) past the end of the file"),
+        ));
     }
     Ok(tp)
 }
@@ -89,7 +100,13 @@ pub fn read_apt(path: &Path) -> Result<Toolpath> {
 
 /// Writes a CL file: `GOTO/x, y, z[, i, j, k]` per point (tool axes when given), `FEDRAT/f`
 /// whenever the feed changes, `RAPID` before the first point of every segment but the first.
-pub fn write_apt(path: &Path, points: &[f64], axes: Option<&[f64]>, feeds: Option<&[f64]>, segments: Option<&[u32]>) -> Result<()> {
+pub fn write_apt(
+    path: &Path,
+    points: &[f64],
+    axes: Option<&[f64]>,
+    feeds: Option<&[f64]>,
+    segments: Option<&[u32]>,
+) -> Result<()> {
     use std::io::Write;
     let n = points.len() / 3;
     if axes.is_some_and(|a| a.len() != points.len()) {

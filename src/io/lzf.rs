@@ -15,7 +15,10 @@ pub fn lzf_decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String> {
             // Literal run of ctrl + 1 bytes.
             let len = ctrl + 1;
             if ip + len > input.len() {
-                return Err(format!("bad LZF stream: a literal run of {len} bytes at input byte {} runs past the end", ip - 1));
+                return Err(format!(
+                    "bad LZF stream: a literal run of {len} bytes at input byte {} runs past the end",
+                    ip - 1
+                ));
             }
             if out.len() + len > out_len {
                 return Err(format!("bad LZF stream: it decompresses to more than the {out_len} bytes announced"));
@@ -35,7 +38,10 @@ pub fn lzf_decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String> {
             ip += 1;
             let back = ((ctrl & 0x1f) << 8) + low + 1;
             if back > out.len() {
-                return Err(format!("bad LZF stream: a back reference reaches {back} bytes back with only {} written", out.len()));
+                return Err(format!(
+                    "bad LZF stream: a back reference reaches {back} bytes back with only {} written",
+                    out.len()
+                ));
             }
             if out.len() + len > out_len {
                 return Err(format!("bad LZF stream: it decompresses to more than the {out_len} bytes announced"));

@@ -73,7 +73,8 @@ mod robustness {
 
     #[test]
     fn pcd_never_panics() {
-        let head = "VERSION 0.7\nFIELDS x y z i\nSIZE 4 4 4 2\nTYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 8\nHEIGHT 1\nPOINTS 8\n";
+        let head =
+            "VERSION 0.7\nFIELDS x y z i\nSIZE 4 4 4 2\nTYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 8\nHEIGHT 1\nPOINTS 8\n";
         let ascii = format!("{head}DATA ascii\n") + &(0..8).map(|k| format!("{k} 1.5 -2 {k}\n")).collect::<String>();
         sweep(ascii.as_bytes(), |b| parse_pcd(Path::new("t.pcd"), b).is_ok());
         let mut raw = Vec::new();
@@ -144,7 +145,11 @@ mod fuzz {
 
     fn mutate(mut b: Vec<u8>, cut: usize, flips: &[(usize, u8)], huge: bool) -> Vec<u8> {
         if huge {
-            let s = String::from_utf8_lossy(&b).replacen(" 4\n", " 4000000000\n", 1).replacen("POINTS 3", "POINTS 99999999999", 1);
+            let s = String::from_utf8_lossy(&b).replacen(" 4\n", " 4000000000\n", 1).replacen(
+                "POINTS 3",
+                "POINTS 99999999999",
+                1,
+            );
             b = s.into_bytes();
         }
         for &(i, v) in flips {

@@ -73,7 +73,8 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
     let bad = |why: String| Error::file(path, why);
     // Header: text lines up to and including the DATA line.
     let mut pos = 0usize;
-    let (mut names, mut sizes, mut types, mut counts): (Vec<String>, Vec<usize>, Vec<Kind>, Vec<usize>) = Default::default();
+    let (mut names, mut sizes, mut types, mut counts): (Vec<String>, Vec<usize>, Vec<Kind>, Vec<usize>) =
+        Default::default();
     let (mut width, mut height, mut points_n): (Option<usize>, Option<usize>, Option<usize>) = (None, None, None);
     let mut data = None;
     let mut line_no = 0;
@@ -82,7 +83,8 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
             return Err(bad("the header ends before its DATA line".into()));
         }
         let end = bytes[pos..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |e| pos + e);
-        let line = std::str::from_utf8(&bytes[pos..end]).map_err(|_| bad(format!("header line {} is not text", line_no + 1)))?;
+        let line = std::str::from_utf8(&bytes[pos..end])
+            .map_err(|_| bad(format!("header line {} is not text", line_no + 1)))?;
         pos = (end + 1).min(bytes.len());
         line_no += 1;
         let line = line.split('#').next().unwrap_or("").trim();
@@ -94,7 +96,9 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
         let rest: Vec<&str> = words.collect();
         let at = |why: String| bad(format!("header line {line_no}: {why}"));
         let nums = |what: &str| -> Result<Vec<usize>> {
-            rest.iter().map(|w| w.parse::<usize>().map_err(|_| at(format!("{what}: {w:?} is not a whole number")))).collect()
+            rest.iter()
+                .map(|w| w.parse::<usize>().map_err(|_| at(format!("{what}: {w:?} is not a whole number"))))
+                .collect()
         };
         match key.as_str() {
             "VERSION" | "VIEWPOINT" => {}
@@ -135,13 +139,21 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
         counts = vec![1; nf];
     }
     if sizes.len() != nf || types.len() != nf || counts.len() != nf {
-        return Err(bad(format!("FIELDS names {nf} fields but SIZE has {}, TYPE {}, COUNT {}", sizes.len(), types.len(), counts.len())));
+        return Err(bad(format!(
+            "FIELDS names {nf} fields but SIZE has {}, TYPE {}, COUNT {}",
+            sizes.len(),
+            types.len(),
+            counts.len()
+        )));
     }
     let mut fields = Vec::with_capacity(nf);
     for k in 0..nf {
         let ok = matches!((types[k], sizes[k]), (Kind::F, 4) | (Kind::F, 8) | (Kind::I | Kind::U, 1 | 2 | 4 | 8));
         if !ok {
-            return Err(bad(format!("field {:?}: TYPE {:?} with SIZE {} is not a number type", names[k], types[k], sizes[k])));
+            return Err(bad(format!(
+                "field {:?}: TYPE {:?} with SIZE {} is not a number type",
+                names[k], types[k], sizes[k]
+            )));
         }
         fields.push(Field { name: names[k].clone(), size: sizes[k], kind: types[k], count: counts[k] });
     }
@@ -163,19 +175,30 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
     let table: Vec<Vec<f64>> = match data {
         Data::Ascii => {
             let text = std::str::from_utf8(body).map_err(|_| bad("the ASCII data is not text".into()))?;
-            let lines: Vec<(usize, &str)> = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).take(n).collect();
+            let lines: Vec<(usize, &str)> =
+                text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).take(n).collect();
             if lines.len() < n {
-                return Err(bad(format!("truncated: the header declares {n} points but only {} data lines follow", lines.len())));
+                return Err(bad(format!(
+                    "truncated: the header declares {n} points but only {} data lines follow",
+                    lines.len()
+                )));
             }
             let rows: Vec<std::result::Result<Vec<f64>, String>> = lines
                 .par_iter()
                 .map(|(k, l)| {
                     let v: Vec<f64> = l
                         .split_whitespace()
-                        .map(|t| parse_pcd_number(t).ok_or_else(|| format!("data line {}: {t:?} is not a number", line_no + k + 1)))
+                        .map(|t| {
+                            parse_pcd_number(t)
+                                .ok_or_else(|| format!("data line {}: {t:?} is not a number", line_no + k + 1))
+                        })
                         .collect::<std::result::Result<_, _>>()?;
                     if v.len() < per_point {
-                        return Err(format!("data line {}: {} values, the fields hold {per_point}", line_no + k + 1, v.len()));
+                        return Err(format!(
+                            "data line {}: {} values, the fields hold {per_point}",
+                            line_no + k + 1,
+                            v.len()
+                        ));
                     }
                     Ok(v)
                 })
@@ -192,7 +215,10 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
         Data::Binary => {
             let need = n.checked_mul(record).ok_or_else(|| bad("the point count overflows".into()))?;
             if body.len() < need {
-                return Err(bad(format!("truncated: the header declares {n} points ({need} bytes) but only {} bytes follow", body.len())));
+                return Err(bad(format!(
+                    "truncated: the header declares {n} points ({need} bytes) but only {} bytes follow",
+                    body.len()
+                )));
             }
             let mut table = Vec::with_capacity(per_point);
             let mut off = 0;
@@ -200,7 +226,9 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
                 for _ in 0..f.count {
                     let mut col = vec![0.0; n];
                     if record > 0 {
-                        col.par_iter_mut().zip(body[..need].par_chunks_exact(record)).for_each(|(v, r)| *v = f.decode(&r[off..]));
+                        col.par_iter_mut()
+                            .zip(body[..need].par_chunks_exact(record))
+                            .for_each(|(v, r)| *v = f.decode(&r[off..]));
                     }
                     table.push(col);
                     off += f.size;
@@ -216,15 +244,22 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
             let raw = u32::from_le_bytes([body[4], body[5], body[6], body[7]]) as usize;
             let need = n.checked_mul(record).ok_or_else(|| bad("the point count overflows".into()))?;
             if raw != need {
-                return Err(bad(format!("the compressed block unpacks to {raw} bytes but {n} points of {record} bytes need {need}")));
+                return Err(bad(format!(
+                    "the compressed block unpacks to {raw} bytes but {n} points of {record} bytes need {need}"
+                )));
             }
             // LZF expands at most ~132× (a 2-byte back reference yields up to 264 bytes): a
             // larger announced size is a lie, refused before anything is allocated.
             if raw > compressed.saturating_mul(140).saturating_add(64) {
-                return Err(bad(format!("bad LZF block: {compressed} compressed bytes cannot unpack to the {raw} announced")));
+                return Err(bad(format!(
+                    "bad LZF block: {compressed} compressed bytes cannot unpack to the {raw} announced"
+                )));
             }
             if body.len() - 8 < compressed {
-                return Err(bad(format!("truncated: {compressed} compressed bytes announced, {} present", body.len() - 8)));
+                return Err(bad(format!(
+                    "truncated: {compressed} compressed bytes announced, {} present",
+                    body.len() - 8
+                )));
             }
             let unpacked = lzf_decompress(&body[8..8 + compressed], raw).map_err(bad)?;
             // Column-major: each field's values for all points, one after the other.
@@ -233,7 +268,8 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
             for f in &fields {
                 let block = &unpacked[start..start + n * f.size * f.count];
                 for c in 0..f.count {
-                    let col: Vec<f64> = (0..n).into_par_iter().map(|i| f.decode(&block[(i * f.count + c) * f.size..])).collect();
+                    let col: Vec<f64> =
+                        (0..n).into_par_iter().map(|i| f.decode(&block[(i * f.count + c) * f.size..])).collect();
                     table.push(col);
                 }
                 start += n * f.size * f.count;
@@ -296,12 +332,22 @@ pub enum PcdEncoding {
 
 /// Writes x y z (and normal_x/y/z, and named scalars) as `double` (SIZE 8, TYPE F) fields.
 /// `binary_compressed` stores the columns one after the other, LZF-framed.
-pub fn write_pcd(path: &Path, points: &[f64], normals: Option<&[f64]>, scalars: &[(&str, &[f64])], data: PcdEncoding) -> Result<()> {
+pub fn write_pcd(
+    path: &Path,
+    points: &[f64],
+    normals: Option<&[f64]>,
+    scalars: &[(&str, &[f64])],
+    data: PcdEncoding,
+) -> Result<()> {
     use std::io::Write;
     let n = points.len() / 3;
     if let Some(nr) = normals {
         if nr.len() != points.len() {
-            return Err(Error::shape("normals", format!("({n}, 3): one normal per point"), format!("({}, 3)", nr.len() / 3)));
+            return Err(Error::shape(
+                "normals",
+                format!("({n}, 3): one normal per point"),
+                format!("({}, 3)", nr.len() / 3),
+            ));
         }
     }
     for (name, v) in scalars {

@@ -111,7 +111,8 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
     if !bytes.starts_with(b"ply") {
         return Err(bad("not a PLY file (it does not start with \"ply\")".into()));
     }
-    let end = find(bytes, b"end_header").ok_or_else(|| bad("no end_header line: the header is truncated or this is not a PLY file".into()))?;
+    let end = find(bytes, b"end_header")
+        .ok_or_else(|| bad("no end_header line: the header is truncated or this is not a PLY file".into()))?;
     let mut body_start = end + b"end_header".len();
     // The header ends with the line break after end_header (\n or \r\n).
     if bytes.get(body_start) == Some(&b'\r') {
@@ -140,7 +141,8 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
                 let (Some(name), Some(count)) = (words.get(1), words.get(2)) else {
                     return Err(at("an element needs a name and a count".into()));
                 };
-                let count = count.parse::<usize>().map_err(|_| at(format!("element count {count:?} is not a number")))?;
+                let count =
+                    count.parse::<usize>().map_err(|_| at(format!("element count {count:?} is not a number")))?;
                 elements.push(Element { name: name.to_string(), count, properties: Vec::new() });
             }
             Some("property") => {
@@ -205,7 +207,10 @@ fn vertex_columns(path: &Path, el: &Element) -> Result<VertexColumns> {
         match p {
             Property::Scalar { name, .. } => names.push(name.clone()),
             Property::List { name, .. } => {
-                return Err(Error::file(path, format!("vertex property {name:?} is a list; machscan reads scalar vertex properties only")))
+                return Err(Error::file(
+                    path,
+                    format!("vertex property {name:?} is a list; machscan reads scalar vertex properties only"),
+                ))
             }
         }
     }
@@ -255,7 +260,10 @@ fn fan(poly: &[u32], out: &mut Vec<[u32; 3]>) {
 
 fn check_face_indices(path: &Path, triangles: &[[u32; 3]], n: usize) -> Result<()> {
     if let Some(t) = triangles.iter().find(|t| t.iter().any(|&v| v as usize >= n)) {
-        return Err(Error::file(path, format!("a face refers to vertex {} but there are only {n} vertices", t.iter().max().unwrap_or(&0))));
+        return Err(Error::file(
+            path,
+            format!("a face refers to vertex {} but there are only {n} vertices", t.iter().max().unwrap_or(&0)),
+        ));
     }
     Ok(())
 }
@@ -265,29 +273,40 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
     let mut vertex: Option<(VertexColumns, usize, Vec<Vec<f64>>)> = None;
     let mut triangles = Vec::new();
     for el in elements {
-        let fixed: Option<usize> = el.properties.iter().map(|p| match p {
-            Property::Scalar { kind, .. } => Some(kind.size()),
-            Property::List { .. } => None,
-        }).sum();
+        let fixed: Option<usize> = el
+            .properties
+            .iter()
+            .map(|p| match p {
+                Property::Scalar { kind, .. } => Some(kind.size()),
+                Property::List { .. } => None,
+            })
+            .sum();
         if el.name == "vertex" {
             let cols = vertex_columns(path, el)?;
             let stride = fixed.unwrap_or(0);
             let need = el.count.checked_mul(stride).ok_or_else(|| Error::file(path, "the vertex count overflows"))?;
             if body.len() - pos < need {
-                return Err(Error::file(path, format!(
-                    "truncated: the header declares {} vertices ({need} bytes) but only {} bytes follow",
-                    el.count, body.len() - pos
-                )));
+                return Err(Error::file(
+                    path,
+                    format!(
+                        "truncated: the header declares {} vertices ({need} bytes) but only {} bytes follow",
+                        el.count,
+                        body.len() - pos
+                    ),
+                ));
             }
             let data = &body[pos..pos + need];
             let kinds: Vec<(Scalar, usize)> = {
                 let mut off = 0;
-                el.properties.iter().map(|p| {
-                    let Property::Scalar { kind, .. } = p else { unreachable!() };
-                    let r = (*kind, off);
-                    off += kind.size();
-                    r
-                }).collect()
+                el.properties
+                    .iter()
+                    .map(|p| {
+                        let Property::Scalar { kind, .. } = p else { unreachable!() };
+                        let r = (*kind, off);
+                        off += kind.size();
+                        r
+                    })
+                    .collect()
             };
             // Column by column, rows in parallel: memory bandwidth, not parsing, bounds this.
             let table: Vec<Vec<f64>> = kinds
@@ -295,7 +314,9 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
                 .map(|&(kind, off)| {
                     let mut col = vec![0.0; el.count];
                     if stride > 0 {
-                        col.par_iter_mut().zip(data.par_chunks_exact(stride)).for_each(|(v, row)| *v = kind.decode(&row[off..], be));
+                        col.par_iter_mut()
+                            .zip(data.par_chunks_exact(stride))
+                            .for_each(|(v, row)| *v = kind.decode(&row[off..], be));
                     }
                     col
                 })
@@ -311,26 +332,41 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
                 match p {
                     Property::Scalar { kind, .. } => {
                         if body.len() - pos < kind.size() {
-                            return Err(Error::file(path, format!("truncated in element {:?}, row {row} of {}", el.name, el.count)));
+                            return Err(Error::file(
+                                path,
+                                format!("truncated in element {:?}, row {row} of {}", el.name, el.count),
+                            ));
                         }
                         pos += kind.size();
                     }
                     Property::List { name, count, item } => {
                         if body.len() - pos < count.size() {
-                            return Err(Error::file(path, format!("truncated in element {:?}, row {row} of {}", el.name, el.count)));
+                            return Err(Error::file(
+                                path,
+                                format!("truncated in element {:?}, row {row} of {}", el.name, el.count),
+                            ));
                         }
                         let c = count.decode(&body[pos..], be);
                         pos += count.size();
                         if !(c >= 0.0) {
-                            return Err(Error::file(path, format!("element {:?}, row {row}: negative list length {c}", el.name)));
+                            return Err(Error::file(
+                                path,
+                                format!("element {:?}, row {row}: negative list length {c}", el.name),
+                            ));
                         }
                         let c = c as usize;
                         let need = c * item.size();
                         if body.len() - pos < need {
-                            return Err(Error::file(path, format!("truncated in element {:?}, row {row} of {}", el.name, el.count)));
+                            return Err(Error::file(
+                                path,
+                                format!("truncated in element {:?}, row {row} of {}", el.name, el.count),
+                            ));
                         }
                         if is_face && (name == "vertex_indices" || name == "vertex_index") {
-                            poly = (0..c).map(|k| item.decode(&body[pos + k * item.size()..], be)).map(|v| if v >= 0.0 { v as u32 } else { u32::MAX }).collect();
+                            poly = (0..c)
+                                .map(|k| item.decode(&body[pos + k * item.size()..], be))
+                                .map(|v| if v >= 0.0 { v as u32 } else { u32::MAX })
+                                .collect();
                         }
                         pos += need;
                     }
@@ -355,7 +391,14 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
             let w = cols.names.len();
             let rows: Vec<(usize, &str)> = lines.by_ref().take(el.count).collect();
             if rows.len() < el.count {
-                return Err(Error::file(path, format!("truncated: the header declares {} vertices but only {} vertex lines follow", el.count, rows.len())));
+                return Err(Error::file(
+                    path,
+                    format!(
+                        "truncated: the header declares {} vertices but only {} vertex lines follow",
+                        el.count,
+                        rows.len()
+                    ),
+                ));
             }
             // Each line parsed straight into its row of a flat table, lines in parallel.
             let mut flat = vec![0.0f64; el.count * w];
@@ -370,7 +413,9 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
                                 Ok(x) => *v = x,
                                 Err(_) => return Some(format!("body line {}: {t:?} is not a number", k + 1)),
                             },
-                            None => return Some(format!("body line {}: {c} values, the vertex has {w} properties", k + 1)),
+                            None => {
+                                return Some(format!("body line {}: {c} values, the vertex has {w} properties", k + 1))
+                            }
                         }
                     }
                     None
@@ -384,20 +429,29 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
         }
         for row in 0..el.count {
             let Some((k, line)) = lines.next() else {
-                return Err(Error::file(path, format!("truncated in element {:?}: {row} of {} lines", el.name, el.count)));
+                return Err(Error::file(
+                    path,
+                    format!("truncated in element {:?}: {row} of {} lines", el.name, el.count),
+                ));
             };
             if el.name != "face" {
                 continue;
             }
             let v: Vec<f64> = line
                 .split_whitespace()
-                .map(|t| t.parse::<f64>().map_err(|_| Error::file(path, format!("body line {}: {t:?} is not a number", k + 1))))
+                .map(|t| {
+                    t.parse::<f64>()
+                        .map_err(|_| Error::file(path, format!("body line {}: {t:?} is not a number", k + 1)))
+                })
                 .collect::<Result<_>>()?;
             // The first list property holds the vertex indices (count, then items).
             if let Some(&c) = v.first() {
                 let c = c as usize;
                 if v.len() < 1 + c {
-                    return Err(Error::file(path, format!("body line {}: the face lists {c} vertices but has {}", k + 1, v.len() - 1)));
+                    return Err(Error::file(
+                        path,
+                        format!("body line {}: the face lists {c} vertices but has {}", k + 1, v.len() - 1),
+                    ));
                 }
                 let poly: Vec<u32> = v[1..1 + c].iter().map(|&x| if x >= 0.0 { x as u32 } else { u32::MAX }).collect();
                 fan(&poly, &mut triangles);
@@ -437,11 +491,21 @@ pub struct PlyScalar<'a> {
 }
 
 /// `points` and `normals` row-major `(N, 3)`; every scalar has N values.
-pub fn write_ply(path: &Path, points: &[f64], normals: Option<&[f64]>, scalars: &[PlyScalar<'_>], binary: bool) -> Result<()> {
+pub fn write_ply(
+    path: &Path,
+    points: &[f64],
+    normals: Option<&[f64]>,
+    scalars: &[PlyScalar<'_>],
+    binary: bool,
+) -> Result<()> {
     let n = points.len() / 3;
     if let Some(nr) = normals {
         if nr.len() != points.len() {
-            return Err(Error::shape("normals", format!("({n}, 3): one normal per point"), format!("({}, 3)", nr.len() / 3)));
+            return Err(Error::shape(
+                "normals",
+                format!("({n}, 3): one normal per point"),
+                format!("({}, 3)", nr.len() / 3),
+            ));
         }
     }
     for s in scalars {

@@ -12,7 +12,9 @@ pub fn read_xyz(path: &Path, delimiter: Option<char>, columns: [usize; 3]) -> Re
     let split = |l: &str| -> Vec<String> {
         match delimiter {
             Some(d) => l.split(d).map(|t| t.trim().to_string()).collect(),
-            None => l.split(|c: char| c.is_whitespace() || c == ',').filter(|t| !t.is_empty()).map(String::from).collect(),
+            None => {
+                l.split(|c: char| c.is_whitespace() || c == ',').filter(|t| !t.is_empty()).map(String::from).collect()
+            }
         }
     };
     let need = columns.iter().max().copied().unwrap_or(0) + 1;
@@ -36,7 +38,8 @@ pub fn read_xyz(path: &Path, delimiter: Option<char>, columns: [usize; 3]) -> Re
             }
             let mut p = [0.0; 3];
             for (j, &c) in columns.iter().enumerate() {
-                p[j] = cells[c].parse::<f64>().map_err(|_| format!("line {}: {:?} is not a number", k + 1, cells[c]))?;
+                p[j] =
+                    cells[c].parse::<f64>().map_err(|_| format!("line {}: {:?} is not a number", k + 1, cells[c]))?;
             }
             Ok(p)
         })
@@ -66,7 +69,8 @@ pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<(Vec<f64>, Vec<[
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
     let Some(first) = lines.next() else { return Ok(None) };
     let head: Vec<&str> = first.split_whitespace().collect();
-    let (Ok(nv), Ok(nf)) = (head.first().unwrap_or(&"").parse::<usize>(), head.get(1).unwrap_or(&"").parse::<usize>()) else {
+    let (Ok(nv), Ok(nf)) = (head.first().unwrap_or(&"").parse::<usize>(), head.get(1).unwrap_or(&"").parse::<usize>())
+    else {
         return Ok(None);
     };
     if head.len() != 2 {
@@ -74,11 +78,17 @@ pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<(Vec<f64>, Vec<[
     }
     let rest: Vec<&str> = lines.collect();
     if rest.len() != nv + nf {
-        return Err(Error::file(path, format!("the mesh header announces {nv} vertices and {nf} faces, but {} lines follow", rest.len())));
+        return Err(Error::file(
+            path,
+            format!("the mesh header announces {nv} vertices and {nf} faces, but {} lines follow", rest.len()),
+        ));
     }
     let mut points = Vec::with_capacity(3 * nv);
     for (k, l) in rest[..nv].iter().enumerate() {
-        let v: Vec<f64> = l.split_whitespace().map(|t| t.parse::<f64>()).collect::<std::result::Result<_, _>>()
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .map(|t| t.parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
             .map_err(|_| Error::file(path, format!("vertex {k}: {l:?} is not three numbers")))?;
         if v.len() != 3 {
             return Err(Error::file(path, format!("vertex {k}: {l:?} is not three numbers")));
@@ -87,7 +97,10 @@ pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<(Vec<f64>, Vec<[
     }
     let mut faces = Vec::with_capacity(nf);
     for (k, l) in rest[nv..].iter().enumerate() {
-        let v: Vec<u32> = l.split_whitespace().map(|t| t.parse::<u32>()).collect::<std::result::Result<_, _>>()
+        let v: Vec<u32> = l
+            .split_whitespace()
+            .map(|t| t.parse::<u32>())
+            .collect::<std::result::Result<_, _>>()
             .map_err(|_| Error::file(path, format!("face {k}: {l:?} is not three vertex indices")))?;
         if v.len() != 3 || v.iter().any(|&i| i as usize >= nv) {
             return Err(Error::file(path, format!("face {k}: {l:?} is not three vertex indices below {nv}")));

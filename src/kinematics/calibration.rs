@@ -43,7 +43,6 @@ impl LeastSquares<6> for MountProblem<'_> {
         3 * self.scs.len()
     }
 
-
     fn normal_equations(&self, x: &SVector<f64, 6>) -> (SMatrix<f64, 6, 6>, SVector<f64, 6>, f64) {
         let r = mount_rotation(x[0], x[1], x[2]);
         let dr = mount_rotation_partials(x[0], x[1], x[2]);
@@ -77,7 +76,11 @@ pub fn calibrate_mount(
 ) -> Result<MountCalibration> {
     let n = scs.len();
     if wcs.len() != n {
-        return Err(Error::shape("wcs_points", format!("({n}, 3): one point per SCS point"), format!("({}, 3)", wcs.len())));
+        return Err(Error::shape(
+            "wcs_points",
+            format!("({n}, 3): one point per SCS point"),
+            format!("({}, 3)", wcs.len()),
+        ));
     }
     if n < 3 {
         return Err(Error::shape("scs_points", "(n, 3) with n >= 3 correspondences", format!("({n}, 3)")));
@@ -89,7 +92,11 @@ pub fn calibrate_mount(
         None => wcs.to_vec(),
         Some(ts) => {
             if ts.len() != n {
-                return Err(Error::shape("axes", format!("({n}, 6): one pose per correspondence"), format!("{} poses", ts.len())));
+                return Err(Error::shape(
+                    "axes",
+                    format!("({n}, 6): one pose per correspondence"),
+                    format!("{} poses", ts.len()),
+                ));
             }
             ts.iter()
                 .zip(wcs)
@@ -115,7 +122,8 @@ pub fn calibrate_mount(
     let ss: f64 = residuals.iter().map(|v| v * v).sum();
     let dof = (3 * n).saturating_sub(6).max(1) as f64;
     let sigma2 = ss / dof;
-    let cov = fit.jtj.try_inverse().map(|m| m * sigma2).unwrap_or_else(|| SMatrix::<f64, 6, 6>::from_element(f64::INFINITY));
+    let cov =
+        fit.jtj.try_inverse().map(|m| m * sigma2).unwrap_or_else(|| SMatrix::<f64, 6, 6>::from_element(f64::INFINITY));
     let mut covariance = [0.0; 36];
     let mut std_errors = [0.0; 6];
     for a in 0..6 {

@@ -110,13 +110,19 @@ impl KinematicChain {
             }
             if let Step::Mirror(d) = step {
                 if d.iter().any(|v| *v != 1.0 && *v != -1.0) {
-                    return Err(Error::invalid("steps", format!("step {k}: a mirror diagonal holds only ±1, got {d:?}")));
+                    return Err(Error::invalid(
+                        "steps",
+                        format!("step {k}: a mirror diagonal holds only ±1, got {d:?}"),
+                    ));
                 }
             }
             if let Step::Rotation(r) = step {
                 let e = (r.transpose() * r - Matrix3::identity()).abs().max();
                 if !(e < 1e-9) || r.determinant() < 0.0 {
-                    return Err(Error::invalid("steps", format!("step {k}: rotation matrix is not a proper rotation (‖RᵀR − I‖ = {e:e})")));
+                    return Err(Error::invalid(
+                        "steps",
+                        format!("step {k}: rotation matrix is not a proper rotation (‖RᵀR − I‖ = {e:e})"),
+                    ));
                 }
             }
             let finite = match step {
@@ -216,12 +222,20 @@ impl KinematicChain {
             return Ok(rows.unwrap_or(0));
         }
         if poses.len() % w != 0 {
-            return Err(Error::shape(name, format!("(F, {w}) with columns {names}"), format!("{} values", poses.len())));
+            return Err(Error::shape(
+                name,
+                format!("(F, {w}) with columns {names}"),
+                format!("{} values", poses.len()),
+            ));
         }
         let f = poses.len() / w;
         if let Some(r) = rows {
             if r != f {
-                return Err(Error::shape(name, format!("({r}, {w}): one pose per row of the other input"), format!("({f}, {w})")));
+                return Err(Error::shape(
+                    name,
+                    format!("({r}, {w}): one pose per row of the other input"),
+                    format!("({f}, {w})"),
+                ));
             }
         }
         crate::error::check_finite(name, poses, w)?;

@@ -7,6 +7,6 @@ mod timing;
 
 pub use calibration::{calibrate_mount, MountCalibration};
 pub use chain::{AngleSource, KinematicChain, Step};
-pub use profiler::{profile_to_points, Profiler, ProfilePoints};
+pub use profiler::{profile_to_points, ProfilePoints, Profiler};
 pub use scan::{frames_to_points, ScanPoints};
 pub use timing::interpolate_poses;

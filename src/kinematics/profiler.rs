@@ -19,12 +19,7 @@ pub struct Profiler {
 
 impl Profiler {
     /// Checks the parameters; `center = None` means `n_readings / 2`.
-    pub fn new(
-        pitch: f64,
-        n_readings: usize,
-        center: Option<f64>,
-        valid_range: Option<(f64, f64)>,
-    ) -> Result<Self> {
+    pub fn new(pitch: f64, n_readings: usize, center: Option<f64>, valid_range: Option<(f64, f64)>) -> Result<Self> {
         if !(pitch.is_finite() && pitch > 0.0) {
             return Err(Error::invalid("pitch", format!("must be a positive number of mm, got {pitch}")));
         }
@@ -34,10 +29,7 @@ impl Profiler {
         }
         let (lo, hi) = valid_range.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
         if lo.is_nan() || hi.is_nan() || lo > hi {
-            return Err(Error::invalid(
-                "valid_range",
-                format!("must be (lo, hi) with lo <= hi, got ({lo}, {hi})"),
-            ));
+            return Err(Error::invalid("valid_range", format!("must be (lo, hi) with lo <= hi, got ({lo}, {hi})")));
         }
         Ok(Profiler { pitch, center, valid_lo: lo, valid_hi: hi })
     }

@@ -26,10 +26,8 @@ pub fn frames_to_points(
     let f = frames.len() / n_readings;
     chain.check_poses("axes", poses, Some(f))?;
     let w = chain.n_axes();
-    let transforms: Vec<Matrix4<f64>> = (0..f)
-        .into_par_iter()
-        .map(|k| chain.transform(&poses[k * w..(k + 1) * w]))
-        .collect();
+    let transforms: Vec<Matrix4<f64>> =
+        (0..f).into_par_iter().map(|k| chain.transform(&poses[k * w..(k + 1) * w])).collect();
     Ok(map_valid_readings(frames, n_readings, profiler, |k, p| {
         let t = &transforms[k];
         crate::geom::transform_point(t, p)
@@ -45,10 +43,8 @@ where
     if n == 0 {
         return ProfilePoints::default();
     }
-    let counts: Vec<usize> = frames
-        .par_chunks(n)
-        .map(|row| row.iter().filter(|d| profiler.is_valid(**d)).count())
-        .collect();
+    let counts: Vec<usize> =
+        frames.par_chunks(n).map(|row| row.iter().filter(|d| profiler.is_valid(**d)).count()).collect();
     let total: usize = counts.iter().sum();
     let mut points = vec![0.0f64; 3 * total];
     let mut frame_index = vec![0i64; total];
@@ -64,21 +60,17 @@ where
             i_rest = ir;
         }
     }
-    slots
-        .into_par_iter()
-        .zip(frames.par_chunks(n))
-        .enumerate()
-        .for_each(|(k, ((p_out, i_out), row))| {
-            let mut j = 0;
-            for (i, &d) in row.iter().enumerate() {
-                if profiler.is_valid(d) {
-                    let q = map(k, [profiler.x(i), 0.0, d]);
-                    p_out[3 * j..3 * j + 3].copy_from_slice(&q);
-                    i_out[j] = k as i64;
-                    j += 1;
-                }
+    slots.into_par_iter().zip(frames.par_chunks(n)).enumerate().for_each(|(k, ((p_out, i_out), row))| {
+        let mut j = 0;
+        for (i, &d) in row.iter().enumerate() {
+            if profiler.is_valid(d) {
+                let q = map(k, [profiler.x(i), 0.0, d]);
+                p_out[3 * j..3 * j + 3].copy_from_slice(&q);
+                i_out[j] = k as i64;
+                j += 1;
             }
-        });
+        }
+    });
     ProfilePoints { points, frame_index, dropped: frames.len() - total }
 }
 
@@ -92,7 +84,13 @@ mod tests {
             for i in 0..n {
                 let v = ((k * 31 + i * 17) % 97) as f64 * 0.01 - 0.3;
                 // Every 13th reading a sentinel, every 29th a NaN.
-                frames.push(if (k + i) % 13 == 0 { -99999.0 } else if (k * i) % 29 == 5 { f64::NAN } else { v });
+                frames.push(if (k + i) % 13 == 0 {
+                    -99999.0
+                } else if (k * i) % 29 == 5 {
+                    f64::NAN
+                } else {
+                    v
+                });
             }
         }
         let poses: Vec<f64> = (0..f)

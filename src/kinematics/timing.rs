@@ -18,7 +18,11 @@ pub fn interpolate_poses(
         return Err(Error::shape("sample_times", "(S,) with S >= 2 samples", format!("({s},)")));
     }
     if samples.len() % s != 0 || samples.is_empty() {
-        return Err(Error::shape("samples", format!("({s}, n_axes): one row per sample time"), format!("{} values", samples.len())));
+        return Err(Error::shape(
+            "samples",
+            format!("({s}, n_axes): one row per sample time"),
+            format!("{} values", samples.len()),
+        ));
     }
     let w = samples.len() / s;
     crate::error::check_finite("sample_times", sample_times, 1)?;
@@ -27,7 +31,13 @@ pub fn interpolate_poses(
     if let Some(k) = sample_times.windows(2).position(|p| !(p[1] > p[0])) {
         return Err(Error::invalid(
             "sample_times",
-            format!("must be strictly increasing, but sample {} ({}) is not after sample {} ({})", k + 1, sample_times[k + 1], k, sample_times[k]),
+            format!(
+                "must be strictly increasing, but sample {} ({}) is not after sample {} ({})",
+                k + 1,
+                sample_times[k + 1],
+                k,
+                sample_times[k]
+            ),
         ));
     }
     if let Some(&c) = rotary.iter().find(|&&c| c >= w) {
@@ -37,7 +47,10 @@ pub fn interpolate_poses(
     if let Some(k) = frame_times.iter().position(|&t| t < t0 || t > t1) {
         return Err(Error::invalid(
             "frame_times",
-            format!("frame {k} at t = {} lies outside the CNC samples [{t0}, {t1}]; poses are not extrapolated", frame_times[k]),
+            format!(
+                "frame {k} at t = {} lies outside the CNC samples [{t0}, {t1}]; poses are not extrapolated",
+                frame_times[k]
+            ),
         ));
     }
     // Unwrap rotary columns: remove jumps larger than π between consecutive samples.

@@ -50,10 +50,7 @@ pub enum LmStop {
 
 impl LmStop {
     pub fn converged(self) -> bool {
-        matches!(
-            self,
-            LmStop::CostBelowTolerance | LmStop::SmallStep | LmStop::SmallGradient
-        )
+        matches!(self, LmStop::CostBelowTolerance | LmStop::SmallStep | LmStop::SmallGradient)
     }
 }
 
@@ -77,13 +74,7 @@ pub fn levenberg_marquardt<const P: usize, Prob: LeastSquares<P>>(
     let n = problem.len().max(1) as f64;
     let mut x = x0;
     let (mut jtj, mut g, mut cost) = problem.normal_equations(&x);
-    let finish = |x, cost, iterations, stop, jtj| LmResult {
-        x,
-        cost,
-        iterations,
-        stop,
-        jtj,
-    };
+    let finish = |x, cost, iterations, stop, jtj| LmResult { x, cost, iterations, stop, jtj };
     if !cost.is_finite() {
         return finish(x, cost, 0, LmStop::Failed, jtj);
     }
@@ -122,11 +113,7 @@ pub fn levenberg_marquardt<const P: usize, Prob: LeastSquares<P>>(
         let cost_new = trial.2;
         // Gain ratio (eq 18): actual over predicted reduction, L(0) − L(h) = ½ hᵀ(μh − g).
         let predicted = 0.5 * h.dot(&(mu * h - g));
-        let rho = if cost_new.is_finite() && predicted > 0.0 {
-            (cost - cost_new) / predicted
-        } else {
-            -1.0
-        };
+        let rho = if cost_new.is_finite() && predicted > 0.0 { (cost - cost_new) / predicted } else { -1.0 };
         if rho > 0.0 {
             x = x_new;
             (jtj, g, cost) = trial;

@@ -41,7 +41,12 @@ fn indices<'py>(py: Python<'py>, v: Vec<usize>) -> PyResult<Bound<'py, PyAny>> {
 /// >>> c = machscan.voxel_downsample(pts, 0.5)
 #[pyfunction]
 #[pyo3(signature = (points, voxel_size, return_index=false))]
-fn voxel_downsample<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, voxel_size: f64, return_index: bool) -> PyResult<Bound<'py, PyAny>> {
+fn voxel_downsample<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    voxel_size: f64,
+    return_index: bool,
+) -> PyResult<Bound<'py, PyAny>> {
     let pts = points_arg(points)?;
     let g = py.detach(|| crate::cloud::voxel_downsample(&pts, voxel_size)).map_err(to_py_err)?;
     let m = g.centroids.len();
@@ -67,7 +72,12 @@ fn voxel_downsample<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, voxel_size
 /// --------
 /// >>> keep = machscan.statistical_outlier_removal(pts, k=20, std_ratio=2.0)
 #[pyfunction]
-fn statistical_outlier_removal<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: i64, std_ratio: f64) -> PyResult<Bound<'py, PyAny>> {
+fn statistical_outlier_removal<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    k: i64,
+    std_ratio: f64,
+) -> PyResult<Bound<'py, PyAny>> {
     let k = count("k", k)?;
     let pts = points_arg(points)?;
     let keep = py.detach(|| crate::cloud::statistical_outlier_removal(&pts, k, std_ratio)).map_err(to_py_err)?;
@@ -86,7 +96,12 @@ fn statistical_outlier_removal<'py>(py: Python<'py>, points: &Bound<'py, PyAny>,
 /// --------
 /// >>> keep = machscan.radius_outlier_removal(pts, radius=0.5, min_neighbors=5)
 #[pyfunction]
-fn radius_outlier_removal<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: f64, min_neighbors: i64) -> PyResult<Bound<'py, PyAny>> {
+fn radius_outlier_removal<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    radius: f64,
+    min_neighbors: i64,
+) -> PyResult<Bound<'py, PyAny>> {
     let min_neighbors = count("min_neighbors", min_neighbors)?;
     let pts = points_arg(points)?;
     let keep = py.detach(|| crate::cloud::radius_outlier_removal(&pts, radius, min_neighbors)).map_err(to_py_err)?;
@@ -106,7 +121,12 @@ fn remove_duplicates<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, tolerance
 /// Indices of the points inside the box ``[min_bound, max_bound]`` (bounds included): crop box /
 /// pass-through filter (a pass-through on one axis is a box infinite on the others).
 #[pyfunction]
-fn crop_box<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, min_bound: &Bound<'py, PyAny>, max_bound: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+fn crop_box<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    min_bound: &Bound<'py, PyAny>,
+    max_bound: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
     let a = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
     let pts = as_points(a.as_slice()?);
     let lo = f64_array(min_bound, "min_bound", &[Dim::Is(3)], "(x, y, z) in mm")?;
@@ -121,7 +141,8 @@ fn crop_box<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, min_bound: &Bound<
 #[pyfunction]
 #[pyo3(signature = (n_points, count, seed=0))]
 fn random_downsample<'py>(py: Python<'py>, n_points: i64, count: i64, seed: i64) -> PyResult<Bound<'py, PyAny>> {
-    let (n_points, how_many, seed) = (self::count("n_points", n_points)?, self::count("count", count)?, self::count("seed", seed)?);
+    let (n_points, how_many, seed) =
+        (self::count("n_points", n_points)?, self::count("count", count)?, self::count("seed", seed)?);
     indices(py, crate::cloud::random_downsample(n_points, how_many, seed as u64))
 }
 
@@ -174,7 +195,9 @@ fn estimate_normals<'py>(
     let pts = points_arg(points)?;
     let (towards, along) = (vec3(towards, "towards")?, vec3(along, "along")?);
     if [towards.is_some(), along.is_some(), consistent].iter().filter(|b| **b).count() > 1 {
-        return Err(pyo3::exceptions::PyValueError::new_err("towards, along, consistent: choose at most one orientation"));
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "towards, along, consistent: choose at most one orientation",
+        ));
     }
     let nbh = neighbourhood(k, radius);
     let normals = py
@@ -198,10 +221,16 @@ fn estimate_normals<'py>(
 /// plane, up to 1/3 for isotropic scatter); neighbourhoods as in :func:`estimate_normals`.
 #[pyfunction]
 #[pyo3(signature = (points, k=20, radius=None))]
-fn surface_variation<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: i64, radius: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+fn surface_variation<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    k: i64,
+    radius: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
     let k = count("k", k)?;
     let pts = points_arg(points)?;
-    let (_, var, _) = py.detach(|| crate::cloud::estimate_normals(&pts, neighbourhood(k, radius))).map_err(to_py_err)?;
+    let (_, var, _) =
+        py.detach(|| crate::cloud::estimate_normals(&pts, neighbourhood(k, radius))).map_err(to_py_err)?;
     let n = var.len();
     to_numpy(py, var, &[n])
 }
@@ -319,14 +348,17 @@ fn octree_simplify<'py>(
     feature_threshold: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (k, eps1, eps2) = (count("k", k)?, count_opt("eps1", eps1)?, count_opt("eps2", eps2)?);
-    let refine = u32::try_from(count("refine", refine)?)
-        .ok()
-        .filter(|&r| r <= 40)
-        .ok_or_else(|| pyo3::exceptions::PyValueError::new_err(format!("refine: at most 40 extra levels, got {refine}")))?;
+    let refine = u32::try_from(count("refine", refine)?).ok().filter(|&r| r <= 40).ok_or_else(|| {
+        pyo3::exceptions::PyValueError::new_err(format!("refine: at most 40 extra levels, got {refine}"))
+    })?;
     let neighbours = match neighbours {
         "xyz" => crate::cloud::NeighbourSpace::Xyz,
         "xy" => crate::cloud::NeighbourSpace::Xy,
-        other => return Err(pyo3::exceptions::PyValueError::new_err(format!("neighbours must be \"xyz\" or \"xy\", got {other:?}"))),
+        other => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "neighbours must be \"xyz\" or \"xy\", got {other:?}"
+            )))
+        }
     };
     let pts = points_arg(points)?;
     let n = pts.len();

@@ -8,7 +8,13 @@ use pyo3::types::PyDict;
 /// Contour error of one contour (SPEC C3–C5); ``machscan.contour_error`` wraps the dict.
 #[pyfunction]
 #[pyo3(signature = (theoretical, actual, delta1=1.0, delta2=1.0))]
-fn contour_error<'py>(py: Python<'py>, theoretical: &Bound<'py, PyAny>, actual: &Bound<'py, PyAny>, delta1: f64, delta2: f64) -> PyResult<Bound<'py, PyDict>> {
+fn contour_error<'py>(
+    py: Python<'py>,
+    theoretical: &Bound<'py, PyAny>,
+    actual: &Bound<'py, PyAny>,
+    delta1: f64,
+    delta2: f64,
+) -> PyResult<Bound<'py, PyDict>> {
     let p = f64_array(theoretical, "theoretical", &[Dim::Any("a"), Dim::Is(3)], "")?;
     let q = f64_array(actual, "actual", &[Dim::Any("b"), Dim::Is(3)], "")?;
     let a = p.shape()[0];
@@ -42,7 +48,12 @@ fn contour_error<'py>(py: Python<'py>, theoretical: &Bound<'py, PyAny>, actual: 
 /// >>> pts = machscan.resample_polyline(cad_vertices, spacing=0.5, closed=True)
 #[pyfunction]
 #[pyo3(signature = (vertices, spacing, closed=true))]
-fn resample_polyline<'py>(py: Python<'py>, vertices: &Bound<'py, PyAny>, spacing: f64, closed: bool) -> PyResult<Bound<'py, PyAny>> {
+fn resample_polyline<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    spacing: f64,
+    closed: bool,
+) -> PyResult<Bound<'py, PyAny>> {
     let v = f64_array(vertices, "vertices", &[Dim::Any("n"), Dim::Is(3)], "")?;
     let out = crate::contour::resample_polyline(&as_points(v.as_slice()?), spacing, closed).map_err(to_py_err)?;
     let m = out.len();
@@ -58,11 +69,18 @@ fn resample_polyline<'py>(py: Python<'py>, vertices: &Bound<'py, PyAny>, spacing
 /// >>> idx = machscan.match_contours(actual_centroids, cad_centroids, max_distance=10.0)
 #[pyfunction]
 #[pyo3(signature = (actual_centroids, theoretical_centroids, max_distance=f64::INFINITY))]
-fn match_contours<'py>(py: Python<'py>, actual_centroids: &Bound<'py, PyAny>, theoretical_centroids: &Bound<'py, PyAny>, max_distance: f64) -> PyResult<Bound<'py, PyAny>> {
+fn match_contours<'py>(
+    py: Python<'py>,
+    actual_centroids: &Bound<'py, PyAny>,
+    theoretical_centroids: &Bound<'py, PyAny>,
+    max_distance: f64,
+) -> PyResult<Bound<'py, PyAny>> {
     let a = f64_array(actual_centroids, "actual_centroids", &[Dim::Any("n"), Dim::Is(3)], "")?;
     let t = f64_array(theoretical_centroids, "theoretical_centroids", &[Dim::Any("m"), Dim::Is(3)], "")?;
     if max_distance.is_nan() || max_distance < 0.0 {
-        return Err(pyo3::exceptions::PyValueError::new_err(format!("max_distance: must be >= 0 mm, got {max_distance}")));
+        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "max_distance: must be >= 0 mm, got {max_distance}"
+        )));
     }
     let (aa, tt) = (as_points(a.as_slice()?), as_points(t.as_slice()?));
     for (name, pts) in [("actual_centroids", &aa), ("theoretical_centroids", &tt)] {

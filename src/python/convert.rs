@@ -58,9 +58,7 @@ fn spec_str(spec: &[Dim]) -> String {
 
 fn numpy_module(py: Python<'_>) -> PyResult<&Bound<'_, PyModule>> {
     static NUMPY: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
-    NUMPY
-        .get_or_try_init(py, || py.import("numpy").map(Bound::unbind))
-        .map(|m| m.bind(py))
+    NUMPY.get_or_try_init(py, || py.import("numpy").map(Bound::unbind)).map(|m| m.bind(py))
 }
 
 /// `obj` as a C-contiguous float64 array of the shape `spec` (with `what` describing the
@@ -78,7 +76,10 @@ pub fn f64_array<'py>(
         return Err(PyValueError::new_err(format!("{name}: expected an array of shape {expected}, got None")));
     }
     let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
-        PyValueError::new_err(format!("{name}: expected an array of shape {expected}, but it cannot be converted to an array ({})", e.value(py)))
+        PyValueError::new_err(format!(
+            "{name}: expected an array of shape {expected}, but it cannot be converted to an array ({})",
+            e.value(py)
+        ))
     })?;
     let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
     if !matches!(kind.as_str(), "f" | "i" | "u") {

@@ -1,8 +1,8 @@
 //! Bindings of `crate::groove`: the batch groove fit.
 use super::convert::{count, count_opt, f64_array, to_numpy, to_py_err, Dim};
 use crate::groove::{fit_frames, level_frame, GrooveOptions, TemplateKind};
-use pyo3::exceptions::PyValueError;
 use numpy::PyUntypedArrayMethods;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -36,7 +36,11 @@ fn fit_grooves<'py>(
     let template = match template {
         "tanh" => TemplateKind::Tanh,
         "v" => TemplateKind::V,
-        other => return Err(PyValueError::new_err(format!("template: expected \"tanh\" (paper 000) or \"v\", got {other:?}"))),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "template: expected \"tanh\" (paper 000) or \"v\", got {other:?}"
+            )))
+        }
     };
     let xa = f64_array(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
     let n = xa.shape()[0];
@@ -99,7 +103,16 @@ fn level_groove_frame<'py>(
     let xa = f64_array(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
     let n = xa.shape()[0];
     let za = f64_array(z, "z", &[Dim::Is(n)], "(one frame, one value per x, mm)")?;
-    let options = GrooveOptions { alpha, nominal_width, window, window_center, spike_threshold, min_depth, min_valid, ..GrooveOptions::default() };
+    let options = GrooveOptions {
+        alpha,
+        nominal_width,
+        window,
+        window_center,
+        spike_threshold,
+        min_depth,
+        min_valid,
+        ..GrooveOptions::default()
+    };
     options.validate().map_err(to_py_err)?;
     let d = PyDict::new(py);
     match level_frame(xa.as_slice()?, za.as_slice()?, &options) {

@@ -39,7 +39,10 @@ fn write_points(
 ) -> PyResult<()> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     if !matches!(ext.as_str(), "ply" | "pcd" | "xyz" | "csv" | "txt" | "pts") {
-        return Err(PyValueError::new_err(format!("path: {}: machscan writes .ply, .pcd, .xyz, .csv, .txt, .pts, got {ext:?}", path.display())));
+        return Err(PyValueError::new_err(format!(
+            "path: {}: machscan writes .ply, .pcd, .xyz, .csv, .txt, .pts, got {ext:?}",
+            path.display()
+        )));
     }
     let pts = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
     let n = pts.shape()[0];
@@ -50,7 +53,8 @@ fn write_points(
     let mut named = Vec::new();
     if let Some(d) = scalars {
         for (k, v) in d.iter() {
-            let name: String = k.extract().map_err(|_| PyValueError::new_err("scalars: keys must be property names (str)"))?;
+            let name: String =
+                k.extract().map_err(|_| PyValueError::new_err("scalars: keys must be property names (str)"))?;
             let arr = f64_array(&v, &name, &[Dim::Is(n)], "(one value per point)")?;
             named.push((name, arr));
         }
@@ -60,7 +64,8 @@ fn write_points(
         Some(a) => Some(a.as_slice()?),
         None => None,
     };
-    let slices: Vec<(String, &[f64])> = named.iter().map(|(k, a)| Ok((k.clone(), a.as_slice()?))).collect::<PyResult<_>>()?;
+    let slices: Vec<(String, &[f64])> =
+        named.iter().map(|(k, a)| Ok((k.clone(), a.as_slice()?))).collect::<PyResult<_>>()?;
     let props: Vec<PlyScalar<'_>> = slices.iter().map(|(k, v)| PlyScalar { name: k, values: v }).collect();
     py.detach(|| match ext.as_str() {
         "ply" => write_ply(&path, p, nr, &props, binary),
@@ -75,7 +80,10 @@ fn write_points(
         }
         _ => {
             if nr.is_some() || !props.is_empty() {
-                return Err(Error::invalid("normals", "a text point file holds x, y, z only: write .ply or .pcd to keep normals and scalars"));
+                return Err(Error::invalid(
+                    "normals",
+                    "a text point file holds x, y, z only: write .ply or .pcd to keep normals and scalars",
+                ));
             }
             crate::io::write_xyz(&path, p, if ext == "csv" { ',' } else { ' ' })
         }
@@ -113,8 +121,17 @@ fn is_mesh_txt(path: &std::path::Path) -> bool {
 /// dict this returns (``points``, ``normals``, ``scalars``, ``triangles``).
 #[pyfunction]
 #[pyo3(signature = (path, delimiter=None, columns=(0, 1, 2)))]
-fn read_cloud<'py>(py: Python<'py>, path: PathBuf, delimiter: Option<char>, columns: (i64, i64, i64)) -> PyResult<Bound<'py, PyDict>> {
-    let columns = (super::convert::count("columns", columns.0)?, super::convert::count("columns", columns.1)?, super::convert::count("columns", columns.2)?);
+fn read_cloud<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    delimiter: Option<char>,
+    columns: (i64, i64, i64),
+) -> PyResult<Bound<'py, PyDict>> {
+    let columns = (
+        super::convert::count("columns", columns.0)?,
+        super::convert::count("columns", columns.1)?,
+        super::convert::count("columns", columns.2)?,
+    );
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let (points, normals, scalars, triangles) = match ext.as_str() {
         "ply" => {
@@ -126,7 +143,8 @@ fn read_cloud<'py>(py: Python<'py>, path: PathBuf, delimiter: Option<char>, colu
             (d.points, d.normals, d.scalars, Vec::new())
         }
         "txt" if delimiter.is_none() && columns == (0, 1, 2) && is_mesh_txt(&path) => {
-            let text = std::fs::read_to_string(&path).map_err(|e| file_error(Error::file(&path, format!("cannot read: {e}"))))?;
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| file_error(Error::file(&path, format!("cannot read: {e}"))))?;
             let (p, t) = crate::io::parse_mesh_txt(&path, &text).map_err(file_error)?.unwrap_or_default();
             (p, None, Vec::new(), t)
         }
@@ -145,17 +163,23 @@ fn read_cloud<'py>(py: Python<'py>, path: PathBuf, delimiter: Option<char>, colu
     let n = points.len() / 3;
     let d = PyDict::new(py);
     d.set_item("points", to_numpy(py, points, &[n, 3])?)?;
-    d.set_item("normals", match normals {
-        Some(v) => to_numpy(py, v, &[n, 3])?,
-        None => py.None().into_bound(py),
-    })?;
+    d.set_item(
+        "normals",
+        match normals {
+            Some(v) => to_numpy(py, v, &[n, 3])?,
+            None => py.None().into_bound(py),
+        },
+    )?;
     let sd = PyDict::new(py);
     for (name, v) in scalars {
         sd.set_item(name, to_numpy(py, v, &[n])?)?;
     }
     d.set_item("scalars", sd)?;
     let t = triangles.len();
-    d.set_item("triangles", to_numpy(py, triangles.into_iter().flatten().map(|v| v as i64).collect::<Vec<_>>(), &[t, 3])?)?;
+    d.set_item(
+        "triangles",
+        to_numpy(py, triangles.into_iter().flatten().map(|v| v as i64).collect::<Vec<_>>(), &[t, 3])?,
+    )?;
     Ok(d)
 }
 
@@ -202,7 +226,8 @@ fn write_toolpath(
         }
         _ => None,
     };
-    let (ps, as_, fs) = (p.as_slice()?, a.as_ref().map(|x| x.as_slice()).transpose()?, f.as_ref().map(|x| x.as_slice()).transpose()?);
+    let (ps, as_, fs) =
+        (p.as_slice()?, a.as_ref().map(|x| x.as_slice()).transpose()?, f.as_ref().map(|x| x.as_slice()).transpose()?);
     py.detach(|| crate::io::write_apt(&path, ps, as_, fs, s.as_deref())).map_err(file_error)
 }
 

@@ -139,7 +139,11 @@ fn scan_points_with<'py>(
     points_result(py, out)
 }
 
-fn poses_array<'py>(chain: &KinematicChain, axes: &Bound<'py, PyAny>, rows: Option<usize>) -> PyResult<numpy::PyReadonlyArrayDyn<'py, f64>> {
+fn poses_array<'py>(
+    chain: &KinematicChain,
+    axes: &Bound<'py, PyAny>,
+    rows: Option<usize>,
+) -> PyResult<numpy::PyReadonlyArrayDyn<'py, f64>> {
     let w = chain.n_axes();
     let what = format!("with columns {}", chain.axis_names().join(", "));
     let rows_dim = match rows {
@@ -157,7 +161,11 @@ fn ac_head_chain(c2_offset: &Bound<'_, PyAny>, mount: &Bound<'_, PyAny>) -> PyRe
     KinematicChain::ac_head(c2, m).map_err(to_py_err)
 }
 
-fn transforms_array<'py>(py: Python<'py>, chain: &KinematicChain, axes: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+fn transforms_array<'py>(
+    py: Python<'py>,
+    chain: &KinematicChain,
+    axes: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
     let axes = poses_array(chain, axes, None)?;
     let f = axes.shape()[0];
     let poses = axes.as_slice()?;
@@ -393,9 +401,7 @@ fn calibrate_mount<'py>(
         }
         _ => None,
     };
-    let cal = py
-        .detach(|| kin::calibrate_mount(&scs_p, &wcs_p, machine.as_deref()))
-        .map_err(to_py_err)?;
+    let cal = py.detach(|| kin::calibrate_mount(&scs_p, &wcs_p, machine.as_deref())).map_err(to_py_err)?;
     let d = PyDict::new(py);
     d.set_item("params", to_numpy(py, cal.params.to_vec(), &[6])?)?;
     d.set_item("rms", cal.rms)?;
@@ -438,7 +444,8 @@ fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<S
     if tup.is_empty() {
         return Err(bad("empty tuple".into()));
     }
-    let kind: String = tup.get_item(0)?.extract().map_err(|_| bad("the first item must be the step kind (str)".into()))?;
+    let kind: String =
+        tup.get_item(0)?.extract().map_err(|_| bad("the first item must be the step kind (str)".into()))?;
     let arg = |i: usize| tup.get_item(i).map_err(|_| bad(format!("\"{kind}\" needs {} arguments", i)));
     let axis = |o: Bound<'_, PyAny>| -> PyResult<Axis> {
         let s: String = o.extract().map_err(|_| bad("axis must be \"x\", \"y\" or \"z\"".into()))?;
@@ -446,14 +453,18 @@ fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<S
     };
     let column = |o: Bound<'_, PyAny>| -> PyResult<usize> {
         if let Ok(s) = o.extract::<String>() {
-            return names.iter().position(|n| *n == s).ok_or_else(|| bad(format!("unknown axis name {s:?}; axes are {names:?}")));
+            return names
+                .iter()
+                .position(|n| *n == s)
+                .ok_or_else(|| bad(format!("unknown axis name {s:?}; axes are {names:?}")));
         }
         o.extract::<usize>().map_err(|_| bad("a pose column is an index or an axis name".into()))
     };
     Ok(match kind.as_str() {
         "translate" => Step::Translate(f64_vector::<3>(&arg(1)?, "steps", "translation (x, y, z)")?),
         "translate_axes" => {
-            let cols: Vec<Option<Bound<'_, PyAny>>> = arg(1)?.extract().map_err(|_| bad("needs three columns (None for 0)".into()))?;
+            let cols: Vec<Option<Bound<'_, PyAny>>> =
+                arg(1)?.extract().map_err(|_| bad("needs three columns (None for 0)".into()))?;
             if cols.len() != 3 {
                 return Err(bad(format!("needs three columns, got {}", cols.len())));
             }
@@ -466,7 +477,10 @@ fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<S
             }
             Step::TranslateAxes(c)
         }
-        "rotate" => Step::Rotate(axis(arg(1)?)?, AngleSource::Constant(arg(2)?.extract().map_err(|_| bad("angle must be a number (rad)".into()))?)),
+        "rotate" => Step::Rotate(
+            axis(arg(1)?)?,
+            AngleSource::Constant(arg(2)?.extract().map_err(|_| bad("angle must be a number (rad)".into()))?),
+        ),
         "rotate_axis" => Step::Rotate(axis(arg(1)?)?, AngleSource::AxisColumn(column(arg(2)?)?)),
         "rotation" => {
             let r = f64_array(&arg(1)?, "steps", &[Dim::Is(3), Dim::Is(3)], "rotation matrix")?;
@@ -474,7 +488,11 @@ fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<S
             Step::Rotation(nalgebra::Matrix3::from_row_slice(s))
         }
         "mirror" => Step::Mirror(f64_vector::<3>(&arg(1)?, "steps", "mirror diagonal (±1, ±1, ±1)")?),
-        other => return Err(bad(format!("unknown step kind {other:?}; use translate, translate_axes, rotate, rotate_axis, rotation or mirror"))),
+        other => {
+            return Err(bad(format!(
+                "unknown step kind {other:?}; use translate, translate_axes, rotate, rotate_axis, rotation or mirror"
+            )))
+        }
     })
 }
 
@@ -482,11 +500,8 @@ fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<S
 impl PyKinematicChain {
     #[new]
     fn new(steps: &Bound<'_, PyList>, axis_names: Vec<String>) -> PyResult<Self> {
-        let parsed = steps
-            .iter()
-            .enumerate()
-            .map(|(k, s)| parse_step(&s, k, &axis_names))
-            .collect::<PyResult<Vec<_>>>()?;
+        let parsed =
+            steps.iter().enumerate().map(|(k, s)| parse_step(&s, k, &axis_names)).collect::<PyResult<Vec<_>>>()?;
         Ok(PyKinematicChain { inner: KinematicChain::new(parsed, axis_names).map_err(to_py_err)? })
     }
 
@@ -529,12 +544,22 @@ impl PyKinematicChain {
     }
 
     /// Points ``(N, 3)``, each with its own pose ``axes (N, n_axes)`` → ``(N, 3)``.
-    fn transform_points<'py>(&self, py: Python<'py>, points: &Bound<'py, PyAny>, axes: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn transform_points<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+        axes: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         apply_chain(py, &self.inner, points, "points", axes, false)
     }
 
     /// Directions or normals ``(N, 3)`` with poses ``(N, n_axes)``: turned, not moved.
-    fn transform_vectors<'py>(&self, py: Python<'py>, vectors: &Bound<'py, PyAny>, axes: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn transform_vectors<'py>(
+        &self,
+        py: Python<'py>,
+        vectors: &Bound<'py, PyAny>,
+        axes: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         apply_chain(py, &self.inner, vectors, "vectors", axes, true)
     }
 

@@ -33,7 +33,12 @@ pub(crate) fn as_points(s: &[f64]) -> Vec<[f64; 3]> {
 /// >>> labels = machscan.euclidean_clusters(centres, radius=5.0, k=5)
 #[pyfunction]
 #[pyo3(signature = (points, radius, k=None))]
-fn euclidean_clusters<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: f64, k: Option<i64>) -> PyResult<Bound<'py, PyAny>> {
+fn euclidean_clusters<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    radius: f64,
+    k: Option<i64>,
+) -> PyResult<Bound<'py, PyAny>> {
     let k = super::convert::count_opt("k", k)?;
     let arr = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
     let n = arr.shape()[0];
@@ -61,12 +66,18 @@ fn euclidean_clusters<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, radius: 
 /// --------
 /// >>> idx, dist = machscan.nearest_neighbors(model, measured)
 #[pyfunction]
-fn nearest_neighbors<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, queries: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+fn nearest_neighbors<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    queries: &Bound<'py, PyAny>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     use rayon::prelude::*;
     let p = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
     let q = f64_array(queries, "queries", &[Dim::Any("M"), Dim::Is(3)], "")?;
     if p.shape()[0] == 0 {
-        return Err(pyo3::exceptions::PyValueError::new_err("points: expected at least one point to search, got (0, 3)"));
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "points: expected at least one point to search, got (0, 3)",
+        ));
     }
     let m = q.shape()[0];
     let (pp, qq) = (as_points(p.as_slice()?), as_points(q.as_slice()?));
@@ -74,7 +85,13 @@ fn nearest_neighbors<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, queries: 
     let (idx, dist): (Vec<i64>, Vec<f64>) = py
         .detach(|| -> crate::Result<_> {
             let index = crate::spatial::PointIndex::new(&pp)?;
-            Ok(qq.par_iter().map(|x| { let (i, d) = index.nearest(x); (i as i64, d) }).unzip())
+            Ok(qq
+                .par_iter()
+                .map(|x| {
+                    let (i, d) = index.nearest(x);
+                    (i as i64, d)
+                })
+                .unzip())
         })
         .map_err(to_py_err)?;
     Ok((to_numpy(py, idx, &[m])?, to_numpy(py, dist, &[m])?))
@@ -106,11 +123,18 @@ fn nearest_neighbors<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, queries: 
 /// >>> spacing = np.median(dist[:, 1])
 #[pyfunction]
 #[pyo3(signature = (points, k, radius=None))]
-fn knn_graph<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, k: i64, radius: Option<f64>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+fn knn_graph<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    k: i64,
+    radius: Option<f64>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let k = super::convert::count("k", k)?;
     if let Some(r) = radius {
         if !(r.is_finite() && r > 0.0) {
-            return Err(pyo3::exceptions::PyValueError::new_err(format!("radius: must be a positive distance in mm, got {r}")));
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "radius: must be a positive distance in mm, got {r}"
+            )));
         }
     }
     let p = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;

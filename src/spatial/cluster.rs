@@ -90,7 +90,9 @@ fn union_within_radius_grid(points: &[[f64; 3]], radius: f64, parent: &mut [u32]
     // A hair under r/√3, so that two points of one cell are strictly closer than r.
     let edge = radius / 3f64.sqrt() * (1.0 - 1e-12);
     let r2 = radius * radius;
-    let cell_of = |p: &[f64; 3]| -> Cell { [(p[0] / edge).floor() as i64, (p[1] / edge).floor() as i64, (p[2] / edge).floor() as i64] };
+    let cell_of = |p: &[f64; 3]| -> Cell {
+        [(p[0] / edge).floor() as i64, (p[1] / edge).floor() as i64, (p[2] / edge).floor() as i64]
+    };
     // Points sorted by cell (stable: within a cell, by index).
     let mut order: Vec<u32> = (0..n as u32).collect();
     let cells: Vec<Cell> = points.par_iter().map(cell_of).collect();

@@ -15,7 +15,10 @@ impl PointIndex {
     /// Builds the index over `points` (finite, at most u32::MAX − 1 of them); items are indices.
     pub fn new(points: &[[f64; 3]]) -> Result<Self> {
         if points.len() >= u32::MAX as usize {
-            return Err(Error::invalid("points", format!("{} points exceed the 2^32 − 1 an index can hold", points.len())));
+            return Err(Error::invalid(
+                "points",
+                format!("{} points exceed the 2^32 − 1 an index can hold", points.len()),
+            ));
         }
         if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
             return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));

@@ -105,7 +105,13 @@ impl CloudNeighbours {
         let order: Vec<u32> = items.par_iter().map(|it| it.1).collect();
         let xyz = [0, 1, 2].map(|k| items.par_iter().map(|it| it.0[k]).collect::<Vec<f64>>());
         drop(items);
-        let mut tree = CloudNeighbours { order, xyz, nodes: Vec::with_capacity(4 * n / LEAF_SIZE + 1), leaves: Vec::new(), extent2: 0.0 };
+        let mut tree = CloudNeighbours {
+            order,
+            xyz,
+            nodes: Vec::with_capacity(4 * n / LEAF_SIZE + 1),
+            leaves: Vec::new(),
+            extent2: 0.0,
+        };
         if n > 0 {
             tree.build_nodes(0, n);
             let root = &tree.nodes[0];
@@ -240,7 +246,16 @@ impl CloudNeighbours {
 
     /// The k nearest (strictly within `cap2` when finite) of every point of one leaf.
     #[allow(clippy::too_many_arguments)]
-    fn leaf_knn<T>(&self, leaf: u32, k: usize, cap2: f64, s: &mut Scratch, guess: &mut f64, f: &mut impl FnMut(usize, &[Neighbour]) -> T, out: &mut Vec<T>) {
+    fn leaf_knn<T>(
+        &self,
+        leaf: u32,
+        k: usize,
+        cap2: f64,
+        s: &mut Scratch,
+        guess: &mut f64,
+        f: &mut impl FnMut(usize, &[Neighbour]) -> T,
+        out: &mut Vec<T>,
+    ) {
         let (a, b, lo, hi) = self.leaf(leaf);
         let m = b - a;
         if k == 0 {
@@ -286,7 +301,11 @@ impl CloudNeighbours {
                 }
                 for (r, &(bits, index, j)) in s.sel[..taken].iter().enumerate() {
                     let j = j as usize;
-                    s.found[qi * k + r] = Neighbour { index: index as usize, dist2: f64::from_bits(bits), point: [s.cand.x[j], s.cand.y[j], s.cand.z[j]] };
+                    s.found[qi * k + r] = Neighbour {
+                        index: index as usize,
+                        dist2: f64::from_bits(bits),
+                        point: [s.cand.x[j], s.cand.y[j], s.cand.z[j]],
+                    };
                 }
                 s.count[qi] = taken;
                 s.kth2[qi] = if taken == k { f64::from_bits(s.sel[k - 1].0) } else { f64::INFINITY };
@@ -433,7 +452,15 @@ fn box_gap2(alo: &[f64; 3], ahi: &[f64; 3], blo: &[f64; 3], bhi: &[f64; 3]) -> f
 /// by (squared distance, index), written to `sel`; returns how many. `pos` is scratch as long as
 /// `d2`. Entries are (distance bits, index, candidate position): the bits of a non-negative float
 /// order as the float does, and integer tuples compare fast.
-fn select(d2: &[f64], index: &[u32], bound: f64, cap2: f64, k: usize, pos: &mut [u32], sel: &mut Vec<(u64, u32, u32)>) -> usize {
+fn select(
+    d2: &[f64],
+    index: &[u32],
+    bound: f64,
+    cap2: f64,
+    k: usize,
+    pos: &mut [u32],
+    sel: &mut Vec<(u64, u32, u32)>,
+) -> usize {
     // Branch-free compaction of positions: most candidates fail the test, and unpredictably.
     let limit = if bound < cap2 { bound } else { cap2.next_down() };
     let mut n = 0;
@@ -552,7 +579,8 @@ mod tests {
         let tree = CloudNeighbours::new(&pts).unwrap();
         for (k, radius) in [(7, None), (25, Some(0.4))] {
             let (index, dist2) = tree.knn_graph(k, radius);
-            let lists = tree.map_knn(k, radius, |_, nb| nb.iter().map(|n| (n.index as u32, n.dist2)).collect::<Vec<_>>());
+            let lists =
+                tree.map_knn(k, radius, |_, nb| nb.iter().map(|n| (n.index as u32, n.dist2)).collect::<Vec<_>>());
             for (i, list) in lists.iter().enumerate() {
                 let mut row: Vec<(u32, f64)> = (0..k).map(|r| (index[i * k + r], dist2[i * k + r])).collect();
                 assert!(row[list.len()..].iter().all(|&(j, d)| j == u32::MAX && d == f64::INFINITY));
