@@ -37,7 +37,10 @@ pub type Result<T> = std::result::Result<T, Error>;
 /// `values` is row-major with `width` columns.
 pub fn check_finite(name: &str, values: &[f64], width: usize) -> Result<()> {
     if let Some(pos) = values.iter().position(|v| !v.is_finite()) {
-        let (row, col) = if width > 0 { (pos / width, pos % width) } else { (pos, 0) };
+        let (row, col) = match pos.checked_div(width) {
+            Some(row) => (row, pos % width),
+            None => (pos, 0),
+        };
         return Err(Error::invalid(
             name,
             format!("must be finite, found {} at row {}, column {}", values[pos], row, col),

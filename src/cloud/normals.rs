@@ -207,11 +207,14 @@ pub fn orient_consistent(points: &[[f64; 3]], normals: &mut [[f64; 3]], k: usize
 /// at its foot (u, v) = (0, 0), corrected for the fitted slope (d, e). Signs follow the normal:
 /// positive where the surface bends towards it (a sphere with inward normals has k1 = k2 = 1/R,
 /// with outward normals −1/R); a point with fewer than 6 neighbours gets NaN.
+/// Principal curvatures `k1 >= k2` (1/mm) and their unit directions at one point.
+pub type PrincipalCurvature = ([f64; 2], [[f64; 3]; 2]);
+
 pub fn principal_curvatures(
     points: &[[f64; 3]],
     normals: &[[f64; 3]],
     nbh: Neighbourhood,
-) -> Result<Vec<([f64; 2], [[f64; 3]; 2])>> {
+) -> Result<Vec<PrincipalCurvature>> {
     nbh.check()?;
     if normals.len() != points.len() {
         return Err(Error::shape(

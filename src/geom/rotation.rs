@@ -111,7 +111,7 @@ mod tests {
     #[rstest]
     #[case(0.0, 0.0, 0.0)]
     #[case(0.3, -1.2, 2.5)]
-    #[case(1.5707, 0.1, -3.0)]
+    #[case(1.5, 0.1, -3.0)]
     #[case(-0.7, 3.1, 0.01)]
     fn mount_rotation_is_orthonormal_and_matches_spec(#[case] theta: f64, #[case] psi: f64, #[case] phi: f64) {
         let r = mount_rotation(theta, psi, phi);

@@ -718,7 +718,7 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<G
             ));
         }
     }
-    if z.len() % n != 0 {
+    if !z.len().is_multiple_of(n) {
         return Err(Error::shape("z", format!("(F, {n}): one column per x"), format!("{} values", z.len())));
     }
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {

@@ -80,7 +80,7 @@ mod tests {
         let data: Vec<u8> = (0..1000u32).map(|i| (i * 7 % 251) as u8).collect();
         assert_eq!(lzf_decompress(&lzf_store(&data), data.len()).unwrap(), data);
         // "abc" then a back reference of length 9 at distance 3: "abcabcabcabc".
-        let stream = [2u8, b'a', b'b', b'c', (7 << 5) as u8 | 0, 0, 2];
+        let stream = [2u8, b'a', b'b', b'c', 7 << 5, 0, 2];
         // len = 7 + 0 + 2 = 9, back = (0 << 8) + 2 + 1 = 3
         assert_eq!(lzf_decompress(&stream, 12).unwrap(), b"abcabcabcabc");
     }

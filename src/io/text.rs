@@ -62,10 +62,13 @@ pub fn write_xyz(path: &Path, points: &[f64], delimiter: char) -> Result<()> {
     w.flush().map_err(io)
 }
 
+/// Vertices `(V, 3)` row-major and triangles of vertex indices.
+pub type MeshArrays = (Vec<f64>, Vec<[u32; 3]>);
+
 /// The plain mesh text format of the geodesic test meshes (pygeodesic / Kirsanov): a line
 /// `n_vertices n_faces`, then n_vertices lines `x y z` and n_faces lines of three 0-based
 /// vertex indices. `None` when the text does not have that shape (it is then a point file).
-pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<(Vec<f64>, Vec<[u32; 3]>)>> {
+pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<MeshArrays>> {
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
     let Some(first) = lines.next() else { return Ok(None) };
     let head: Vec<&str> = first.split_whitespace().collect();

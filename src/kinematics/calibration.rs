@@ -56,8 +56,8 @@ impl LeastSquares<6> for MountProblem<'_> {
             cost += 0.5 * res.norm_squared();
             // J rows for the 3 components: [dR_k s | I].
             let mut j = SMatrix::<f64, 3, 6>::zeros();
-            for k in 0..3 {
-                j.fixed_view_mut::<3, 1>(0, k).copy_from(&(dr[k] * s));
+            for (k, drk) in dr.iter().enumerate() {
+                j.fixed_view_mut::<3, 1>(0, k).copy_from(&(drk * s));
             }
             j.fixed_view_mut::<3, 3>(0, 3).copy_from(&nalgebra::Matrix3::identity());
             jtj += j.transpose() * j;
@@ -155,8 +155,8 @@ mod tests {
         let scs: Vec<[f64; 3]> = (0..60).map(|i| [(i as f64 - 30.0) * 1.3, 0.0, ((i * 13) % 7) as f64 - 3.0]).collect();
         let wcs: Vec<[f64; 3]> = scs.iter().map(|s| (r * Vector3::from(*s) + d).into()).collect();
         let cal = calibrate_mount(&scs, &wcs, None).unwrap();
-        for k in 0..6 {
-            assert!((cal.params[k] - truth[k]).abs() < 1e-9, "{:?}", cal.params);
+        for (p, t) in cal.params.iter().zip(truth) {
+            assert!((p - t).abs() < 1e-9, "{:?}", cal.params);
         }
         assert!(cal.rms < 1e-9);
         assert!(cal.converged);

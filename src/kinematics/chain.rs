@@ -221,7 +221,7 @@ impl KinematicChain {
         if w == 0 {
             return Ok(rows.unwrap_or(0));
         }
-        if poses.len() % w != 0 {
+        if !poses.len().is_multiple_of(w) {
             return Err(Error::shape(
                 name,
                 format!("(F, {w}) with columns {names}"),

@@ -17,7 +17,7 @@ pub fn interpolate_poses(
     if s < 2 {
         return Err(Error::shape("sample_times", "(S,) with S >= 2 samples", format!("({s},)")));
     }
-    if samples.len() % s != 0 || samples.is_empty() {
+    if !samples.len().is_multiple_of(s) || samples.is_empty() {
         return Err(Error::shape(
             "samples",
             format!("({s}, n_axes): one row per sample time"),

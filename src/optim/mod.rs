@@ -8,6 +8,9 @@ use nalgebra::{SMatrix, SVector};
 pub trait LeastSquares<const P: usize> {
     /// Number of residuals.
     fn len(&self) -> usize;
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
     /// `(JᵀJ, Jᵀf, ½ Σ f_i²)` at `x`, J the Jacobian of f.
     fn normal_equations(&self, x: &SVector<f64, P>) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64);
 }
