@@ -111,7 +111,7 @@ def main() -> None:
         nns.knn_index()
         return nns.knn_search(open3d.core.Tensor(p200), 20)
 
-    print("neighbour search (tree built in the call):")
+    print("neighbor search (tree built in the call):")
     row("k-nearest graph k=20, 200 k", best(lambda: machscan.knn_graph(p200, 20)), best(o3_knn))
     row("k-nearest graph k=20, 200 k", best(lambda: machscan.knn_graph(p200, 20)),
         best(lambda: cKDTree(p200).query(p200, 20, workers=-1)), "scipy cKDTree (2 workers)")

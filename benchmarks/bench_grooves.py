@@ -5,7 +5,7 @@
    scipy.optimize.least_squares(method="lm") loop on the same levelled frames (the levelling
    is not timed for scipy). scipy runs on a subset (--scipy-frames) because it is slow; both
    are reported as frames/s. Issue #3 target: >= 50x scipy and >= 40,000 frames/s.
-2. machscan.euclidean_clusters on >= 500,000 groove-centre-like points against Open3D
+2. machscan.euclidean_clusters on >= 500,000 groove-center-like points against Open3D
    cluster_dbscan(eps, min_points=1), same points, same partition checked. Target: >= 2x.
 
     python benchmarks/bench_grooves.py [--frames 20000] [--scipy-frames 2000] [--points 500000]
@@ -75,7 +75,7 @@ def bench_clusters(n_points: int) -> None:
     import open3d
 
     rng = np.random.default_rng(1)
-    # Groove centres: ~0.1 mm apart along 400 closed contours on a 2 m x 2 m skin.
+    # Groove centers: ~0.1 mm apart along 400 closed contours on a 2 m x 2 m skin.
     per = n_points // 400
     pts = []
     for c in range(400):

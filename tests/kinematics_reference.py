@@ -175,7 +175,7 @@ def scan_to_wcs_np(frames, axes, pitch, c2_offset, mount, center=None, valid_ran
     c2_offset, mount : array_like
         See :func:`ac_head_transforms_np`.
     center : float, optional
-        Centre reading index ``i0``; default ``N / 2``.
+        Center reading index ``i0``; default ``N / 2``.
     valid_range : (float, float), optional
         Inclusive measuring range (mm).
 

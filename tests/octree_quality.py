@@ -89,7 +89,7 @@ def compare_held_out(points: np.ndarray, d_min: float, seed: int = 1, **options)
     )
 
 
-RULES = {"paper": {}, "xy, refine 2": {"neighbours": "xy", "refine": 2}}
+RULES = {"paper": {}, "xy, refine 2": {"neighbors": "xy", "refine": 2}}
 
 
 def main() -> None:

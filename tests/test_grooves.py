@@ -68,7 +68,7 @@ def test_noisy_frames_statistics_and_standard_errors():
     z, x0, d, w = noisy_frames(2000, seed=2)
     fits = machscan.fit_grooves(X, z)
     assert fits.ok.all()
-    # Centre of a tilted frame is not where the untilted truth is; compare depth/width only.
+    # Center of a tilted frame is not where the untilted truth is; compare depth/width only.
     err_d, err_w = fits.depth - d, fits.width - w
     assert abs(np.median(err_d)) < 0.001 and abs(np.median(err_w)) < 0.001
     # The reported standard errors match the actual scatter (within 20 %).
@@ -84,7 +84,7 @@ def test_fitted_alpha():
     assert abs(fit.alpha[0] - 11.0) < 1e-4
 
 
-def test_window_excludes_a_neighbouring_groove():
+def test_window_excludes_a_neighboring_groove():
     z = template(X, 0.05, 0.0, 0.3, 0.48) + template(X, 1.6, 0.0, 0.3, 0.48)
     both = machscan.fit_grooves(X, z[None, :])
     assert both.status[0] == GrooveStatus.TWO_GROOVES

@@ -24,13 +24,13 @@ def test_width_and_depth_per_frame_against_truth(run):
     assert np.median(d_rel) <= 0.015
 
 
-def test_groove_centres_in_the_wcs(run):
+def test_groove_centers_in_the_wcs(run):
     scan, truth, r = run
     ok = r.used
     assert ok.mean() > 0.98
-    err = np.linalg.norm(r.centre_wcs[ok] - truth.centre_wcs[ok], axis=1)
+    err = np.linalg.norm(r.center_wcs[ok] - truth.center_wcs[ok], axis=1)
     assert np.sqrt(np.mean(err**2)) <= 0.010
-    assert np.isnan(r.centre_wcs[~ok]).all()
+    assert np.isnan(r.center_wcs[~ok]).all()
 
 
 def test_every_contour_found_and_matched(run):
@@ -53,9 +53,9 @@ def test_contour_error_recovers_the_truth(run):
 
 def test_decomposition_shares_within_5_points_of_truth(run):
     scan, truth, r = run
-    off = np.linalg.norm(truth.centre_offset, axis=1).mean()
-    bend = np.abs(truth.centre_bend).mean()
-    loc = np.abs(truth.centre_local).mean()
+    off = np.linalg.norm(truth.center_offset, axis=1).mean()
+    bend = np.abs(truth.center_bend).mean()
+    loc = np.abs(truth.center_local).mean()
     true_shares = np.array([off, bend, loc]) / (off + bend + loc)
     d = r.decomposition
     got = np.array([d.offset_share, d.bending_share, d.local_share])

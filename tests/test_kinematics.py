@@ -72,7 +72,7 @@ def test_profile_to_points_matches_definition():
     np.testing.assert_allclose(pts[:, 0], (i - 17.5) * 0.025, rtol=0, atol=0)
     np.testing.assert_array_equal(pts[:, 1], 0.0)
     np.testing.assert_array_equal(pts[:, 2], frames[valid])
-    # Default centre is N / 2 (paper 000).
+    # Default center is N / 2 (paper 000).
     pts2, _ = machscan.profile_to_points(frames[:1], 0.5)
     assert pts2[0, 0] == (0 - 20) * 0.5
 

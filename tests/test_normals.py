@@ -1,4 +1,4 @@
-"""Normals against Open3D's estimate_normals on the same neighbourhoods; curvature against
+"""Normals against Open3D's estimate_normals on the same neighborhoods; curvature against
 spheres and cylinders of known radius."""
 
 from pathlib import Path

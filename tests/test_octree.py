@@ -46,7 +46,7 @@ def test_refined_octree_beats_the_voxel_grid_at_equal_point_count(plate, drafted
     """Issue #4 §4, with the options beyond the paper: closer to the original points than
     Open3D's voxel grid at the same count, in max and RMS, and keeping the outline."""
     points = plate if wall == "vertical" else drafted_plate
-    octree, voxel = compare(points, d_min, neighbours="xy", refine=2)
+    octree, voxel = compare(points, d_min, neighbors="xy", refine=2)
     assert abs(octree.count - voxel.count) <= 0.005 * octree.count
     assert octree.max < voxel.max and octree.rms < voxel.rms
     assert octree.outside < 0.001 < voxel.outside
@@ -57,7 +57,7 @@ def test_refined_octree_held_out(drafted_plate, d_min):
     """Simplify half the points, measure the other half: no measured point was kept. On the
     drafted plate the refined octree is closer than the voxel grid, and within 25 % of the
     floor (the surface through the whole half: what the samples themselves know)."""
-    octree, voxel, floor = compare_held_out(drafted_plate, d_min, neighbours="xy", refine=2)
+    octree, voxel, floor = compare_held_out(drafted_plate, d_min, neighbors="xy", refine=2)
     assert octree.max < voxel.max and octree.rms < voxel.rms
     assert octree.rms < 1.25 * floor.rms
 
@@ -67,7 +67,7 @@ def test_paper_rule_at_equal_point_count(plate, drafted_plate, d_min):
     """The rule as written (measured, see BENCHMARKS.md): it keeps creases — on the drafted
     plate its surface is closer in RMS than the voxel grid's — and the outline, but not height
     steps: on the vertical walls its RMS is worse (1.2–1.5× the voxel grid's) because 3D
-    neighbourhoods never reach across a 3 mm step, so no leaf there knows it holds a feature."""
+    neighborhoods never reach across a 3 mm step, so no leaf there knows it holds a feature."""
     octree, voxel = compare(drafted_plate, d_min)
     assert octree.rms < voxel.rms
     assert octree.outside < 0.001 < voxel.outside
@@ -78,9 +78,9 @@ def test_paper_rule_at_equal_point_count(plate, drafted_plate, d_min):
 
 def test_refine_keeps_the_paper_points_away_from_features(plate):
     """Refinement only adds points in feature leaves: away from the walls the kept set equals the
-    paper's rule with the same neighbours."""
-    paper = set(machscan.octree_simplify(plate, 2.0, neighbours="xy").tolist())
-    refined = set(machscan.octree_simplify(plate, 2.0, neighbours="xy", refine=2).tolist())
+    paper's rule with the same neighbors."""
+    paper = set(machscan.octree_simplify(plate, 2.0, neighbors="xy").tolist())
+    refined = set(machscan.octree_simplify(plate, 2.0, neighbors="xy", refine=2).tolist())
     x, y = plate[:, 0], plate[:, 1]
     # Far (> 6 mm, three leaves) from the pocket walls and the boss.
     far = ((x < 14) | (x > 76) | (y < 9) | (y > 66)) | (
@@ -96,7 +96,7 @@ def test_refine_keeps_the_paper_points_away_from_features(plate):
         (dict(d_min=0.0), "d_min"),
         (dict(d_min=1.0, eps1=0), "eps1"),
         (dict(d_min=1.0, normals=np.zeros((3, 3))), "normals"),
-        (dict(d_min=1.0, neighbours="z"), "neighbours"),
+        (dict(d_min=1.0, neighbors="z"), "neighbors"),
         (dict(d_min=1.0, refine=2, feature_threshold=-1.0), "feature_threshold"),
         (dict(d_min=1e-12, refine=8), "d_min"),
         (dict(d_min=1.0, refine=2**32 - 1), "refine"),

@@ -96,17 +96,17 @@ def test_contour_error_map_has_one_collection_per_contour(run):
     lo = min(c.error.errors.min() for c in report.contours)
     hi = max(c.error.errors.max() for c in report.contours)
     for lc, c in zip(lcs, report.contours):
-        colour = lc.get_array()
-        assert 250 < len(colour) <= 500
-        assert lo <= colour.min() and colour.max() <= hi
+        color = lc.get_array()
+        assert 250 < len(color) <= 500
+        assert lo <= color.min() and color.max() <= hi
         # Chunk means of e_i: their mean is the contour's mean error up to the short last chunk.
-        assert colour.mean() == pytest.approx(c.error.mean, abs=0.002)
+        assert color.mean() == pytest.approx(c.error.mean, abs=0.002)
         # Segments follow the CAD contour and close it.
         segs = lc.get_segments()
         np.testing.assert_allclose(segs[0][0], c.theoretical[0, :2])
         np.testing.assert_allclose(segs[-1][1], c.theoretical[0, :2])
-    (centres,) = [col for col in ax.collections if isinstance(col, PathCollection)]
-    assert len(centres.get_offsets()) == np.isfinite(report.centre_wcs).all(axis=1).sum()
+    (centers,) = [col for col in ax.collections if isinstance(col, PathCollection)]
+    assert len(centers.get_offsets()) == np.isfinite(report.center_wcs).all(axis=1).sum()
     worst = max(report.contours, key=lambda c: c.error.max)
     (marker,) = [ln for ln in ax.get_lines() if ln.get_marker() == "x"]
     np.testing.assert_allclose([marker.get_xdata()[0], marker.get_ydata()[0]],
@@ -157,7 +157,7 @@ def test_levelled_frame_template_matches_the_fit(run):
         (template,) = _data_lines(ax, "fitted template")
         lf = machscan.level_groove_frame(x, z[frame], window=200)
         np.testing.assert_array_equal(readings.get_xdata(), lf.x)
-        # The drawn template at the readings leaves the fit's own residual RMS: the centre was
+        # The drawn template at the readings leaves the fit's own residual RMS: the center was
         # mapped into the levelled frame correctly.
         model = np.interp(lf.x, template.get_xdata(), template.get_ydata())
         rms = np.sqrt(np.mean((lf.z - model) ** 2))
@@ -169,7 +169,7 @@ def test_levelled_frame_template_matches_the_fit(run):
     assert len(_data_lines(fig.axes[0], "initial guess")) == 1
 
 
-def test_levelled_frame_maps_the_centre_with_the_tilt():
+def test_levelled_frame_maps_the_center_with_the_tilt():
     # A steeply tilted frame (80 mrad) high above the reference: drawing the template at the
     # unrotated (x0, z0), or rotating the wrong way, misses the readings by 20-50 µm RMS.
     x = (np.arange(400) - 200) * 0.025

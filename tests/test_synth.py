@@ -65,7 +65,7 @@ def test_same_seed_gives_identical_arrays_and_other_seed_differs():
     c, tc = groove_scan(12, readings=300, keep_every=300)
     for name in ("frames", "poses", "frame_times", "axis_times", "axis_samples", "mount"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
-    for name in ("centre_wcs", "centre_scs", "width", "depth", "offsets", "frame_u"):
+    for name in ("center_wcs", "center_scs", "width", "depth", "offsets", "frame_u"):
         np.testing.assert_array_equal(getattr(ta, name), getattr(tb, name))
     assert a.metadata == b.metadata
     assert not np.array_equal(a.frames, c.frames)
@@ -163,13 +163,13 @@ def test_error_components_are_paper_like(noisy):
     # offset error (paper: 0.0255 +- 0.0148 mm) and local error (0.0123 +- 0.0062 mm)
     e = np.linalg.norm(truth.offsets, axis=1)
     assert 0.008 < e.mean() < 0.05 and e.max() < 0.1
-    loc = np.abs(truth.centre_local)
+    loc = np.abs(truth.center_local)
     assert 0.006 < loc.mean() < 0.02 and loc.max() < 0.06
     # bending dominates (paper: 74.56 % of the error) and peaks at `bend` over the plate
     g = np.linspace(0, 200, 201)
     gx, gy = np.meshgrid(g, g)
     assert np.abs(truth.deflection(gx, gy)).max() == pytest.approx(0.3, abs=1e-12)
-    b = np.abs(truth.centre_bend)
+    b = np.abs(truth.center_bend)
     assert b.max() <= 0.3 and b.mean() > 2 * (e.mean() + loc.mean())
 
 
@@ -196,7 +196,7 @@ def test_surface_error_is_the_profiler_noise(noisy, clean):
     cerr = surface_error(*_wcs(cscan, truth.mount_true), truth)
     assert cerr.max_abs < 1e-8 and cerr.n_outliers == 0
     # points in a groove are not compared
-    inside = truth.centre_wcs - [0.0, 0.0, 0.3]
+    inside = truth.center_wcs - [0.0, 0.0, 0.3]
     assert surface_error(inside, None, truth).n == 0
     with pytest.raises(ValueError, match="points"):
         surface_error(pts[:, :2], None, truth)
@@ -208,7 +208,7 @@ def test_flat_plate_has_no_deflection():
     scan, truth = flat_plate_scan(2)
     g = np.linspace(0, 200, 11)
     assert np.all(truth.deflection(*np.meshgrid(g, g)) == 0.0)
-    np.testing.assert_array_equal(truth.centre_bend, 0.0)
+    np.testing.assert_array_equal(truth.center_bend, 0.0)
     assert scan.n_readings == 400 and 200 < scan.n_frames < 600
     pts, _ = _wcs(scan)
     s, _, _ = truth.groove_signed_distance(pts[:, 0], pts[:, 1])
@@ -232,38 +232,38 @@ def test_readings_are_exact_ray_casts_of_the_true_surface(clean):
     np.testing.assert_allclose(pts[~on, 2], -truth.plate_thickness, atol=1e-12)
 
 
-def test_true_centre_is_the_frame_transform_of_its_scs_coordinates(noisy):
+def test_true_center_is_the_frame_transform_of_its_scs_coordinates(noisy):
     scan, truth = noisy
     T = ac_head_transforms_np(scan.poses, scan.c2_offset, truth.mount_true)
     f = scan.n_frames
-    scs = np.column_stack([truth.centre_scs[:, 0], np.zeros(f), truth.centre_scs[:, 1], np.ones(f)])
+    scs = np.column_stack([truth.center_scs[:, 0], np.zeros(f), truth.center_scs[:, 1], np.ones(f)])
     wcs = np.einsum("fij,fj->fi", T, scs)[:, :3]
-    np.testing.assert_allclose(wcs, truth.centre_wcs, rtol=0, atol=1e-9)
-    # the centre is on the engraved line, on the bent surface
+    np.testing.assert_allclose(wcs, truth.center_wcs, rtol=0, atol=1e-9)
+    # the center is on the engraved line, on the bent surface
     for k in range(truth.n_contours):
         sel = truth.frame_contour == k
-        np.testing.assert_allclose(truth.engraved_point(k, truth.centre_u[sel]),
-                                   truth.centre_wcs[sel], atol=1e-12)
-    c = truth.centre_wcs
+        np.testing.assert_allclose(truth.engraved_point(k, truth.center_u[sel]),
+                                   truth.center_wcs[sel], atol=1e-12)
+    c = truth.center_wcs
     np.testing.assert_allclose(c[:, 2], truth.deflection(c[:, 0], c[:, 1]), atol=1e-15)
     s, k, _ = truth.groove_signed_distance(c[:, 0], c[:, 1])
     np.testing.assert_allclose(s, 0.0, atol=1e-9)
     np.testing.assert_array_equal(k, truth.frame_contour)
     # the decomposition offset + local + bending is exact
-    recon = (truth.centre_nominal + truth.centre_offset
-             + truth.centre_local[:, None] * truth.centre_normal)
-    recon[:, 2] += truth.centre_bend
-    np.testing.assert_allclose(recon, truth.centre_wcs, atol=1e-12)
+    recon = (truth.center_nominal + truth.center_offset
+             + truth.center_local[:, None] * truth.center_normal)
+    recon[:, 2] += truth.center_bend
+    np.testing.assert_allclose(recon, truth.center_wcs, atol=1e-12)
     # the groove appears near the middle of the line
-    assert np.abs(truth.centre_scs[:, 0]).max() < 0.2
+    assert np.abs(truth.center_scs[:, 0]).max() < 0.2
 
 
-def test_reading_at_true_centre_is_a_depth_deep_dip(noisy):
+def test_reading_at_true_center_is_a_depth_deep_dip(noisy):
     scan, truth = noisy
     p = scan.profiler
     fr = scan.frames
     rows = np.arange(scan.n_frames)
-    i = np.rint(truth.centre_scs[:, 0] / p.pitch + p.i0).astype(int)
+    i = np.rint(truth.center_scs[:, 0] / p.pitch + p.i0).astype(int)
     off = 16  # 0.4 mm: beyond the groove and its lips on both sides
     dn, left, right = fr[rows, i], fr[rows, i - off], fr[rows, i + off]
     ok = p.valid_mask(dn) & p.valid_mask(left) & p.valid_mask(right)
@@ -271,8 +271,8 @@ def test_reading_at_true_centre_is_a_depth_deep_dip(noisy):
     dip = 0.5 * (left + right) - dn
     np.testing.assert_allclose(np.median((dip - truth.depth)[ok]), 0.0, atol=0.01)
     assert np.quantile(np.abs(dip - truth.depth)[ok], 0.9) < 0.04
-    # the bottom is depth below the surface height of the centre (SCS z)
-    bottom = truth.centre_scs[:, 1] - truth.depth
+    # the bottom is depth below the surface height of the center (SCS z)
+    bottom = truth.center_scs[:, 1] - truth.depth
     assert np.median(np.abs(dn - bottom)[ok]) < 0.012
 
 
@@ -311,7 +311,7 @@ def test_dropouts_runs_sentinel_and_flanks(noisy, clean):
     flank = on_plate & (t > 0.2) & (t < 0.9)
     away = on_plate & (t > 3.0)
     assert lost_at[flank].mean() > lost_at[away].mean() + 0.08  # more on the steep flanks
-    # short runs: lost readings often have a lost neighbour
+    # short runs: lost readings often have a lost neighbor
     pairs = lost[:, 1:] & lost[:, :-1]
     assert pairs.sum() > 0.4 * lost.sum()
     # the shadow next to the plate edge is lost, the table further out is measured
@@ -334,7 +334,7 @@ def test_poses_follow_the_closed_form(noisy):
     for k, shape in enumerate(truth.contours):
         sel = truth.frame_contour == k
         u = truth.frame_u[sel]
-        # SCS origin (reading centre, height 0) on the nominal contour, nominal surface
+        # SCS origin (reading center, height 0) on the nominal contour, nominal surface
         np.testing.assert_allclose(T[sel, :2, 3], shape.point(u), atol=1e-9)
         np.testing.assert_allclose(T[sel, 2, 3], 0.0, atol=1e-9)
         # laser line (SCS x) across the contour, along the outward normal

@@ -190,7 +190,7 @@ def ac_table_rotate(
     a, c : float
         Table angles, rad.
     center : array_like, shape (3,)
-        Rotation centre in measurement coordinates ``t = O'_w − O_w``, mm.
+        Rotation center in measurement coordinates ``t = O'_w − O_w``, mm.
 
     Returns
     -------
@@ -283,7 +283,7 @@ def level_groove_frame(
 def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -> NDArray[np.int64]:
     """Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than ``radius`` share a cluster.
 
-    Clusters are the connected components of the neighbour graph: every neighbour within
+    Clusters are the connected components of the neighbor graph: every neighbor within
     ``radius`` (the same partition as Open3D's ``cluster_dbscan(eps=radius, min_points=1)``), or
     with ``k`` the paper's form, the k nearest within ``radius`` (made symmetric so the result
     does not depend on the seed order). Memory is O(N); queries run in parallel.
@@ -293,9 +293,9 @@ def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -
     points : array_like, shape (N, 3)
         Points, mm.
     radius : float
-        Neighbour distance threshold, mm (paper: 5 mm).
+        Neighbor distance threshold, mm (paper: 5 mm).
     k : int, optional
-        Number of nearest neighbours considered (paper: 5); default all within ``radius``.
+        Number of nearest neighbors considered (paper: 5); default all within ``radius``.
 
     Returns
     -------
@@ -304,13 +304,13 @@ def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -
 
     Examples
     --------
-    >>> labels = machscan.euclidean_clusters(centres, radius=5.0, k=5)
+    >>> labels = machscan.euclidean_clusters(centers, radius=5.0, k=5)
     """
 
 def knn_graph(points: ArrayLike, k: int, radius: float | None = None) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """The k nearest points of every point of a cloud (its k-nearest graph), the point itself
     included and first unless an exact duplicate with a lower index precedes it; nearest first,
-    ties by index. With ``radius`` only neighbours strictly closer than it (Open3D's hybrid
+    ties by index. With ``radius`` only neighbors strictly closer than it (Open3D's hybrid
     search), the rows padded with index −1 and distance ``inf``.
 
     Parameters
@@ -318,7 +318,7 @@ def knn_graph(points: ArrayLike, k: int, radius: float | None = None) -> tuple[N
     points : array_like, shape (N, 3)
         mm.
     k : int
-        Neighbours per point (at most N).
+        Neighbors per point (at most N).
     radius : float, optional
         mm.
 
@@ -522,14 +522,14 @@ def estimate_normals(
     consistent: bool = False,
 ) -> NDArray[np.float64]:
     """PCA normals (SPEC F): the eigenvector of the smallest eigenvalue of each point's
-    neighbourhood covariance — the k nearest points, the point itself included (Open3D's
+    neighborhood covariance — the k nearest points, the point itself included (Open3D's
     ``KDTreeSearchParamKNN(k)``), or with ``radius`` the nearest ``k`` strictly closer than it
     (``KDTreeSearchParamHybrid(radius, k)``). Unit length.
 
     Orientation (at most one): ``towards`` a viewpoint (n·(v − p) ≥ 0), ``along`` a direction
     (n·d ≥ 0), or ``consistent=True``: propagation over a minimum spanning tree of the k-nearest
     graph from the highest point, turned to +z (Hoppe et al. 1992). Without one the sign is the
-    solver's. A point with fewer than 3 neighbours gets (0, 0, 1), as in Open3D.
+    solver's. A point with fewer than 3 neighbors gets (0, 0, 1), as in Open3D.
 
     Examples
     --------
@@ -537,8 +537,8 @@ def estimate_normals(
     """
 
 def surface_variation(points: ArrayLike, k: int = 20, radius: float | None = None) -> NDArray[np.float64]:
-    """Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighbourhood covariance (0 on a
-    plane, up to 1/3 for isotropic scatter); neighbourhoods as in :func:`estimate_normals`.
+    """Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighborhood covariance (0 on a
+    plane, up to 1/3 for isotropic scatter); neighborhoods as in :func:`estimate_normals`.
     """
 
 def principal_curvatures(
@@ -546,12 +546,12 @@ def principal_curvatures(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Principal curvatures and directions from a local quadric fit (SPEC F).
 
-    In each point's frame (tangents u, v; normal n) the neighbours are fitted by
+    In each point's frame (tangents u, v; normal n) the neighbors are fitted by
     ``h = a u² + b uv + c v² + d u + e v + f``; the shape operator at the point gives
     ``k1 ≥ k2`` (1/mm) and their directions. Signs follow the normals: positive where the
     surface bends towards the normal (a sphere with outward normals: −1/R). ``normals`` default
-    to :func:`estimate_normals` with the same neighbourhood. Points with fewer than 6
-    neighbours get NaN.
+    to :func:`estimate_normals` with the same neighborhood. Points with fewer than 6
+    neighbors get NaN.
 
     Returns
     -------
@@ -572,7 +572,7 @@ def octree_simplify(
     k: int = 10,
     eps1: int | None = None,
     eps2: int | None = None,
-    neighbours: str = "xyz",
+    neighbors: str = "xyz",
     refine: int = 0,
     feature_threshold: float = 0.05,
 ) -> NDArray[np.int64]:
@@ -580,17 +580,17 @@ def octree_simplify(
 
     Cube of edge L (the largest extent) on the minimum corner, depth ⌈log2(L/d_min)⌉; each
     occupied leaf keeps its point of largest feature degree (mean angle between its normal and
-    its ``k`` neighbours' normals, unoriented) and its point nearest the cell centre; the x–y
+    its ``k`` neighbors' normals, unoriented) and its point nearest the cell center; the x–y
     boundary points are kept by the paper's group rule (sorted by x, groups of ``eps1`` keep
     min-y and max-y; sorted by y, groups of ``eps2`` keep min-x and max-x). ``eps1``/``eps2``
     default to the number of points in a strip ``d_min`` wide.
 
-    Beyond the paper (off by default): ``neighbours="xy"`` takes the neighbours of the normals
+    Beyond the paper (off by default): ``neighbors="xy"`` takes the neighbors of the normals
     and the feature degree in the x–y projection, so both sides of a vertical step see each
     other (height-field scans); ``refine=r`` splits every leaf whose largest feature degree
     exceeds ``feature_threshold`` r levels deeper, each occupied sub-cell keeping its own two
     points. On a pocket plate with 3 mm steps the paper's rule rebuilds a worse surface than a
-    voxel grid of the same point count; ``neighbours="xy", refine=2`` a better one
+    voxel grid of the same point count; ``neighbors="xy", refine=2`` a better one
     (tests/test_octree.py, figures in BENCHMARKS.md).
 
     Parameters
@@ -602,9 +602,9 @@ def octree_simplify(
     normals : array_like (N, 3), optional
         Default: :func:`estimate_normals` with ``k``.
     k : int
-        Neighbours of the feature degree.
+        Neighbors of the feature degree.
     eps1, eps2 : int, optional
-    neighbours : {"xyz", "xy"}
+    neighbors : {"xyz", "xy"}
     refine : int
         Extra octree levels on feature leaves (0: the paper's rule).
     feature_threshold : float

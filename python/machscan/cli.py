@@ -94,7 +94,7 @@ def _demo(args: argparse.Namespace) -> int:
     print(
         f"\nagainst the truth: width |error| median {np.median(np.abs(report.fits.width[ok] - truth.width[ok])) * 1e3:.1f} µm, "
         f"depth |error| median {100 * np.median(np.abs(report.fits.depth[ok] - truth.depth[ok]) / truth.depth[ok]):.2f} %, "
-        f"centre rms {np.sqrt(np.mean(np.sum((report.centre_wcs[ok] - truth.centre_wcs[ok]) ** 2, axis=1))) * 1e3:.1f} µm"
+        f"center rms {np.sqrt(np.mean(np.sum((report.center_wcs[ok] - truth.center_wcs[ok]) ** 2, axis=1))) * 1e3:.1f} µm"
     )
     out = Path(args.out)
     paths = report.to_csv(out)
@@ -165,7 +165,7 @@ def build_parser() -> argparse.ArgumentParser:
     _scan_arguments(gr)
     gr.add_argument("cad", nargs="+", type=Path, help="CAD contours: CSV (contour, x, y, z) or APT/CL files (GOTO points)")
     gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
-    gr.add_argument("--window", type=int, default=200, help="readings around the line centre fitted per frame (default: %(default)s)")
+    gr.add_argument("--window", type=int, default=200, help="readings around the line center fitted per frame (default: %(default)s)")
     gr.add_argument("--alpha", type=float, default=20.0, help="template shape coefficient, 1/mm (default: %(default)s)")
     gr.add_argument("--nominal-width", type=float, default=0.5, help="nominal groove width, mm (default: %(default)s)")
     gr.add_argument("--cluster-radius", type=float, default=5.0, help="contour segmentation distance, mm (default: %(default)s)")

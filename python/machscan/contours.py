@@ -59,7 +59,7 @@ def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0
     theoretical : array_like, shape (a, 3)
         CAD contour points P, mm (e.g. from :func:`resample_polyline`).
     actual : array_like, shape (b, 3)
-        Measured groove centres Q of the same contour, mm.
+        Measured groove centers Q of the same contour, mm.
     delta1, delta2 : float
         Weights of the offset and of the compensated deviation (paper: 1 and 1).
 
@@ -70,7 +70,7 @@ def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0
 
     Examples
     --------
-    >>> r = machscan.contour_error(cad_points, groove_centres)
+    >>> r = machscan.contour_error(cad_points, groove_centers)
     >>> r.mean, r.max
     """
     return ContourError(**_core.contour_error(theoretical, actual, delta1, delta2))

@@ -40,7 +40,7 @@ class GrooveFits:
     Attributes
     ----------
     x0, z0 : ndarray (F,)
-        Groove centre and surface height there, mm, in the coordinates of the x and z given.
+        Groove center and surface height there, mm, in the coordinates of the x and z given.
     depth, width : ndarray (F,)
         Template depth d and width w, mm (w is the width at the surface for a V groove).
     alpha : ndarray (F,)
@@ -145,9 +145,9 @@ def fit_grooves(
     nominal_width : float
         Nominal groove width l, mm.
     window : int, optional
-        Number t of readings kept around the centre; default all.
+        Number t of readings kept around the center; default all.
     window_center : int, optional
-        Reading index the window is centred on; default N // 2.
+        Reading index the window is centered on; default N // 2.
     fit_alpha : bool
         Fit the shape coefficient as a fifth parameter.
     template : {"tanh", "v"}

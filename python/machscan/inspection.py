@@ -1,7 +1,7 @@
 """Groove inspection end to end (paper 000): from a raw line-laser scan of an engraved,
 film-coated skin and the CAD contours to the paper's tables.
 
-Steps (SPEC G and C): per-frame groove fit → groove centres in the WCS → Euclidean clustering
+Steps (SPEC G and C): per-frame groove fit → groove centers in the WCS → Euclidean clustering
 into engraved contours → matching to the CAD contours (one to one, by centroid) → contour error
 per contour → decomposition of the error into offset, bending and local parts.
 """
@@ -32,13 +32,13 @@ class ContourResult:
     cad_index : int
         Index of the CAD contour (as given).
     cluster : int
-        Label of the cluster of groove centres.
+        Label of the cluster of groove centers.
     frames : ndarray of int64
-        Frames whose groove centre belongs to this contour.
+        Frames whose groove center belongs to this contour.
     theoretical : ndarray (a, 3)
         CAD contour points P (resampled), mm.
     actual : ndarray (b, 3)
-        Measured groove centres (WCS) of the contour's frames, mm; the errors use them joined
+        Measured groove centers (WCS) of the contour's frames, mm; the errors use them joined
         in scan order and resampled (see :func:`inspect_grooves`).
     width, depth : ndarray (b,)
         Groove width and depth of those frames, mm.
@@ -75,7 +75,7 @@ class Decomposition:
 
     Each part is a mean magnitude over all theoretical points of all matched contours (mm); the
     shares are each part over their sum. ``bending_surface`` holds the polynomial B(x, y) fitted
-    to the measured surface heights (coefficients over ``exponents``, in coordinates centred on
+    to the measured surface heights (coefficients over ``exponents``, in coordinates centered on
     ``center`` and scaled by ``scale``)."""
 
     offset: float
@@ -108,11 +108,11 @@ class GrooveReport:
         Converged fits left out because their standard error of width or depth is more than
         ``max_se_ratio`` times the median (typically a groove whose flank readings were lost:
         the fit converges, but to a width the data do not fix).
-    centre_wcs : ndarray (F, 3)
-        Groove centre (x0, 0, z0) of every frame in the WCS, mm; NaN where the frame was not
+    center_wcs : ndarray (F, 3)
+        Groove center (x0, 0, z0) of every frame in the WCS, mm; NaN where the frame was not
         fitted (its status in ``fits.status`` says why).
     cluster : ndarray of int64 (F,)
-        Cluster of every fitted centre; −1 for frames not fitted or in clusters smaller than
+        Cluster of every fitted center; −1 for frames not fitted or in clusters smaller than
         ``min_cluster_frames``.
     contour : ndarray of int64 (F,)
         Matched CAD contour of every frame, −1 when none.
@@ -129,7 +129,7 @@ class GrooveReport:
 
     fits: GrooveFits
     suspect: NDArray[np.bool_]
-    centre_wcs: NDArray[np.float64]
+    center_wcs: NDArray[np.float64]
     cluster: NDArray[np.int64]
     contour: NDArray[np.int64]
     contours: tuple[ContourResult, ...]
@@ -139,7 +139,7 @@ class GrooveReport:
 
     @property
     def used(self) -> NDArray[np.bool_]:
-        """Frames whose groove centre went into the contours: converged and not suspect."""
+        """Frames whose groove center went into the contours: converged and not suspect."""
         return self.fits.ok & ~self.suspect
 
     # ---- the paper's tables ---------------------------------------------------------------
@@ -231,7 +231,7 @@ class GrooveReport:
         paths = []
         f = self.fits
         frame_cols = {"frame": np.arange(len(f)), "status": f.status, "suspect": self.suspect.astype(np.int64), "x0_scs": f.x0, "z0_scs": f.z0,
-                      "x_wcs": self.centre_wcs[:, 0], "y_wcs": self.centre_wcs[:, 1], "z_wcs": self.centre_wcs[:, 2],
+                      "x_wcs": self.center_wcs[:, 0], "y_wcs": self.center_wcs[:, 1], "z_wcs": self.center_wcs[:, 2],
                       "width": f.width, "depth": f.depth, "se_width": f.se_width, "se_depth": f.se_depth,
                       "rms": f.rms, "cluster": self.cluster, "contour": self.contour}
         path = out / "frames.csv"
@@ -318,15 +318,15 @@ def inspect_grooves(
     """Measure engraved grooves and their contour error from a raw scan (paper 000).
 
     1. Every frame: the groove template fit of :func:`machscan.fit_grooves` on the ``window``
-       readings around the line centre (the scan path keeps the groove there).
-    2. Groove centres (x0, 0, z0) to the WCS with the frame's machine pose.
-    3. Euclidean clustering of the centres (``cluster_radius``, paper: 5 mm with ``cluster_k``
+       readings around the line center (the scan path keeps the groove there).
+    2. Groove centers (x0, 0, z0) to the WCS with the frame's machine pose.
+    3. Euclidean clustering of the centers (``cluster_radius``, paper: 5 mm with ``cluster_k``
        = 5 nearest); clusters smaller than ``min_cluster_frames`` are dropped as strays.
     4. CAD contours resampled every ``cad_spacing`` mm; clusters matched to them one to one by
        centroid (no match beyond ``max_match_distance``).
-    5. Contour error per contour, paper eq (21)–(23), against the centres joined in scan order
+    5. Contour error per contour, paper eq (21)–(23), against the centers joined in scan order
        and resampled every ``actual_spacing`` mm. The paper's frames lie microns apart; a
-       decimated scan's do not, and bare centres would add the gaps between frames to the
+       decimated scan's do not, and bare centers would add the gaps between frames to the
        nearest-point distances. Both spacings must be small against the errors measured: the
        nearest-point matching adds up to about half of the coarser one (the defaults, 5 µm and
        2 µm, add about 1 µm; 0.2 mm would add about 0.1 mm).
@@ -343,7 +343,7 @@ def inspect_grooves(
     cad_contours : sequence of array_like, each (n, 3) or (n, 2); or one (n, 3) array
         Closed CAD polylines in the WCS, mm (z = 0 when only x, y are given), resampled every
         ``cad_spacing`` mm. Or the points of the whole drawing as one array: its contours are
-        then found by the same Euclidean clustering as the groove centres and its points are
+        then found by the same Euclidean clustering as the groove centers and its points are
         used as they are (they should be dense: see step 5).
     window, alpha, nominal_width, fit_alpha
         Groove fit settings (see :func:`machscan.fit_grooves`).
@@ -372,7 +372,7 @@ def inspect_grooves(
     cad_cloud = isinstance(cad_contours, np.ndarray) and cad_contours.ndim == 2
     if cad_cloud:
         # One point set for the whole drawing: its contours are found by the same Euclidean
-        # clustering as the groove centres (SPEC C1); the points are used as they are.
+        # clustering as the groove centers (SPEC C1); the points are used as they are.
         cad_points = np.asarray(cad_contours, dtype=np.float64)
         if cad_points.shape[1] == 2:
             cad_points = np.column_stack([cad_points, np.zeros(len(cad_points))])
@@ -401,17 +401,17 @@ def inspect_grooves(
             suspect |= converged & (se > max_se_ratio * np.median(se[converged]))
     ok = converged & ~suspect
 
-    # Centres to the WCS with each frame's pose.
+    # Centers to the WCS with each frame's pose.
     t = scan.transforms()
     local = np.column_stack([fits.x0, np.zeros(len(fits)), fits.z0])
-    centre = np.full((len(fits), 3), np.nan)
-    centre[ok] = np.einsum("fij,fj->fi", t[ok, :3, :3], local[ok]) + t[ok, :3, 3]
+    center = np.full((len(fits), 3), np.nan)
+    center[ok] = np.einsum("fij,fj->fi", t[ok, :3, :3], local[ok]) + t[ok, :3, 3]
 
-    # Contours from the centre cloud.
+    # Contours from the center cloud.
     cluster = np.full(len(fits), -1, dtype=np.int64)
     idx_ok = np.nonzero(ok)[0]
     if len(idx_ok):
-        labels = _core.euclidean_clusters(centre[idx_ok], cluster_radius, cluster_k)
+        labels = _core.euclidean_clusters(center[idx_ok], cluster_radius, cluster_k)
         sizes = np.bincount(labels)
         keep = sizes[labels] >= min_cluster_frames
         # Renumber the kept clusters 0.. in order of first frame.
@@ -422,23 +422,23 @@ def inspect_grooves(
     n_clusters = int(cluster.max()) + 1
     theoretical = polylines if cad_cloud else [_core.resample_polyline(p, cad_spacing, True) for p in polylines]
     cad_centroids = np.array([p.mean(0) for p in theoretical])
-    cl_centroids = np.array([centre[cluster == c].mean(0) for c in range(n_clusters)]).reshape(-1, 3)
+    cl_centroids = np.array([center[cluster == c].mean(0) for c in range(n_clusters)]).reshape(-1, 3)
     match = _core.match_contours(cl_centroids, cad_centroids, max_match_distance)
     contour = np.full(len(fits), -1, dtype=np.int64)
     for c, m in enumerate(match):
         if m >= 0:
             contour[cluster == c] = m
 
-    # Bending surface over the whole part: measured heights minus CAD heights at the centres.
+    # Bending surface over the whole part: measured heights minus CAD heights at the centers.
     pairs = [(int(m), c) for c, m in enumerate(match) if m >= 0]
     decomposition = None
     results = []
     if pairs:
         dz_parts, xs, ys = [], [], []
         for m, c in pairs:
-            q = centre[cluster == c]
+            q = center[cluster == c]
             p = theoretical[m]
-            # CAD height under each centre: the nearest CAD point's z (the CAD skin is smooth).
+            # CAD height under each center: the nearest CAD point's z (the CAD skin is smooth).
             near, _ = _core.nearest_neighbors(p * [1.0, 1.0, 0.0], q * [1.0, 1.0, 0.0])
             dz_parts.append(q[:, 2] - p[near, 2])
             xs.append(q[:, 0])
@@ -447,18 +447,18 @@ def inspect_grooves(
         degree = int(bending_degree)
         while degree > 0 and len(dz) < 3 * len(_exponents(degree)):
             degree -= 1
-        ex, coef, center, scale, resid = _fit_bending(xs_a, ys_a, dz, degree)
+        ex, coef, bend_center, scale, resid = _fit_bending(xs_a, ys_a, dz, degree)
         totals = np.zeros(3)
         count = 0
         for m, c in sorted(pairs):
             frames = np.nonzero(cluster == c)[0]
-            q = centre[frames]
+            q = center[frames]
             p = theoretical[m]
-            dense = _join_centres(q, actual_spacing)
+            dense = _join_centers(q, actual_spacing)
             err = contour_error(p, dense)
-            bend_q = _poly_eval(ex, coef, dense[:, 0], dense[:, 1], center, scale)
+            bend_q = _poly_eval(ex, coef, dense[:, 0], dense[:, 1], bend_center, scale)
             flat = dense - np.column_stack([np.zeros((len(dense), 2)), bend_q])
-            bend_p = np.abs(_poly_eval(ex, coef, p[:, 0], p[:, 1], center, scale))
+            bend_p = np.abs(_poly_eval(ex, coef, p[:, 0], p[:, 1], bend_center, scale))
             flat_err = contour_error(p, flat)
             offset_error = float(np.linalg.norm(flat_err.offset))
             results.append(ContourResult(cad_index=m, cluster=c, frames=frames, theoretical=p, actual=q,
@@ -472,12 +472,12 @@ def inspect_grooves(
                                       offset_share=float(shares[0]), bending_share=float(shares[1]),
                                       local_share=float(shares[2]), bending_degree=degree,
                                       bending_rms_residual=resid, exponents=ex, coefficients=coef,
-                                      center=center, scale=scale)
+                                      center=bend_center, scale=scale)
     matched_cad = {m for m, _ in pairs}
     return GrooveReport(
         fits=fits,
         suspect=suspect,
-        centre_wcs=centre,
+        center_wcs=center,
         cluster=cluster,
         contour=contour,
         contours=tuple(results),
@@ -487,10 +487,10 @@ def inspect_grooves(
     )
 
 
-def _join_centres(q: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
-    """The groove centres of one contour, in scan order, joined into a polyline and resampled
+def _join_centers(q: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
+    """The groove centers of one contour, in scan order, joined into a polyline and resampled
     every ``spacing`` mm. Frames are far apart next to the CAD points (0.4 mm at a typical
-    decimation), and nearest-point distances to bare centres would measure those gaps, not the
+    decimation), and nearest-point distances to bare centers would measure those gaps, not the
     deviation. Gaps longer than 5× the median step (a skipped stretch) are not bridged, and
     the contour is closed when its ends meet."""
     if len(q) < 2:

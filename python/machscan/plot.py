@@ -59,8 +59,8 @@ def _pyplot() -> Any:
     return plt
 
 
-def _colours(n: int) -> list[Any]:
-    """n distinguishable colours: tab10, then tab20's light shades beyond ten."""
+def _colors(n: int) -> list[Any]:
+    """n distinguishable colors: tab10, then tab20's light shades beyond ten."""
     import matplotlib
 
     if n <= 10:
@@ -96,7 +96,7 @@ def _cad_arc_length(c: ContourResult) -> NDArray[np.float64]:
 
 def _frame_arc_length(c: ContourResult) -> NDArray[np.float64]:
     """Position of every frame of the contour along the CAD contour: the arc length of the CAD
-    point nearest (in x-y) to the frame's groove centre, mm."""
+    point nearest (in x-y) to the frame's groove center, mm."""
     flat = np.array([1.0, 1.0, 0.0])
     near, _ = _core.nearest_neighbors(c.theoretical * flat, c.actual * flat)
     return _cad_arc_length(c)[near]
@@ -116,7 +116,7 @@ def width_depth_along(
 ) -> Figure:
     """Groove width and depth along the contours (paper 000 table 1, per frame).
 
-    Each frame is placed at the arc length of the CAD point nearest to its groove centre
+    Each frame is placed at the arc length of the CAD point nearest to its groove center
     (from the first point of the CAD contour), so the curves of different scans of the same
     part line up. All contours are drawn end to end in CAD order, each starting where the
     previous one ends, with its index on top and the whole-part mean dashed. With one
@@ -150,9 +150,9 @@ def width_depth_along(
         aw, ad = axes
         fig = aw.figure
     one = len(chosen) == 1
-    colours = ["tab:blue"] if one else ["tab:blue", "tab:orange"] * len(chosen)
+    colors = ["tab:blue"] if one else ["tab:blue", "tab:orange"] * len(chosen)
     start = 0.0
-    for c, col in zip(chosen, colours):
+    for c, col in zip(chosen, colors):
         s = _frame_arc_length(c)
         o = np.argsort(s, kind="stable")
         length = float(_cad_arc_length(c)[-1] + np.linalg.norm(c.theoretical[-1] - c.theoretical[0]))
@@ -263,14 +263,14 @@ def contour_error_map(
     vmin: float | None = None,
     vmax: float | None = None,
     max_points: int = 4000,
-    show_centres: bool = True,
+    show_centers: bool = True,
     label_contours: bool = True,
 ) -> Figure:
     """The contour error over the part (paper 000 fig. 11).
 
-    Every matched CAD contour is drawn in the WCS x-y plane, coloured by the point error e_i
+    Every matched CAD contour is drawn in the WCS x-y plane, colored by the point error e_i
     of eq (23) (offset plus compensated deviation, mm). The point of largest error is marked.
-    The measured groove centres of all fitted frames are dotted lightly under the contours:
+    The measured groove centers of all fitted frames are dotted lightly under the contours:
     at the scale of the part they lie on their contour; any away from one are stray fits or
     grooves with no CAD contour.
 
@@ -281,15 +281,15 @@ def contour_error_map(
     ax : matplotlib Axes, optional
         Where to draw; default a new figure.
     cmap : str
-        Colour map of the error.
+        Color map of the error.
     vmin, vmax : float, optional
-        Colour range, mm; default the smallest and largest e_i over all contours.
+        Color range, mm; default the smallest and largest e_i over all contours.
     max_points : int
         A contour of more theoretical points is drawn with about this many segments, each
-        coloured by the mean e_i of the points it covers (the CAD contours are resampled every
+        colored by the mean e_i of the points it covers (the CAD contours are resampled every
         few µm: hundreds of thousands of points per part).
-    show_centres : bool
-        Dot the measured groove centres.
+    show_centers : bool
+        Dot the measured groove centers.
     label_contours : bool
         Write the CAD index of every contour at its centroid.
 
@@ -297,7 +297,7 @@ def contour_error_map(
     -------
     matplotlib.figure.Figure
         The map (one :class:`~matplotlib.collections.LineCollection` per contour) and its
-        colour bar in mm.
+        color bar in mm.
 
     Examples
     --------
@@ -315,8 +315,8 @@ def contour_error_map(
         fig = ax.figure
     if max_points < 3:
         raise ValueError(f"max_points: must be at least 3, got {max_points}")
-    if show_centres:
-        q = report.centre_wcs[np.isfinite(report.centre_wcs).all(axis=1)]
+    if show_centers:
+        q = report.center_wcs[np.isfinite(report.center_wcs).all(axis=1)]
         ax.scatter(q[:, 0], q[:, 1], s=1.5, color="0.55", alpha=0.5, lw=0, zorder=1)
     if not report.contours:
         _empty(ax, "no contour matched")
@@ -331,12 +331,12 @@ def contour_error_map(
         step = max(1, int(np.ceil(len(p) / max_points)))
         idx = np.arange(0, len(p), step)
         counts = np.diff(np.append(idx, len(p)))
-        colour = np.add.reduceat(e, idx) / counts
+        color = np.add.reduceat(e, idx) / counts
         # The contour is closed: the last segment returns to the first point.
         ends = np.append(idx[1:], 0)
         segments = np.stack([p[idx], p[ends]], axis=1)
         lc = LineCollection(list(segments), cmap=cmap, norm=norm, linewidths=2.5, zorder=2, capstyle="round")
-        lc.set_array(colour)
+        lc.set_array(color)
         ax.add_collection(lc)
         if label_contours:
             cx, cy = p.mean(axis=0)
@@ -354,8 +354,8 @@ def contour_error_map(
 
     handles = [Line2D([], [], ls="none", marker="x", color="red", ms=7, mew=2,
                       label=f"max e = {worst.error.max:.4f} mm (contour {worst.cad_index})")]
-    if show_centres:
-        handles.insert(0, Line2D([], [], ls="none", marker=".", color="0.55", ms=6, label="measured groove centres"))
+    if show_centers:
+        handles.insert(0, Line2D([], [], ls="none", marker=".", color="0.55", ms=6, label="measured groove centers"))
     if own_figure:
         fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize="small", frameon=False)
     else:
@@ -515,7 +515,7 @@ def levelled_frame(
     (paper 000 fig. 4 and 10).
 
     The readings of the window, after the spike filter, are rotated by the surface tilt θ
-    (:func:`machscan.level_groove_frame`). The fit's groove centre (x0, z0) is reported in the
+    (:func:`machscan.level_groove_frame`). The fit's groove center (x0, z0) is reported in the
     frame's own coordinates, so it is rotated the same way, ``x' = cos θ·x0 + sin θ·z0``,
     ``z' = −sin θ·x0 + cos θ·z0``, and the template
     ``z' = z0' + ½d(tanh(α(x' − x0' − w/4)) − tanh(α(x' − x0' + w/4)))`` is drawn over the

@@ -153,7 +153,7 @@ class Profiler:
         ----------
         readings : int
             Number of readings; fewer than 3200 models a cropped line (region of interest),
-            same pitch, centred.
+            same pitch, centered.
         """
         return cls(
             readings=readings,
@@ -168,7 +168,7 @@ class Profiler:
 
     @property
     def i0(self) -> float:
-        """Centre index (reading at SCS x = 0): ``center`` or ``readings / 2``."""
+        """Center index (reading at SCS x = 0): ``center`` or ``readings / 2``."""
         return self.readings / 2.0 if self.center is None else float(self.center)
 
     @property

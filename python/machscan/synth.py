@@ -6,7 +6,7 @@ maskant, bent a few tenths of a millimetre by clamping, carrying 11 engraved clo
 scanned contour by contour by an SR7140-like line-laser profiler on a gantry with an AC
 double-swing head and a sixth axis C2 that keeps the laser line across the groove. Everything
 the measurement pipeline should recover is returned in a :class:`GrooveTruth`: the groove
-centre, width and depth at every frame, the engraved contours, and the three error sources of
+center, width and depth at every frame, the engraved contours, and the three error sources of
 the paper's decomposition (rigid offset, bending, local wiggle) separately.
 
 All lengths are in mm, angles in rad, times in s. The module is pure NumPy (it does not use
@@ -30,7 +30,7 @@ Model summary (numbers from paper 000 unless marked as assumptions):
   read as 3 sigma), 2500 frames/s; dropouts (sentinel) in short runs and more often on the
   steep groove flanks; rare spikes; a shadow next to the plate edge.
 * Machine: ``A = C = 0`` while scanning; ``C2`` turns the laser line onto the outward normal
-  of the nominal contour; the SCS origin (reading centre, height 0) follows the nominal
+  of the nominal contour; the SCS origin (reading center, height 0) follows the nominal
   contour on the nominal surface at the scanning feed (default 20 mm/s = 1200 mm/min, an
   assumption). Readings are ray-cast through the true (slightly misaligned) mount.
 """
@@ -69,7 +69,7 @@ PLATE = (0.0, 0.0, 200.0, 200.0)
 DEFAULT_C2_OFFSET = (-120.0, 35.0, 115.0)
 
 #: ``(theta, psi, phi, dx, dy, dz)``: SCS pose in the C2 frame (rad, mm). A few mrad of
-#: misalignment and a sub-mm offset of the line centre from the C2 axis; ``dz = -140`` puts the
+#: misalignment and a sub-mm offset of the line center from the C2 axis; ``dz = -140`` puts the
 #: reference plane 140 mm below the C2 frame origin (an SR7140-like stand-off, assumption).
 DEFAULT_MOUNT = (0.0031, -0.0024, 0.0042, 0.62, -0.41, -140.0)
 
@@ -96,13 +96,13 @@ class ContourShape:
         ``"rounded_rectangle"``, ``"slot"`` or ``"circle"`` (a label; the geometry is given by
         the other fields).
     center : (float, float)
-        Centre in the WCS, mm.
+        Center in the WCS, mm.
     half_size : (float, float)
         Half extents ``(hx, hy)`` along the shape's own axes, mm.
     radius : float
         Corner radius, mm, ``0 < radius <= min(hx, hy)``.
     angle : float
-        Rotation of the shape about its centre, rad (counter-clockwise).
+        Rotation of the shape about its center, rad (counter-clockwise).
 
     Notes
     -----
@@ -454,7 +454,7 @@ _LIP_HALF_WIDTH = 0.05  # half width of the lip bead, mm
 def _groove_section(s, width, depth, lip_in, lip_out):
     """Height of a groove cross-section relative to the surface (mm) and a steep-flank mask.
 
-    ``s`` is the signed distance to the groove centreline (positive outside the contour).
+    ``s`` is the signed distance to the groove centerline (positive outside the contour).
     The section is a smooth V: ``-depth * (1 - S(|s| / (width / 2)))`` with the quintic
     smoothstep ``S(t) = 10 t^3 - 15 t^4 + 6 t^5`` (``S = 1`` for ``t >= 1``). So the groove is
     exactly ``width`` wide at the surface, exactly ``width / 2`` wide at half depth (the
@@ -486,8 +486,8 @@ def _groove_section(s, width, depth, lip_in, lip_out):
 class GrooveTruth:
     """Exact ground truth of a :func:`groove_scan`.
 
-    Per-frame arrays (``F`` = number of frames of the scan). The *groove centre* of a frame is
-    the point where the laser plane (SCS y = 0) crosses the true engraved centreline, at the
+    Per-frame arrays (``F`` = number of frames of the scan). The *groove center* of a frame is
+    the point where the laser plane (SCS y = 0) crosses the true engraved centerline, at the
     height of the (bent) surface, i.e. the point a template fit reports as ``(x0, z0)``.
 
     Attributes
@@ -496,34 +496,34 @@ class GrooveTruth:
         Contour scanned by each frame (index into :attr:`contours`; paper numbering is +1).
     frame_u : ndarray, shape (F,)
         Arc length (mm) of the nominal contour point the SCS origin was driven to.
-    centre_u : ndarray, shape (F,)
-        Arc length (mm) of the groove centre on its contour.
-    centre_scs : ndarray, shape (F, 2)
-        Groove centre in the SCS: x along the laser line and z (height), mm. Its SCS y is 0.
-    centre_wcs : ndarray, shape (F, 3)
-        Groove centre in the WCS, mm; equals ``T_f @ (x, 0, z, 1)`` with the frame's true
+    center_u : ndarray, shape (F,)
+        Arc length (mm) of the groove center on its contour.
+    center_scs : ndarray, shape (F, 2)
+        Groove center in the SCS: x along the laser line and z (height), mm. Its SCS y is 0.
+    center_wcs : ndarray, shape (F, 3)
+        Groove center in the WCS, mm; equals ``T_f @ (x, 0, z, 1)`` with the frame's true
         WCS <- SCS transform.
     width, depth : ndarray, shape (F,)
         True groove width at the surface and depth of the bottom below the surface at the
-        centre, mm.
-    centre_nominal : ndarray, shape (F, 3)
+        center, mm.
+    center_nominal : ndarray, shape (F, 3)
         CAD point at the same arc length (z = 0).
-    centre_offset : ndarray, shape (F, 3)
+    center_offset : ndarray, shape (F, 3)
         Rigid engraving offset of the frame's contour (z = 0).
-    centre_local : ndarray, shape (F,)
+    center_local : ndarray, shape (F,)
         Local (machine dynamics) error: normal displacement of the engraved line, mm.
-    centre_normal : ndarray, shape (F, 3)
-        Outward unit normal of the CAD contour at ``centre_u`` (z = 0).
-    centre_bend : ndarray, shape (F,)
-        Bending error: the plate deflection at the centre, mm. Exactly,
-        ``centre_wcs = centre_nominal + centre_offset + centre_local * centre_normal
-        + centre_bend * e_z``.
+    center_normal : ndarray, shape (F, 3)
+        Outward unit normal of the CAD contour at ``center_u`` (z = 0).
+    center_bend : ndarray, shape (F,)
+        Bending error: the plate deflection at the center, mm. Exactly,
+        ``center_wcs = center_nominal + center_offset + center_local * center_normal
+        + center_bend * e_z``.
     contours : tuple of ContourShape
         The nominal CAD contours (analytic).
     nominal_polylines : tuple of ndarray (n_k, 3)
         CAD contours sampled every ~0.05 mm at z = 0.
     engraved_polylines : tuple of ndarray (n_k, 3)
-        True engraved centrelines on the bent surface, sampled every ~0.05 mm.
+        True engraved centerlines on the bent surface, sampled every ~0.05 mm.
     offsets : ndarray, shape (K, 2)
         Rigid xy offset of every engraved contour, mm.
     wiggle : tuple of PeriodicProfile
@@ -548,16 +548,16 @@ class GrooveTruth:
 
     frame_contour: np.ndarray
     frame_u: np.ndarray
-    centre_u: np.ndarray
-    centre_scs: np.ndarray
-    centre_wcs: np.ndarray
+    center_u: np.ndarray
+    center_scs: np.ndarray
+    center_wcs: np.ndarray
     width: np.ndarray
     depth: np.ndarray
-    centre_nominal: np.ndarray
-    centre_offset: np.ndarray
-    centre_local: np.ndarray
-    centre_normal: np.ndarray
-    centre_bend: np.ndarray
+    center_nominal: np.ndarray
+    center_offset: np.ndarray
+    center_local: np.ndarray
+    center_normal: np.ndarray
+    center_bend: np.ndarray
     contours: tuple
     nominal_polylines: tuple
     engraved_polylines: tuple
@@ -588,7 +588,7 @@ class GrooveTruth:
     # -- evaluation -------------------------------------------------------------------------
 
     def engraved_point(self, k: int, u) -> np.ndarray:
-        """True engraved centreline point of contour ``k`` at arc length ``u`` (mm), shape (..., 3)."""
+        """True engraved centerline point of contour ``k`` at arc length ``u`` (mm), shape (..., 3)."""
         xy = _engraved_xy(self.contours[k], self.offsets[k], self.wiggle[k], u)
         z = self.deflection(xy[..., 0], xy[..., 1])
         return np.concatenate([xy, z[..., None]], axis=-1)
@@ -607,7 +607,7 @@ class GrooveTruth:
         return np.where(self.on_plate(x, y), self.deflection(x, y), -self.plate_thickness)
 
     def groove_signed_distance(self, x, y) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Signed distance (mm, positive outside) to the nearest engraved centreline.
+        """Signed distance (mm, positive outside) to the nearest engraved centerline.
 
         Returns ``(s, contour, u)``: the distance, the index of the nearest contour and the
         arc length of the closest point on it. Accurate to O(wiggle slope^2) near the lines.
@@ -788,7 +788,7 @@ def groove_scan(
         a few tenths of a mm). 0 gives a flat plate.
     readings : int
         Readings per frame (3200 for the full 80 mm line; fewer crops the line about its
-        centre, for small test scans). The pitch stays 0.025 mm.
+        center, for small test scans). The pitch stays 0.025 mm.
     keep_every : int
         Keep every k-th profiler frame. The profiler runs at 2500 frames/s, i.e. a frame
         every ``feed / 2500`` mm (8 um at the default feed); the default 50 keeps one frame
@@ -1050,8 +1050,8 @@ def groove_scan(
         frames[f0:f1] = d
 
     # ---- truth per frame ---------------------------------------------------------------------
-    centre_u = np.zeros(nf)
-    centre_xy = np.zeros((nf, 2))
+    center_u = np.zeros(nf)
+    center_xy = np.zeros((nf, 2))
     for k, sh in enumerate(shapes):
         sel = np.flatnonzero(frame_contour == k)
         if sel.size == 0:
@@ -1076,32 +1076,32 @@ def groove_scan(
                 break
         g = plane_dist(u)
         if np.max(np.abs(g)) > 1e-9:  # pragma: no cover - geometry guarantees convergence
-            raise RuntimeError("groove_scan: groove centre search did not converge")
+            raise RuntimeError("groove_scan: groove center search did not converge")
         u = np.mod(u, sh.length)
-        centre_u[sel] = u
-        centre_xy[sel] = _engraved_xy(sh, design.offsets[k], design.wiggle[k], u)
-    centre_bend = deflection(centre_xy[:, 0], centre_xy[:, 1])
-    centre_wcs = np.column_stack([centre_xy, centre_bend])
-    rel = centre_wcs - trans
-    centre_scs = np.column_stack([
+        center_u[sel] = u
+        center_xy[sel] = _engraved_xy(sh, design.offsets[k], design.wiggle[k], u)
+    center_bend = deflection(center_xy[:, 0], center_xy[:, 1])
+    center_wcs = np.column_stack([center_xy, center_bend])
+    rel = center_wcs - trans
+    center_scs = np.column_stack([
         np.einsum("fi,fi->f", rot[:, :, 0], rel),
         np.einsum("fi,fi->f", rot[:, :, 2], rel),
     ])
     width = np.zeros(nf)
     depth = np.zeros(nf)
-    centre_nominal = np.zeros((nf, 3))
-    centre_offset = np.zeros((nf, 3))
-    centre_local = np.zeros(nf)
-    centre_normal = np.zeros((nf, 3))
+    center_nominal = np.zeros((nf, 3))
+    center_offset = np.zeros((nf, 3))
+    center_local = np.zeros(nf)
+    center_normal = np.zeros((nf, 3))
     for k, sh in enumerate(shapes):
         sel = frame_contour == k
-        u = centre_u[sel]
+        u = center_u[sel]
         width[sel] = design.width_profile[k](u)
         depth[sel] = design.depth_profile[k](u)
-        centre_nominal[sel, :2] = sh.point(u)
-        centre_offset[sel, :2] = design.offsets[k]
-        centre_local[sel] = design.wiggle[k](u)
-        centre_normal[sel, :2] = sh.normal(u)
+        center_nominal[sel, :2] = sh.point(u)
+        center_offset[sel, :2] = design.offsets[k]
+        center_local[sel] = design.wiggle[k](u)
+        center_normal[sel, :2] = sh.normal(u)
 
     nominal_polylines = []
     engraved_polylines = []
@@ -1142,16 +1142,16 @@ def groove_scan(
     truth = GrooveTruth(
         frame_contour=frame_contour,
         frame_u=frame_u,
-        centre_u=centre_u,
-        centre_scs=centre_scs,
-        centre_wcs=centre_wcs,
+        center_u=center_u,
+        center_scs=center_scs,
+        center_wcs=center_wcs,
         width=width,
         depth=depth,
-        centre_nominal=centre_nominal,
-        centre_offset=centre_offset,
-        centre_local=centre_local,
-        centre_normal=centre_normal,
-        centre_bend=centre_bend,
+        center_nominal=center_nominal,
+        center_offset=center_offset,
+        center_local=center_local,
+        center_normal=center_normal,
+        center_bend=center_bend,
         contours=shapes,
         nominal_polylines=tuple(nominal_polylines),
         engraved_polylines=tuple(engraved_polylines),

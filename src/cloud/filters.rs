@@ -14,7 +14,7 @@
 //! Voxel keys are 64-bit and relative to the minimum bound, so clouds in machine coordinates
 //! several metres from the origin keep full precision.
 use crate::error::{Error, Result};
-use crate::spatial::{CloudNeighbours, PointIndex};
+use crate::spatial::{CloudNeighbors, PointIndex};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -137,7 +137,7 @@ pub fn statistical_outlier_removal(points: &[[f64; 3]], k: usize, std_ratio: f64
         return Ok(Vec::new());
     }
     // Summed nearest first, as Open3D: bit-identical means.
-    let avg: Vec<f64> = CloudNeighbours::new(points)?
+    let avg: Vec<f64> = CloudNeighbors::new(points)?
         .map_knn(k, None, |_, nn| nn.iter().map(|n| n.dist2.sqrt()).sum::<f64>() / nn.len() as f64);
     // Sequential in point order, as Open3D sums.
     let valid = n as f64;
@@ -168,7 +168,7 @@ pub fn radius_outlier_removal(points: &[[f64; 3]], radius: f64, min_neighbors: u
     if points.is_empty() {
         return Ok(Vec::new());
     }
-    let counts = CloudNeighbours::new(points)?.count_within(radius);
+    let counts = CloudNeighbors::new(points)?.count_within(radius);
     Ok((0..points.len()).filter(|&i| counts[i] > min_neighbors).collect())
 }
 

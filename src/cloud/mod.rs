@@ -9,6 +9,6 @@ pub use filters::{
     uniform_downsample, voxel_downsample, VoxelGrid,
 };
 pub use normals::{
-    estimate_normals, orient_along, orient_consistent, orient_towards, principal_curvatures, Neighbourhood,
+    estimate_normals, orient_along, orient_consistent, orient_towards, principal_curvatures, Neighborhood,
 };
-pub use octree::{boundary_points, feature_degree, octree_simplify, NeighbourSpace, OctreeOptions};
+pub use octree::{boundary_points, feature_degree, octree_simplify, NeighborSpace, OctreeOptions};

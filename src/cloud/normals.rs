@@ -1,57 +1,56 @@
-//! Normals and curvature (SPEC F): PCA of each point's neighbourhood, orientation, surface
+//! Normals and curvature (SPEC F): PCA of each point's neighborhood, orientation, surface
 //! variation, and principal curvatures from a local quadric fit.
 use crate::error::{Error, Result};
-use crate::spatial::{CloudNeighbours, Neighbour};
+use crate::spatial::{CloudNeighbors, Neighbor};
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-/// Which neighbours a point's estimate uses.
+/// Which neighbors a point's estimate uses.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Neighbourhood {
+pub enum Neighborhood {
     /// The k nearest points, the point itself included (Open3D's `KDTreeSearchParamKNN`).
     Knn(usize),
     /// The nearest `max_nn` points strictly closer than `radius` (Open3D's
     /// `KDTreeSearchParamHybrid(radius, max_nn)`).
     Hybrid { radius: f64, max_nn: usize },
     /// The k nearest in the x–y projection, the point itself included. For height-field scans
-    /// (z the cutting depth): the two sides of a vertical step are then neighbours, as they are
-    /// on the part, while in 3D a step higher than the neighbourhood separates them.
+    /// (z the cutting depth): the two sides of a vertical step are then neighbors, as they are
+    /// on the part, while in 3D a step higher than the neighborhood separates them.
     KnnXy(usize),
 }
 
-impl Neighbourhood {
+impl Neighborhood {
     fn check(&self) -> Result<()> {
         match *self {
-            Neighbourhood::Knn(k) | Neighbourhood::KnnXy(k) if k < 3 => {
-                Err(Error::invalid("k", format!("a plane needs at least 3 neighbours, got {k}")))
+            Neighborhood::Knn(k) | Neighborhood::KnnXy(k) if k < 3 => {
+                Err(Error::invalid("k", format!("a plane needs at least 3 neighbors, got {k}")))
             }
-            Neighbourhood::Hybrid { radius, .. } if !(radius.is_finite() && radius > 0.0) => {
+            Neighborhood::Hybrid { radius, .. } if !(radius.is_finite() && radius > 0.0) => {
                 Err(Error::invalid("radius", format!("must be a positive distance in mm, got {radius}")))
             }
-            Neighbourhood::Hybrid { max_nn, .. } if max_nn < 3 => {
+            Neighborhood::Hybrid { max_nn, .. } if max_nn < 3 => {
                 Err(Error::invalid("max_nn", format!("must be at least 3, got {max_nn}")))
             }
             _ => Ok(()),
         }
     }
 
-    /// `f(i, neighbours)` for every point, in point order; neighbour positions are 3D (the
+    /// `f(i, neighbors)` for every point, in point order; neighbor positions are 3D (the
     /// squared distances of `KnnXy` are in x–y).
     pub(crate) fn map<T: Send + Default>(
         &self,
         points: &[[f64; 3]],
-        f: impl Fn(usize, &[Neighbour]) -> T + Sync,
+        f: impl Fn(usize, &[Neighbor]) -> T + Sync,
     ) -> Result<Vec<T>> {
         Ok(match *self {
-            Neighbourhood::Knn(k) => CloudNeighbours::new(points)?.map_knn(k, None, f),
-            Neighbourhood::Hybrid { radius, max_nn } => CloudNeighbours::new(points)?.map_knn(max_nn, Some(radius), f),
-            Neighbourhood::KnnXy(k) => {
+            Neighborhood::Knn(k) => CloudNeighbors::new(points)?.map_knn(k, None, f),
+            Neighborhood::Hybrid { radius, max_nn } => CloudNeighbors::new(points)?.map_knn(max_nn, Some(radius), f),
+            Neighborhood::KnnXy(k) => {
                 let flat: Vec<[f64; 3]> = points.par_iter().map(|p| [p[0], p[1], 0.0]).collect();
-                CloudNeighbours::new(&flat)?.map_knn(k, None, |i, nb| {
-                    let lifted: Vec<Neighbour> =
-                        nb.iter().map(|n| Neighbour { point: points[n.index], ..*n }).collect();
+                CloudNeighbors::new(&flat)?.map_knn(k, None, |i, nb| {
+                    let lifted: Vec<Neighbor> = nb.iter().map(|n| Neighbor { point: points[n.index], ..*n }).collect();
                     f(i, &lifted)
                 })
             }
@@ -59,13 +58,13 @@ impl Neighbourhood {
     }
 }
 
-/// Eigen-decomposition of the neighbourhood covariance: eigenvalues ascending and their vectors.
-/// `None` with fewer than 3 neighbours.
-fn local_pca(nbrs: &[Neighbour]) -> Option<([f64; 3], [Vector3<f64>; 3])> {
+/// Eigen-decomposition of the neighborhood covariance: eigenvalues ascending and their vectors.
+/// `None` with fewer than 3 neighbors.
+fn local_pca(nbrs: &[Neighbor]) -> Option<([f64; 3], [Vector3<f64>; 3])> {
     if nbrs.len() < 3 {
         return None;
     }
-    // Centred sums: Open3D's raw-moment form loses digits far from the origin.
+    // Centered sums: Open3D's raw-moment form loses digits far from the origin.
     let n = nbrs.len() as f64;
     let mut c = Vector3::zeros();
     for nb in nbrs {
@@ -86,10 +85,10 @@ fn local_pca(nbrs: &[Neighbour]) -> Option<([f64; 3], [Vector3<f64>; 3])> {
     Some((vals, vecs))
 }
 
-/// Unoriented unit normals (smallest-eigenvalue eigenvector of the neighbourhood covariance) and
-/// the surface variation λ0/(λ0+λ1+λ2). A point with fewer than 3 neighbours gets (0, 0, 1)
+/// Unoriented unit normals (smallest-eigenvalue eigenvector of the neighborhood covariance) and
+/// the surface variation λ0/(λ0+λ1+λ2). A point with fewer than 3 neighbors gets (0, 0, 1)
 /// (as Open3D) and variation 0, and is counted in the third return value.
-pub fn estimate_normals(points: &[[f64; 3]], nbh: Neighbourhood) -> Result<(Vec<[f64; 3]>, Vec<f64>, usize)> {
+pub fn estimate_normals(points: &[[f64; 3]], nbh: Neighborhood) -> Result<(Vec<[f64; 3]>, Vec<f64>, usize)> {
     nbh.check()?;
     if points.is_empty() {
         return Ok((Vec::new(), Vec::new(), 0));
@@ -152,9 +151,9 @@ pub fn orient_consistent(points: &[[f64; 3]], normals: &mut [[f64; 3]], k: usize
     if n == 0 {
         return Ok(());
     }
-    // k + 1: the point itself is its own nearest neighbour (unless an exact duplicate with a
+    // k + 1: the point itself is its own nearest neighbor (unless an exact duplicate with a
     // lower index comes first).
-    let knn: Vec<Vec<usize>> = CloudNeighbours::new(points)?
+    let knn: Vec<Vec<usize>> = CloudNeighbors::new(points)?
         .map_knn(k + 1, None, |i, nb| nb.iter().map(|n| n.index).filter(|&j| j != i).take(k).collect());
     // Symmetric adjacency.
     let mut adj: Vec<Vec<usize>> = knn.clone();
@@ -202,18 +201,18 @@ pub fn orient_consistent(points: &[[f64; 3]], normals: &mut [[f64; 3]], k: usize
 }
 
 /// Principal curvatures (k1 ≥ k2, 1/mm) and principal directions from a quadric
-/// `h = a u² + b uv + c v² + d u + e v + f` fitted to the neighbours in the local frame
+/// `h = a u² + b uv + c v² + d u + e v + f` fitted to the neighbors in the local frame
 /// (u, v tangent, h along the normal). The shape operator of the graph at the point is taken
 /// at its foot (u, v) = (0, 0), corrected for the fitted slope (d, e). Signs follow the normal:
 /// positive where the surface bends towards it (a sphere with inward normals has k1 = k2 = 1/R,
-/// with outward normals −1/R); a point with fewer than 6 neighbours gets NaN.
+/// with outward normals −1/R); a point with fewer than 6 neighbors gets NaN.
 /// Principal curvatures `k1 >= k2` (1/mm) and their unit directions at one point.
 pub type PrincipalCurvature = ([f64; 2], [[f64; 3]; 2]);
 
 pub fn principal_curvatures(
     points: &[[f64; 3]],
     normals: &[[f64; 3]],
-    nbh: Neighbourhood,
+    nbh: Neighborhood,
 ) -> Result<Vec<PrincipalCurvature>> {
     nbh.check()?;
     if normals.len() != points.len() {

@@ -5,53 +5,53 @@
 //!    unchanged, so the leaves are the occupied cells of edge L / 2ⁿ: they are found by hashing
 //!    cell indices, with no tree to build.
 //! 2. Feature degree f_i = (1/k) Σ_j θ_ij, the mean angle (rad) between a point's normal and its
-//!    k neighbours' normals, unoriented (θ = acos |n_i·n_j|) (eq 9).
-//! 3. Each leaf keeps its point of largest f (set Q1) and its point nearest the cell centre (Q2).
+//!    k neighbors' normals, unoriented (θ = acos |n_i·n_j|) (eq 9).
+//! 3. Each leaf keeps its point of largest f (set Q1) and its point nearest the cell center (Q2).
 //! 4. Boundary points Q0 in x–y (the cutting depth being z): sorted by x, groups of ε1 points
 //!    keep their min-y and max-y points; sorted by y, groups of ε2 keep min-x and max-x.
 //! 5. Q = Q0 ∪ Q1 ∪ Q2 as sorted unique indices.
 //!
 //! Two options go beyond the paper, both off by default. Measured at equal point counts against
 //! a voxel grid (tests/test_octree.py), the rule as written keeps creases well but not height
-//! steps: neighbourhoods a few tenths of a millimetre across never reach over a 3 mm step, so
+//! steps: neighborhoods a few tenths of a millimetre across never reach over a 3 mm step, so
 //! the feature degree there is noise and each leaf straddling the step keeps one random point.
-//! - `neighbours: Xy` takes the neighbours of the normals and of the feature degree in the x–y
+//! - `neighbors: Xy` takes the neighbors of the normals and of the feature degree in the x–y
 //!   projection, so a step's two sides see each other (height-field scans, z the cutting depth,
 //!   as the boundary rule already assumes).
 //! - `refine`: a leaf whose largest feature degree exceeds `feature_threshold` is split
 //!   `refine` levels deeper, and each occupied sub-cell keeps its Q1 and Q2 points: points are
 //!   spent along the features instead of evenly.
-use super::normals::{estimate_normals, Neighbourhood};
+use super::normals::{estimate_normals, Neighborhood};
 use crate::error::{Error, Result};
 use std::collections::HashMap;
 
-/// Where the neighbours of the normals and of the feature degree are taken.
+/// Where the neighbors of the normals and of the feature degree are taken.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum NeighbourSpace {
+pub enum NeighborSpace {
     /// The k nearest in 3D (the paper).
     Xyz,
     /// The k nearest in the x–y projection (height-field scans).
     Xy,
 }
 
-impl NeighbourSpace {
+impl NeighborSpace {
     /// The k nearest in this space.
-    fn knn(self, k: usize) -> Neighbourhood {
+    fn knn(self, k: usize) -> Neighborhood {
         match self {
-            NeighbourSpace::Xyz => Neighbourhood::Knn(k),
-            NeighbourSpace::Xy => Neighbourhood::KnnXy(k),
+            NeighborSpace::Xyz => Neighborhood::Knn(k),
+            NeighborSpace::Xy => Neighborhood::KnnXy(k),
         }
     }
 }
 
 pub struct OctreeOptions {
     pub d_min: f64,
-    /// Neighbours for the feature degree (and for normals when none are given).
+    /// Neighbors for the feature degree (and for normals when none are given).
     pub k: usize,
     /// Group sizes of the boundary rule; `None` = the points of a strip d_min wide.
     pub eps1: Option<usize>,
     pub eps2: Option<usize>,
-    pub neighbours: NeighbourSpace,
+    pub neighbors: NeighborSpace,
     /// Extra levels for leaves whose largest feature degree exceeds `feature_threshold` (0: the
     /// paper's rule).
     pub refine: u32,
@@ -67,7 +67,7 @@ impl OctreeOptions {
             k: 10,
             eps1: None,
             eps2: None,
-            neighbours: NeighbourSpace::Xyz,
+            neighbors: NeighborSpace::Xyz,
             refine: 0,
             feature_threshold: 0.05,
         }
@@ -76,7 +76,7 @@ impl OctreeOptions {
 
 /// Feature degree of every point (eq 9): the mean unoriented angle to the normals of its `k`
 /// nearest other points, taken in `space`.
-pub fn feature_degree(points: &[[f64; 3]], normals: &[[f64; 3]], k: usize, space: NeighbourSpace) -> Result<Vec<f64>> {
+pub fn feature_degree(points: &[[f64; 3]], normals: &[[f64; 3]], k: usize, space: NeighborSpace) -> Result<Vec<f64>> {
     if k == 0 {
         return Err(Error::invalid("k", "must be at least 1"));
     }
@@ -87,7 +87,7 @@ pub fn feature_degree(points: &[[f64; 3]], normals: &[[f64; 3]], k: usize, space
             format!("({}, 3)", normals.len()),
         ));
     }
-    // k + 1: the point itself is its own nearest neighbour.
+    // k + 1: the point itself is its own nearest neighbor.
     space.knn(k + 1).map(points, |i, nn| {
         let ni = normals[i];
         let mut sum = 0.0;
@@ -161,24 +161,24 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
     let normals = match normals {
         Some(nr) => nr,
         None => {
-            owned = estimate_normals(points, o.neighbours.knn(o.k.max(3)))?.0;
+            owned = estimate_normals(points, o.neighbors.knn(o.k.max(3)))?.0;
             &owned
         }
     };
-    let f = feature_degree(points, normals, o.k, o.neighbours)?;
+    let f = feature_degree(points, normals, o.k, o.neighbors)?;
     let leaves = best_per_cell(points, &f, lo, l, depth, |_| true);
     let mut keep: Vec<usize> = Vec::with_capacity(2 * leaves.len());
     if o.refine == 0 {
-        keep.extend(leaves.values().flat_map(|b| [b.feature.1, b.centre.1]));
+        keep.extend(leaves.values().flat_map(|b| [b.feature.1, b.center.1]));
     } else {
         // Feature leaves give way to their occupied sub-cells `refine` levels down.
         let coarse = cell_indexer(lo, l, depth);
         let hot = |i: usize| leaves[&coarse(&points[i])].feature.0 > o.feature_threshold;
         keep.extend(
-            leaves.values().filter(|b| b.feature.0 <= o.feature_threshold).flat_map(|b| [b.feature.1, b.centre.1]),
+            leaves.values().filter(|b| b.feature.0 <= o.feature_threshold).flat_map(|b| [b.feature.1, b.center.1]),
         );
         let fine = best_per_cell(points, &f, lo, l, deepest, hot);
-        keep.extend(fine.values().flat_map(|b| [b.feature.1, b.centre.1]));
+        keep.extend(fine.values().flat_map(|b| [b.feature.1, b.center.1]));
     }
     let strip = |axis: usize| -> usize {
         let ext = (hi[axis] - lo[axis]).max(o.d_min);
@@ -191,10 +191,10 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
 }
 
 /// The best points of one cell: (feature degree, index) of its largest feature degree and
-/// (squared distance, index) of its point nearest the centre.
+/// (squared distance, index) of its point nearest the center.
 struct CellBest {
     feature: (f64, usize),
-    centre: (f64, usize),
+    center: (f64, usize),
 }
 
 /// Maps a point to its cell at `depth` of the cube of edge `l` on `lo`.
@@ -222,14 +222,14 @@ fn best_per_cell(
             continue;
         }
         let c = cell_of(p);
-        let centre = [0, 1, 2].map(|k| lo[k] + (c[k] as f64 + 0.5) * cell);
-        let d2 = (0..3).map(|k| (p[k] - centre[k]).powi(2)).sum::<f64>();
-        let best = cells.entry(c).or_insert(CellBest { feature: (f[i], i), centre: (d2, i) });
+        let center = [0, 1, 2].map(|k| lo[k] + (c[k] as f64 + 0.5) * cell);
+        let d2 = (0..3).map(|k| (p[k] - center[k]).powi(2)).sum::<f64>();
+        let best = cells.entry(c).or_insert(CellBest { feature: (f[i], i), center: (d2, i) });
         if f[i] > best.feature.0 {
             best.feature = (f[i], i);
         }
-        if d2 < best.centre.0 {
-            best.centre = (d2, i);
+        if d2 < best.center.0 {
+            best.center = (d2, i);
         }
     }
     cells
@@ -280,25 +280,25 @@ mod tests {
     }
 
     #[test]
-    fn xy_neighbours_see_the_step_and_refine_spends_points_on_it() {
+    fn xy_neighbors_see_the_step_and_refine_spends_points_on_it() {
         let pts = stepped_plate();
         let near_step = |p: &[f64; 3]| (p[0] - 25.0).abs() < 1.0;
-        // In 3D, 10 neighbours never reach over 3 mm: the feature degree is 0 at the step.
-        let n3 = estimate_normals(&pts, Neighbourhood::Knn(10)).unwrap().0;
-        let f3 = feature_degree(&pts, &n3, 10, NeighbourSpace::Xyz).unwrap();
+        // In 3D, 10 neighbors never reach over 3 mm: the feature degree is 0 at the step.
+        let n3 = estimate_normals(&pts, Neighborhood::Knn(10)).unwrap().0;
+        let f3 = feature_degree(&pts, &n3, 10, NeighborSpace::Xyz).unwrap();
         assert!(f3.iter().all(|&f| f < 1e-6), "{:?}", f3.iter().cloned().fold(0.0, f64::max));
         // In x–y they do: the points at the step stand out, the rest stays flat.
-        let nxy = estimate_normals(&pts, Neighbourhood::KnnXy(10)).unwrap().0;
-        let fxy = feature_degree(&pts, &nxy, 10, NeighbourSpace::Xy).unwrap();
+        let nxy = estimate_normals(&pts, Neighborhood::KnnXy(10)).unwrap().0;
+        let fxy = feature_degree(&pts, &nxy, 10, NeighborSpace::Xy).unwrap();
         assert!(pts.iter().zip(&fxy).all(|(p, &f)| near_step(p) || f < 1e-6));
         assert!(pts.iter().zip(&fxy).filter(|(p, _)| near_step(p)).any(|(_, &f)| f > 0.5));
         let paper =
-            octree_simplify(&pts, None, &OctreeOptions { neighbours: NeighbourSpace::Xy, ..OctreeOptions::new(4.0) })
+            octree_simplify(&pts, None, &OctreeOptions { neighbors: NeighborSpace::Xy, ..OctreeOptions::new(4.0) })
                 .unwrap();
         let refined = octree_simplify(
             &pts,
             None,
-            &OctreeOptions { neighbours: NeighbourSpace::Xy, refine: 2, ..OctreeOptions::new(4.0) },
+            &OctreeOptions { neighbors: NeighborSpace::Xy, refine: 2, ..OctreeOptions::new(4.0) },
         )
         .unwrap();
         let at_step = |keep: &[usize]| keep.iter().filter(|&&i| near_step(&pts[i])).count();

@@ -66,9 +66,9 @@ pub struct GrooveOptions {
     pub nominal_width: f64,
     /// Number t of readings kept around `window_center`; `None` keeps them all.
     pub window: Option<usize>,
-    /// Reading index the window is centred on; `None` = N/2.
+    /// Reading index the window is centered on; `None` = N/2.
     pub window_center: Option<usize>,
-    /// Drop a reading deviating more than this from the median of its 5-reading neighbourhood
+    /// Drop a reading deviating more than this from the median of its 5-reading neighborhood
     /// (mm); `None` disables the spike filter.
     pub spike_threshold: Option<f64>,
     /// Shallowest dip that counts as a groove, mm.
@@ -142,7 +142,7 @@ impl GrooveOptions {
 /// for a frame that could not be fitted they are NaN and `status` says why.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GrooveFit {
-    /// Groove centre x0 and surface height z0 there, mm.
+    /// Groove center x0 and surface height z0 there, mm.
     pub x0: f64,
     pub z0: f64,
     /// Template depth d and width w, mm.
@@ -479,7 +479,7 @@ pub fn level_frame(
     o: &GrooveOptions,
 ) -> std::result::Result<LevelledFrame, (GrooveStatus, usize)> {
     let n = x.len().min(z.len());
-    // 1. Window of t readings around the centre, valid readings only.
+    // 1. Window of t readings around the center, valid readings only.
     let (lo, hi) = match o.window {
         None => (0, n),
         Some(t) => {
@@ -499,7 +499,7 @@ pub fn level_frame(
     if px.len() < o.min_valid.max(6) {
         return Err((GrooveStatus::TooFewValid, px.len()));
     }
-    // Spike filter: a reading far from the median of its neighbours is an outlier.
+    // Spike filter: a reading far from the median of its neighbors is an outlier.
     if let Some(th) = o.spike_threshold {
         // Median of the five readings around i (the window slides inward at the ends).
         let n_p = px.len();
@@ -586,7 +586,7 @@ pub fn level_frame(
             zn += 1.0;
         }
     }
-    // Fit in coordinates centred on the start (bottom x, surface z), so the relative step test
+    // Fit in coordinates centered on the start (bottom x, surface z), so the relative step test
     // measures the groove, not how far the frame sits from the sensor origin.
     let (ox, oz) = (lx[ib], zsum / zn);
     let lx: Vec<f64> = lx.iter().map(|v| v - ox).collect();

@@ -3,7 +3,7 @@
 //! `z = z0 + ½·d·( tanh(α(x − x0 − w/4)) − tanh(α(x − x0 + w/4)) )`
 //!
 //! At half depth the template is w/2 wide, so for a V groove `w` is the width at the surface.
-//! At the centre the dip is `d·tanh(αw/4)` deep (0.984·d for α = 20 mm⁻¹, w = 0.48 mm).
+//! At the center the dip is `d·tanh(αw/4)` deep (0.984·d for α = 20 mm⁻¹, w = 0.48 mm).
 
 /// Parameters `[x0, z0, d, w, α]` (mm, mm, mm, mm, mm⁻¹).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,8 +98,8 @@ impl TanhTemplate {
         (value, grad)
     }
 
-    /// Depth of the dip at the centre: `d·tanh(αw/4)`.
-    pub fn centre_depth(&self) -> f64 {
+    /// Depth of the dip at the center: `d·tanh(αw/4)`.
+    pub fn center_depth(&self) -> f64 {
         self.depth * (0.25 * self.alpha * self.width).tanh()
     }
 }
@@ -110,7 +110,7 @@ impl TanhTemplate {
 /// For β → ∞, `h` is the tent of height 1 and half-width w/2: straight flanks meeting the
 /// surface at x0 ± w/2 and the tip d below it. A finite β rounds the tip and the edges over
 /// about 1/β mm, as a laser-cut groove is. `d` is the depth of the flanks' meeting point
-/// (the sharp V's tip); the dip at the centre is `d·h(0)`, a little less.
+/// (the sharp V's tip); the dip at the center is `d·h(0)`, a little less.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VTemplate {
     pub x0: f64,
@@ -154,8 +154,8 @@ impl VTemplate {
         self.value_and_gradient(x).0
     }
 
-    /// Depth of the dip at the centre, `d·h(0)`.
-    pub fn centre_depth(&self) -> f64 {
+    /// Depth of the dip at the center, `d·h(0)`.
+    pub fn center_depth(&self) -> f64 {
         self.z0 - self.value(self.x0)
     }
 }
@@ -245,6 +245,6 @@ mod tests {
         let t = TanhTemplate { x0: 0.0, z0: 0.0, depth: 1.0, width: 0.48, alpha: 200.0 };
         // With a sharp template the half-depth crossings sit at ±w/4.
         assert!((t.value(0.12) + 0.5).abs() < 1e-3);
-        assert!((t.centre_depth() - 1.0).abs() < 1e-9);
+        assert!((t.center_depth() - 1.0).abs() < 1e-9);
     }
 }

@@ -153,10 +153,10 @@ fn uniform_downsample<'py>(py: Python<'py>, n_points: i64, every_k: i64) -> PyRe
     indices(py, crate::cloud::uniform_downsample(n_points, every_k).map_err(to_py_err)?)
 }
 
-fn neighbourhood(k: usize, radius: Option<f64>) -> crate::cloud::Neighbourhood {
+fn neighborhood(k: usize, radius: Option<f64>) -> crate::cloud::Neighborhood {
     match radius {
-        Some(r) => crate::cloud::Neighbourhood::Hybrid { radius: r, max_nn: k },
-        None => crate::cloud::Neighbourhood::Knn(k),
+        Some(r) => crate::cloud::Neighborhood::Hybrid { radius: r, max_nn: k },
+        None => crate::cloud::Neighborhood::Knn(k),
     }
 }
 
@@ -168,14 +168,14 @@ fn vec3(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<[f64; 3]>
 }
 
 /// PCA normals (SPEC F): the eigenvector of the smallest eigenvalue of each point's
-/// neighbourhood covariance — the k nearest points, the point itself included (Open3D's
+/// neighborhood covariance — the k nearest points, the point itself included (Open3D's
 /// ``KDTreeSearchParamKNN(k)``), or with ``radius`` the nearest ``k`` strictly closer than it
 /// (``KDTreeSearchParamHybrid(radius, k)``). Unit length.
 ///
 /// Orientation (at most one): ``towards`` a viewpoint (n·(v − p) ≥ 0), ``along`` a direction
 /// (n·d ≥ 0), or ``consistent=True``: propagation over a minimum spanning tree of the k-nearest
 /// graph from the highest point, turned to +z (Hoppe et al. 1992). Without one the sign is the
-/// solver's. A point with fewer than 3 neighbours gets (0, 0, 1), as in Open3D.
+/// solver's. A point with fewer than 3 neighbors gets (0, 0, 1), as in Open3D.
 ///
 /// Examples
 /// --------
@@ -199,7 +199,7 @@ fn estimate_normals<'py>(
             "towards, along, consistent: choose at most one orientation",
         ));
     }
-    let nbh = neighbourhood(k, radius);
+    let nbh = neighborhood(k, radius);
     let normals = py
         .detach(|| -> crate::Result<Vec<[f64; 3]>> {
             let (mut n, _, _) = crate::cloud::estimate_normals(&pts, nbh)?;
@@ -217,8 +217,8 @@ fn estimate_normals<'py>(
     to_numpy(py, normals.into_iter().flatten().collect::<Vec<_>>(), &[m, 3])
 }
 
-/// Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighbourhood covariance (0 on a
-/// plane, up to 1/3 for isotropic scatter); neighbourhoods as in :func:`estimate_normals`.
+/// Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighborhood covariance (0 on a
+/// plane, up to 1/3 for isotropic scatter); neighborhoods as in :func:`estimate_normals`.
 #[pyfunction]
 #[pyo3(signature = (points, k=20, radius=None))]
 fn surface_variation<'py>(
@@ -229,20 +229,19 @@ fn surface_variation<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let k = count("k", k)?;
     let pts = points_arg(points)?;
-    let (_, var, _) =
-        py.detach(|| crate::cloud::estimate_normals(&pts, neighbourhood(k, radius))).map_err(to_py_err)?;
+    let (_, var, _) = py.detach(|| crate::cloud::estimate_normals(&pts, neighborhood(k, radius))).map_err(to_py_err)?;
     let n = var.len();
     to_numpy(py, var, &[n])
 }
 
 /// Principal curvatures and directions from a local quadric fit (SPEC F).
 ///
-/// In each point's frame (tangents u, v; normal n) the neighbours are fitted by
+/// In each point's frame (tangents u, v; normal n) the neighbors are fitted by
 /// ``h = a u² + b uv + c v² + d u + e v + f``; the shape operator at the point gives
 /// ``k1 ≥ k2`` (1/mm) and their directions. Signs follow the normals: positive where the
 /// surface bends towards the normal (a sphere with outward normals: −1/R). ``normals`` default
-/// to :func:`estimate_normals` with the same neighbourhood. Points with fewer than 6
-/// neighbours get NaN.
+/// to :func:`estimate_normals` with the same neighborhood. Points with fewer than 6
+/// neighbors get NaN.
 ///
 /// Returns
 /// -------
@@ -274,7 +273,7 @@ fn principal_curvatures<'py>(
         }
         _ => None,
     };
-    let nbh = neighbourhood(k, radius);
+    let nbh = neighborhood(k, radius);
     let res = py
         .detach(|| -> crate::Result<_> {
             let nrm = match given {
@@ -293,17 +292,17 @@ fn principal_curvatures<'py>(
 ///
 /// Cube of edge L (the largest extent) on the minimum corner, depth ⌈log2(L/d_min)⌉; each
 /// occupied leaf keeps its point of largest feature degree (mean angle between its normal and
-/// its ``k`` neighbours' normals, unoriented) and its point nearest the cell centre; the x–y
+/// its ``k`` neighbors' normals, unoriented) and its point nearest the cell center; the x–y
 /// boundary points are kept by the paper's group rule (sorted by x, groups of ``eps1`` keep
 /// min-y and max-y; sorted by y, groups of ``eps2`` keep min-x and max-x). ``eps1``/``eps2``
 /// default to the number of points in a strip ``d_min`` wide.
 ///
-/// Beyond the paper (off by default): ``neighbours="xy"`` takes the neighbours of the normals
+/// Beyond the paper (off by default): ``neighbors="xy"`` takes the neighbors of the normals
 /// and the feature degree in the x–y projection, so both sides of a vertical step see each
 /// other (height-field scans); ``refine=r`` splits every leaf whose largest feature degree
 /// exceeds ``feature_threshold`` r levels deeper, each occupied sub-cell keeping its own two
 /// points. On a pocket plate with 3 mm steps the paper's rule rebuilds a worse surface than a
-/// voxel grid of the same point count; ``neighbours="xy", refine=2`` a better one
+/// voxel grid of the same point count; ``neighbors="xy", refine=2`` a better one
 /// (tests/test_octree.py, figures in BENCHMARKS.md).
 ///
 /// Parameters
@@ -315,9 +314,9 @@ fn principal_curvatures<'py>(
 /// normals : array_like (N, 3), optional
 ///     Default: :func:`estimate_normals` with ``k``.
 /// k : int
-///     Neighbours of the feature degree.
+///     Neighbors of the feature degree.
 /// eps1, eps2 : int, optional
-/// neighbours : {"xyz", "xy"}
+/// neighbors : {"xyz", "xy"}
 /// refine : int
 ///     Extra octree levels on feature leaves (0: the paper's rule).
 /// feature_threshold : float
@@ -333,7 +332,7 @@ fn principal_curvatures<'py>(
 /// --------
 /// >>> keep = machscan.octree_simplify(pts, d_min=2.0)
 #[pyfunction]
-#[pyo3(signature = (points, d_min, normals=None, k=10, eps1=None, eps2=None, neighbours="xyz", refine=0, feature_threshold=0.05))]
+#[pyo3(signature = (points, d_min, normals=None, k=10, eps1=None, eps2=None, neighbors="xyz", refine=0, feature_threshold=0.05))]
 #[allow(clippy::too_many_arguments)]
 fn octree_simplify<'py>(
     py: Python<'py>,
@@ -343,7 +342,7 @@ fn octree_simplify<'py>(
     k: i64,
     eps1: Option<i64>,
     eps2: Option<i64>,
-    neighbours: &str,
+    neighbors: &str,
     refine: i64,
     feature_threshold: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -351,12 +350,12 @@ fn octree_simplify<'py>(
     let refine = u32::try_from(count("refine", refine)?).ok().filter(|&r| r <= 40).ok_or_else(|| {
         pyo3::exceptions::PyValueError::new_err(format!("refine: at most 40 extra levels, got {refine}"))
     })?;
-    let neighbours = match neighbours {
-        "xyz" => crate::cloud::NeighbourSpace::Xyz,
-        "xy" => crate::cloud::NeighbourSpace::Xy,
+    let neighbors = match neighbors {
+        "xyz" => crate::cloud::NeighborSpace::Xyz,
+        "xy" => crate::cloud::NeighborSpace::Xy,
         other => {
             return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                "neighbours must be \"xyz\" or \"xy\", got {other:?}"
+                "neighbors must be \"xyz\" or \"xy\", got {other:?}"
             )))
         }
     };
@@ -370,7 +369,7 @@ fn octree_simplify<'py>(
         }
         _ => None,
     };
-    let opts = crate::cloud::OctreeOptions { d_min, k, eps1, eps2, neighbours, refine, feature_threshold };
+    let opts = crate::cloud::OctreeOptions { d_min, k, eps1, eps2, neighbors, refine, feature_threshold };
     let keep = py.detach(|| crate::cloud::octree_simplify(&pts, nrm.as_deref(), &opts)).map_err(to_py_err)?;
     indices(py, keep)
 }

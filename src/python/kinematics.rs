@@ -273,7 +273,7 @@ fn apply_chain<'py>(
 /// a, c : float
 ///     Table angles, rad.
 /// center : array_like, shape (3,)
-///     Rotation centre in measurement coordinates ``t = O'_w − O_w``, mm.
+///     Rotation center in measurement coordinates ``t = O'_w − O_w``, mm.
 ///
 /// Returns
 /// -------

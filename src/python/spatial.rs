@@ -9,7 +9,7 @@ pub(crate) fn as_points(s: &[f64]) -> Vec<[f64; 3]> {
 
 /// Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than ``radius`` share a cluster.
 ///
-/// Clusters are the connected components of the neighbour graph: every neighbour within
+/// Clusters are the connected components of the neighbor graph: every neighbor within
 /// ``radius`` (the same partition as Open3D's ``cluster_dbscan(eps=radius, min_points=1)``), or
 /// with ``k`` the paper's form, the k nearest within ``radius`` (made symmetric so the result
 /// does not depend on the seed order). Memory is O(N); queries run in parallel.
@@ -19,9 +19,9 @@ pub(crate) fn as_points(s: &[f64]) -> Vec<[f64; 3]> {
 /// points : array_like, shape (N, 3)
 ///     Points, mm.
 /// radius : float
-///     Neighbour distance threshold, mm (paper: 5 mm).
+///     Neighbor distance threshold, mm (paper: 5 mm).
 /// k : int, optional
-///     Number of nearest neighbours considered (paper: 5); default all within ``radius``.
+///     Number of nearest neighbors considered (paper: 5); default all within ``radius``.
 ///
 /// Returns
 /// -------
@@ -30,7 +30,7 @@ pub(crate) fn as_points(s: &[f64]) -> Vec<[f64; 3]> {
 ///
 /// Examples
 /// --------
-/// >>> labels = machscan.euclidean_clusters(centres, radius=5.0, k=5)
+/// >>> labels = machscan.euclidean_clusters(centers, radius=5.0, k=5)
 #[pyfunction]
 #[pyo3(signature = (points, radius, k=None))]
 fn euclidean_clusters<'py>(
@@ -99,7 +99,7 @@ fn nearest_neighbors<'py>(
 
 /// The k nearest points of every point of a cloud (its k-nearest graph), the point itself
 /// included and first unless an exact duplicate with a lower index precedes it; nearest first,
-/// ties by index. With ``radius`` only neighbours strictly closer than it (Open3D's hybrid
+/// ties by index. With ``radius`` only neighbors strictly closer than it (Open3D's hybrid
 /// search), the rows padded with index −1 and distance ``inf``.
 ///
 /// Parameters
@@ -107,7 +107,7 @@ fn nearest_neighbors<'py>(
 /// points : array_like, shape (N, 3)
 ///     mm.
 /// k : int
-///     Neighbours per point (at most N).
+///     Neighbors per point (at most N).
 /// radius : float, optional
 ///     mm.
 ///
@@ -144,7 +144,7 @@ fn knn_graph<'py>(
     let (idx, dist): (Vec<i64>, Vec<f64>) = py
         .detach(|| -> crate::Result<_> {
             use rayon::prelude::*;
-            let (index, dist2) = crate::spatial::CloudNeighbours::new(&pp)?.knn_graph(k, radius);
+            let (index, dist2) = crate::spatial::CloudNeighbors::new(&pp)?.knn_graph(k, radius);
             let idx = index.par_iter().map(|&j| if j == u32::MAX { -1 } else { j as i64 }).collect();
             Ok((idx, dist2.par_iter().map(|d| d.sqrt()).collect()))
         })

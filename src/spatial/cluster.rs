@@ -1,17 +1,17 @@
 //! Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than a threshold belong to the
 //! same contour. Unlike k-means it needs no cluster count.
 //!
-//! Clusters are the connected components of the neighbour graph: i—j when j is closer than
+//! Clusters are the connected components of the neighbor graph: i—j when j is closer than
 //! `radius` to i (strictly, as Open3D's radius search: the same partition as DBSCAN with
 //! min_points = 1, i.e. Open3D's `cluster_dbscan(eps, 1)`), or when j is one of the `k` nearest of i within `radius` or i one
 //! of j's (the paper's k-nearest form, made symmetric so the result does not depend on which
-//! point a cluster grows from). Neighbours are queried in parallel blocks and merged by
-//! union–find: memory stays O(N), with no neighbour lists kept for the whole cloud. Clusters are
+//! point a cluster grows from). Neighbors are queried in parallel blocks and merged by
+//! union–find: memory stays O(N), with no neighbor lists kept for the whole cloud. Clusters are
 //! labelled 0, 1, … in the order of their lowest point index, as Open3D labels them.
 //!
 //! The radius form does not query a kd-tree per point: with grid cells of edge r/√3 every two
 //! points of a cell are within r, so a cell is connected inside for free and only pairs of
-//! nearby cells need a test, which stops at the first pair of points within r. On groove-centre
+//! nearby cells need a test, which stops at the first pair of points within r. On groove-center
 //! clouds (dense along thin contours) this is several times faster than per-point queries.
 use super::PointIndex;
 use crate::error::{Error, Result};
@@ -113,7 +113,7 @@ fn union_within_radius_grid(points: &[[f64; 3]], radius: f64, parent: &mut [u32]
             union(parent, first, i);
         }
     }
-    // Forward half of the 5×5×5 neighbourhood (cells up to 2 edges away can hold points within
+    // Forward half of the 5×5×5 neighborhood (cells up to 2 edges away can hold points within
     // r = √3 edges); each unordered pair of cells is tested once.
     let offsets: Vec<Cell> = (-2..=2i64)
         .flat_map(|a| (-2..=2i64).flat_map(move |b| (-2..=2i64).map(move |c| [a, b, c])))
@@ -160,7 +160,7 @@ fn union_knn(points: &[[f64; 3]], radius: f64, k: usize, parent: &mut [u32]) -> 
         let edges: Vec<Vec<u32>> = (start..end)
             .into_par_iter()
             .map(|i| {
-                // k + 1: the point itself is its own nearest neighbour. kiddo's radius is
+                // k + 1: the point itself is its own nearest neighbor. kiddo's radius is
                 // inclusive, ours strict: points at exactly `radius` come last and are dropped.
                 index
                     .knn_within(&points[i], k + 1, radius)
@@ -220,7 +220,7 @@ mod tests {
 
     #[test]
     fn radius_is_strict_in_both_forms() {
-        // Neighbours exactly `radius` apart are not joined; a hair closer they are.
+        // Neighbors exactly `radius` apart are not joined; a hair closer they are.
         let pts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
         assert_eq!(euclidean_clusters(&pts, 1.0, None).unwrap(), vec![0, 1, 2]);
         assert_eq!(euclidean_clusters(&pts, 1.0, Some(2)).unwrap(), vec![0, 1, 2]);

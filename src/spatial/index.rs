@@ -1,7 +1,7 @@
 //! The kd-tree facade for queries from arbitrary points (contour matching, clustering, duplicate
 //! removal, registration). kiddo's immutable tree gives the best query speed for clouds built
-//! once and queried many times. Neighbourhoods of a cloud's own points, asked for every point at
-//! once, go through `CloudNeighbours`, which answers them in bulk.
+//! once and queried many times. Neighborhoods of a cloud's own points, asked for every point at
+//! once, go through `CloudNeighbors`, which answers them in bulk.
 use crate::error::{Error, Result};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::num::NonZeroUsize;

@@ -1,5 +1,5 @@
-"""k-nearest graph of a cloud's own points (`spatial::CloudNeighbours`) against scipy's cKDTree
-and Open3D's nearest-neighbour search on the same points."""
+"""k-nearest graph of a cloud's own points (`spatial::CloudNeighbors`) against scipy's cKDTree
+and Open3D's nearest-neighbor search on the same points."""
 
 import numpy as np
 import open3d

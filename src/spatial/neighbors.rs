@@ -1,17 +1,17 @@
-//! Neighbourhoods of every point of one cloud: its k nearest points, or all points within a
+//! Neighborhoods of every point of one cloud: its k nearest points, or all points within a
 //! radius. Outlier removal, normals, curvature and the feature degree ask exactly this.
 //!
 //! Why our own tree beside kiddo (`PointIndex`): kiddo answers one query at a time, each walking
 //! the tree alone — about 3 µs for k = 20, the speed of Open3D's nanoflann. Here the queries are
 //! the cloud's own points, so they are answered a leaf at a time: the leaves that can hold a
-//! neighbour of any point of the leaf are gathered once into contiguous coordinate arrays, and
+//! neighbor of any point of the leaf are gathered once into contiguous coordinate arrays, and
 //! each point of the leaf scans those arrays in a loop the compiler vectorises. The gather radius
 //! is guessed from the previous leaf's largest k-th distance (leaves are visited in tree order,
-//! so the previous leaf is a spatial neighbour); a query whose k-th distance exceeds it is
+//! so the previous leaf is a spatial neighbor); a query whose k-th distance exceeds it is
 //! answered again with a gather radius that is certain to be enough, so every answer is exact.
 //! Measured in benchmarks/bench_cloud.py (`knn_graph`, SOR, ROR, normals against Open3D).
 //!
-//! Neighbours are sorted by (squared distance, index): results do not depend on the tree, the
+//! Neighbors are sorted by (squared distance, index): results do not depend on the tree, the
 //! order of evaluation or the thread count.
 use crate::error::{Error, Result};
 use rayon::prelude::*;
@@ -26,9 +26,9 @@ const GUESS_MARGIN2: f64 = 1.3;
 /// Subtrees larger than this are split on two threads while building.
 const PARALLEL_SPLIT: usize = 16_384;
 
-/// One neighbour of a query point.
+/// One neighbor of a query point.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Neighbour {
+pub struct Neighbor {
     /// Index into the cloud.
     pub index: usize,
     /// Squared distance to the query point.
@@ -48,8 +48,8 @@ enum NodeKind {
     Leaf(u32, u32),
 }
 
-/// A bucket kd-tree over one cloud, answering neighbourhood queries for all of its points.
-pub struct CloudNeighbours {
+/// A bucket kd-tree over one cloud, answering neighborhood queries for all of its points.
+pub struct CloudNeighbors {
     /// Tree position → index into the cloud.
     order: Vec<u32>,
     /// Coordinates in tree order, one array per axis.
@@ -81,14 +81,14 @@ struct Scratch {
     pos: Vec<u32>,
     /// (position, k-th distance) of the queries of this pass answered so far.
     answered: Vec<([f64; 3], f64)>,
-    /// k neighbours per query of the leaf.
-    found: Vec<Neighbour>,
+    /// k neighbors per query of the leaf.
+    found: Vec<Neighbor>,
     count: Vec<usize>,
     kth2: Vec<f64>,
     pending: Vec<usize>,
 }
 
-impl CloudNeighbours {
+impl CloudNeighbors {
     /// Builds the tree over `points` (finite, fewer than 2^32 − 1).
     pub fn new(points: &[[f64; 3]]) -> Result<Self> {
         let n = points.len();
@@ -105,7 +105,7 @@ impl CloudNeighbours {
         let order: Vec<u32> = items.par_iter().map(|it| it.1).collect();
         let xyz = [0, 1, 2].map(|k| items.par_iter().map(|it| it.0[k]).collect::<Vec<f64>>());
         drop(items);
-        let mut tree = CloudNeighbours {
+        let mut tree = CloudNeighbors {
             order,
             xyz,
             nodes: Vec::with_capacity(4 * n / LEAF_SIZE + 1),
@@ -128,21 +128,21 @@ impl CloudNeighbours {
         self.order.is_empty()
     }
 
-    /// `f(i, neighbours)` for every point i, returned in point order. The neighbours are the
+    /// `f(i, neighbors)` for every point i, returned in point order. The neighbors are the
     /// `k` nearest points (the point itself included), nearest first; with `radius` only those
     /// strictly closer than it, so there may be fewer (Open3D's hybrid search; a NaN radius
     /// finds none). Squared distances overflow beyond about 1e154 mm: such points are nobody's
-    /// neighbours.
+    /// neighbors.
     pub fn map_knn<T, F>(&self, k: usize, radius: Option<f64>, f: F) -> Vec<T>
     where
         T: Send + Default,
-        F: Fn(usize, &[Neighbour]) -> T + Sync,
+        F: Fn(usize, &[Neighbor]) -> T + Sync,
     {
         let (k, cap2) = (k.min(self.len()), cap_squared(radius));
         self.map_leaves(|leaf, s, guess, out| self.leaf_knn(leaf, k, cap2, s, guess, &mut |i, nb| f(i, nb), out))
     }
 
-    /// The k-nearest graph as flat rows in point order: row i holds the neighbours of point i
+    /// The k-nearest graph as flat rows in point order: row i holds the neighbors of point i
     /// as in `map_knn`, (index, squared distance), padded with (u32::MAX, ∞) when `radius`
     /// leaves fewer than k. Without a vector per point: each task writes its rows in tree order
     /// into one buffer, and the rows are gathered from there into point order in parallel.
@@ -155,7 +155,7 @@ impl CloudNeighbours {
             let mut rows: Vec<(u32, f64)> = Vec::with_capacity(leaves.len() * LEAF_SIZE * k);
             let mut unit = Vec::new();
             for &leaf in leaves {
-                let mut write = |_: usize, nb: &[Neighbour]| {
+                let mut write = |_: usize, nb: &[Neighbor]| {
                     rows.extend(nb.iter().map(|n| (n.index as u32, n.dist2)));
                     rows.extend(std::iter::repeat_n((u32::MAX, f64::INFINITY), k - nb.len()));
                 };
@@ -253,7 +253,7 @@ impl CloudNeighbours {
         cap2: f64,
         s: &mut Scratch,
         guess: &mut f64,
-        f: &mut impl FnMut(usize, &[Neighbour]) -> T,
+        f: &mut impl FnMut(usize, &[Neighbor]) -> T,
         out: &mut Vec<T>,
     ) {
         let (a, b, lo, hi) = self.leaf(leaf);
@@ -269,7 +269,7 @@ impl CloudNeighbours {
         // Slack on the filter bound, far above the rounding of a squared distance.
         let scale = lo.iter().chain(hi.iter()).fold(1.0f64, |acc, v| acc.max(v.abs()));
         let slack = 1e-9 * scale;
-        s.found.resize(m * k, Neighbour { index: 0, dist2: 0.0, point: [0.0; 3] });
+        s.found.resize(m * k, Neighbor { index: 0, dist2: 0.0, point: [0.0; 3] });
         s.count.resize(m, 0);
         s.kth2.resize(m, 0.0);
         s.pending.clear();
@@ -286,7 +286,7 @@ impl CloudNeighbours {
                 squared_distances(&q, &s.cand, &mut s.d2);
                 // A filter on the candidates before the selection. Any bound gives the exact
                 // answer as long as k points pass it (otherwise all are taken again). Every
-                // neighbour of an answered query p lies within its k-th distance plus |q − p|
+                // neighbor of an answered query p lies within its k-th distance plus |q − p|
                 // of q, so the nearest answered query gives a tight one; the first query of a
                 // pass takes the gather radius.
                 let mut bound = reach2.sqrt();
@@ -301,7 +301,7 @@ impl CloudNeighbours {
                 }
                 for (r, &(bits, index, j)) in s.sel[..taken].iter().enumerate() {
                     let j = j as usize;
-                    s.found[qi * k + r] = Neighbour {
+                    s.found[qi * k + r] = Neighbor {
                         index: index as usize,
                         dist2: f64::from_bits(bits),
                         point: [s.cand.x[j], s.cand.y[j], s.cand.z[j]],
@@ -427,7 +427,7 @@ fn split(items: &mut [([f64; 3], u32)], lo: [f64; 3], hi: [f64; 3]) {
     }
 }
 
-/// The squared cap of a neighbour search: ∞ without a radius; a NaN radius finds nothing.
+/// The squared cap of a neighbor search: ∞ without a radius; a NaN radius finds nothing.
 fn cap_squared(radius: Option<f64>) -> f64 {
     let cap2 = radius.map_or(f64::INFINITY, |r| r * r);
     if cap2.is_nan() {
@@ -551,7 +551,7 @@ mod tests {
     #[test]
     fn knn_equals_brute_force() {
         let pts = cloud(3000, 1);
-        let tree = CloudNeighbours::new(&pts).unwrap();
+        let tree = CloudNeighbors::new(&pts).unwrap();
         for k in [1, 5, 20, 33, 70] {
             let got = tree.map_knn(k, None, |_, nb| nb.iter().map(|n| (n.index, n.dist2)).collect::<Vec<_>>());
             for (i, g) in got.iter().enumerate() {
@@ -564,7 +564,7 @@ mod tests {
     #[test]
     fn hybrid_equals_brute_force() {
         let pts = cloud(2000, 2);
-        let tree = CloudNeighbours::new(&pts).unwrap();
+        let tree = CloudNeighbors::new(&pts).unwrap();
         for (k, r) in [(10, 0.3), (30, 1.0), (5, 100.0)] {
             let got = tree.map_knn(k, Some(r), |_, nb| nb.iter().map(|n| (n.index, n.dist2)).collect::<Vec<_>>());
             for (i, g) in got.iter().enumerate() {
@@ -576,7 +576,7 @@ mod tests {
     #[test]
     fn graph_rows_equal_map_knn() {
         let pts = cloud(3000, 5);
-        let tree = CloudNeighbours::new(&pts).unwrap();
+        let tree = CloudNeighbors::new(&pts).unwrap();
         for (k, radius) in [(7, None), (25, Some(0.4))] {
             let (index, dist2) = tree.knn_graph(k, radius);
             let lists =
@@ -594,7 +594,7 @@ mod tests {
     #[test]
     fn counts_equal_brute_force() {
         let pts = cloud(2500, 3);
-        let tree = CloudNeighbours::new(&pts).unwrap();
+        let tree = CloudNeighbors::new(&pts).unwrap();
         for r in [0.2, 0.5, 3.0] {
             let got = tree.count_within(r);
             for (i, &c) in got.iter().enumerate() {
@@ -605,25 +605,25 @@ mod tests {
 
     #[test]
     fn small_and_degenerate_clouds() {
-        let empty = CloudNeighbours::new(&[]).unwrap();
+        let empty = CloudNeighbors::new(&[]).unwrap();
         assert!(empty.map_knn(5, None, |_, nb| nb.len()).is_empty());
         assert!(empty.count_within(1.0).is_empty());
         let same = vec![[1.0, 2.0, 3.0]; 100];
-        let tree = CloudNeighbours::new(&same).unwrap();
+        let tree = CloudNeighbors::new(&same).unwrap();
         let got = tree.map_knn(7, None, |i, nb| (i, nb.iter().map(|n| n.index).collect::<Vec<_>>()));
         assert!(got.iter().all(|(_, nb)| nb == &(0..7).collect::<Vec<_>>()));
         assert!(tree.count_within(1e-9).iter().all(|&c| c == 100));
         let two = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]];
-        let tree = CloudNeighbours::new(&two).unwrap();
+        let tree = CloudNeighbors::new(&two).unwrap();
         assert_eq!(tree.map_knn(10, None, |_, nb| nb.len()), vec![2, 2]);
-        assert!(CloudNeighbours::new(&[[0.0, f64::NAN, 0.0]]).is_err());
+        assert!(CloudNeighbors::new(&[[0.0, f64::NAN, 0.0]]).is_err());
         // Two clusters of identical points closer than any squared distance can tell: every
         // gather radius rounds to 0, and the search must still end.
         let mut tiny = vec![[0.0; 3]; 32];
         for p in &mut tiny[16..] {
             p[0] = 1e-160;
         }
-        let tree = CloudNeighbours::new(&tiny).unwrap();
+        let tree = CloudNeighbors::new(&tiny).unwrap();
         assert!(tree.map_knn(20, None, |_, nb| nb.len()).iter().all(|&n| n == 20));
         assert!(tree.map_knn(5, Some(f64::NAN), |_, nb| nb.len()).iter().all(|&n| n == 0));
     }
@@ -631,10 +631,10 @@ mod tests {
     #[test]
     fn same_answer_on_one_thread() {
         let pts = cloud(20_000, 4);
-        let tree = CloudNeighbours::new(&pts).unwrap();
+        let tree = CloudNeighbors::new(&pts).unwrap();
         let two = tree.map_knn(12, None, |_, nb| nb.to_vec());
         let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let one = pool.install(|| CloudNeighbours::new(&pts).unwrap().map_knn(12, None, |_, nb| nb.to_vec()));
+        let one = pool.install(|| CloudNeighbors::new(&pts).unwrap().map_knn(12, None, |_, nb| nb.to_vec()));
         assert_eq!(one, two);
     }
 
@@ -644,7 +644,7 @@ mod tests {
         fn knn_on_grids_far_from_the_origin(nx in 1usize..30, ny in 1usize..30, k in 1usize..40, offset in 0.0f64..5000.0) {
             // Grids: many exact ties, which the index order must break.
             let pts: Vec<[f64; 3]> = (0..nx * ny).map(|i| [offset + (i % nx) as f64 * 0.1, offset + (i / nx) as f64 * 0.1, offset]).collect();
-            let tree = CloudNeighbours::new(&pts).unwrap();
+            let tree = CloudNeighbors::new(&pts).unwrap();
             let got = tree.map_knn(k, None, |_, nb| nb.iter().map(|n| (n.index, n.dist2)).collect::<Vec<_>>());
             for (i, g) in got.iter().enumerate() {
                 prop_assert_eq!(g, &brute_knn(&pts, i, k, f64::INFINITY));
