@@ -1,5 +1,7 @@
 //! The one error type of the core. Every variant carries the name of the argument (or file)
-//! at fault, so the Python layer can raise a message a plant engineer understands.
+//! at fault, so the Python layer can raise a message a plant engineer understands. The mapping
+//! to Python exceptions is in one place: `python::error`.
+use std::path::Path;
 use thiserror::Error;
 
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -10,9 +12,23 @@ pub enum Error {
     /// An argument has an unusable value (NaN, out of range, inconsistent with another).
     #[error("{name}: {reason}")]
     Invalid { name: String, reason: String },
-    /// A file could not be read or written, or its content is not what it claims.
+    /// The operating system refused to open, read or write a file (it is missing, not
+    /// permitted, a directory, the disk is full, ...).
+    #[error("{path}: cannot {action}: {message}")]
+    Io {
+        path: String,
+        /// "read" or "write".
+        action: &'static str,
+        kind: std::io::ErrorKind,
+        /// The OS error number, when the OS gave one.
+        errno: Option<i32>,
+        /// The OS's own text, without Rust's "(os error N)" suffix.
+        message: String,
+    },
+    /// A file was read, but its content does not follow its format (truncated, a header that
+    /// promises more than there is, a number that is not one, ...).
     #[error("{path}: {reason}")]
-    File { path: String, reason: String },
+    Format { path: String, reason: String },
 }
 
 impl Error {
@@ -23,11 +39,20 @@ impl Error {
     pub fn invalid(name: &str, reason: impl Into<String>) -> Self {
         Error::Invalid { name: name.to_string(), reason: reason.into() }
     }
-}
 
-impl Error {
-    pub fn file(path: &std::path::Path, reason: impl Into<String>) -> Self {
-        Error::File { path: path.display().to_string(), reason: reason.into() }
+    /// The OS refused `action` ("read" or "write") on `path`.
+    pub fn io(path: &Path, action: &'static str, e: &std::io::Error) -> Self {
+        let text = e.to_string();
+        let message = match e.raw_os_error() {
+            Some(code) => text.trim_end_matches(&format!(" (os error {code})")).to_string(),
+            None => text,
+        };
+        Error::Io { path: path.display().to_string(), action, kind: e.kind(), errno: e.raw_os_error(), message }
+    }
+
+    /// The content of `path` does not follow its format.
+    pub fn format(path: &Path, reason: impl Into<String>) -> Self {
+        Error::Format { path: path.display().to_string(), reason: reason.into() }
     }
 }
 
@@ -47,4 +72,50 @@ pub fn check_finite(name: &str, values: &[f64], width: usize) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// `check_finite` for points.
+pub fn check_finite_points(name: &str, points: &[[f64; 3]]) -> Result<()> {
+    check_finite(name, points.as_flattened(), 3)
+}
+
+/// Fails unless `value` is a finite number > 0 (a length, a tolerance, ...). `unit` is put in
+/// the message, e.g. "mm".
+pub fn check_positive(name: &str, value: f64, unit: &str) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        return Ok(());
+    }
+    let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+    Err(Error::invalid(name, format!("must be a positive finite number{unit}, got {value}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn io_errors_keep_the_kind_and_drop_rusts_suffix() {
+        let e = std::fs::read("/nonexistent/machscan/file.ply").unwrap_err();
+        let err = Error::io(Path::new("/nonexistent/machscan/file.ply"), "read", &e);
+        match &err {
+            Error::Io { kind, errno, message, .. } => {
+                assert_eq!(*kind, std::io::ErrorKind::NotFound);
+                assert!(errno.is_some());
+                assert!(!message.contains("os error"), "{message}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(err.to_string().starts_with("/nonexistent/machscan/file.ply: cannot read: "));
+    }
+
+    #[test]
+    fn finite_and_positive_checks_name_the_argument() {
+        assert!(check_finite("p", &[1.0, 2.0, 3.0], 3).is_ok());
+        let e = check_finite("p", &[1.0, 2.0, 3.0, 4.0, f64::NAN, 6.0], 3).unwrap_err();
+        assert_eq!(e.to_string(), "p: must be finite, found NaN at row 1, column 1");
+        assert!(check_positive("voxel_size", 0.5, "mm").is_ok());
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(check_positive("voxel_size", bad, "mm").unwrap_err().to_string().starts_with("voxel_size: "));
+        }
+    }
 }

@@ -14,7 +14,7 @@
 //! Voxel keys are 64-bit and relative to the minimum bound, so clouds in machine coordinates
 //! several metres from the origin keep full precision.
 use crate::error::{Error, Result};
-use crate::spatial::{CloudNeighbors, PointIndex};
+use crate::spatial::{check_k, CloudNeighbors, Counting, PointIndex};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -70,9 +70,7 @@ impl Hasher for KeyHasher {
 }
 
 pub fn voxel_downsample(points: &[[f64; 3]], voxel: f64) -> Result<VoxelGrid> {
-    if !(voxel.is_finite() && voxel > 0.0) {
-        return Err(Error::invalid("voxel_size", format!("must be a positive length in mm, got {voxel}")));
-    }
+    crate::error::check_positive("voxel_size", voxel, "mm")?;
     check_points(points)?;
     if points.is_empty() {
         return Ok(VoxelGrid { centroids: Vec::new(), voxel_of_point: Vec::new() });
@@ -125,10 +123,8 @@ pub fn voxel_downsample(points: &[[f64; 3]], voxel: f64) -> Result<VoxelGrid> {
 }
 
 /// Kept indices, ascending.
-pub fn statistical_outlier_removal(points: &[[f64; 3]], k: usize, std_ratio: f64) -> Result<Vec<usize>> {
-    if k == 0 {
-        return Err(Error::invalid("k", "must be at least 1"));
-    }
+pub fn remove_statistical_outliers(points: &[[f64; 3]], k: usize, std_ratio: f64) -> Result<Vec<usize>> {
+    check_k("k", k, 1, points.len(), Counting::WithSelf)?;
     if !(std_ratio.is_finite() && std_ratio >= 0.0) {
         return Err(Error::invalid("std_ratio", format!("must be >= 0, got {std_ratio}")));
     }
@@ -161,7 +157,7 @@ pub fn statistical_outlier_removal(points: &[[f64; 3]], k: usize, std_ratio: f64
 
 /// Kept indices, ascending: points with more than `min_neighbors` points strictly closer than
 /// `radius` (the point itself counted).
-pub fn radius_outlier_removal(points: &[[f64; 3]], radius: f64, min_neighbors: usize) -> Result<Vec<usize>> {
+pub fn remove_radius_outliers(points: &[[f64; 3]], radius: f64, min_neighbors: usize) -> Result<Vec<usize>> {
     if !(radius.is_finite() && radius > 0.0) {
         return Err(Error::invalid("radius", format!("must be a positive distance in mm, got {radius}")));
     }

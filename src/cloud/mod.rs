@@ -5,10 +5,11 @@ mod normals;
 mod octree;
 
 pub use filters::{
-    crop_box, radius_outlier_removal, random_downsample, remove_duplicates, statistical_outlier_removal,
+    crop_box, random_downsample, remove_duplicates, remove_radius_outliers, remove_statistical_outliers,
     uniform_downsample, voxel_downsample, VoxelGrid,
 };
 pub use normals::{
-    estimate_normals, orient_along, orient_consistent, orient_towards, principal_curvatures, Neighborhood,
+    estimate_normals, estimate_oriented_normals, orient_along, orient_consistent, orient_towards, principal_curvatures,
+    Neighborhood, Orientation, PrincipalCurvature,
 };
 pub use octree::{boundary_points, feature_degree, octree_simplify, NeighborSpace, OctreeOptions};

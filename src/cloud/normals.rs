@@ -1,7 +1,7 @@
 //! Normals and curvature (SPEC F): PCA of each point's neighborhood, orientation, surface
 //! variation, and principal curvatures from a local quadric fit.
 use crate::error::{Error, Result};
-use crate::spatial::{CloudNeighbors, Neighbor};
+use crate::spatial::{check_k, CloudNeighbors, Counting, Neighbor};
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
 use std::cmp::Ordering;
@@ -22,18 +22,14 @@ pub enum Neighborhood {
 }
 
 impl Neighborhood {
-    fn check(&self) -> Result<()> {
+    /// The neighbor count as every function checks it (`spatial::check_k`), and the radius.
+    fn check(&self, n: usize) -> Result<()> {
         match *self {
-            Neighborhood::Knn(k) | Neighborhood::KnnXy(k) if k < 3 => {
-                Err(Error::invalid("k", format!("a plane needs at least 3 neighbors, got {k}")))
+            Neighborhood::Knn(k) | Neighborhood::KnnXy(k) => check_k("k", k, 3, n, Counting::WithSelf),
+            Neighborhood::Hybrid { radius, max_nn } => {
+                crate::error::check_positive("radius", radius, "mm")?;
+                check_k("k", max_nn, 3, n, Counting::WithSelf)
             }
-            Neighborhood::Hybrid { radius, .. } if !(radius.is_finite() && radius > 0.0) => {
-                Err(Error::invalid("radius", format!("must be a positive distance in mm, got {radius}")))
-            }
-            Neighborhood::Hybrid { max_nn, .. } if max_nn < 3 => {
-                Err(Error::invalid("max_nn", format!("must be at least 3, got {max_nn}")))
-            }
-            _ => Ok(()),
         }
     }
 
@@ -89,7 +85,8 @@ fn local_pca(nbrs: &[Neighbor]) -> Option<([f64; 3], [Vector3<f64>; 3])> {
 /// the surface variation λ0/(λ0+λ1+λ2). A point with fewer than 3 neighbors gets (0, 0, 1)
 /// (as Open3D) and variation 0, and is counted in the third return value.
 pub fn estimate_normals(points: &[[f64; 3]], nbh: Neighborhood) -> Result<(Vec<[f64; 3]>, Vec<f64>, usize)> {
-    nbh.check()?;
+    nbh.check(points.len())?;
+    crate::error::check_finite_points("points", points)?;
     if points.is_empty() {
         return Ok((Vec::new(), Vec::new(), 0));
     }
@@ -139,15 +136,69 @@ impl Ord for Edge {
     }
 }
 
+/// How normals are turned after estimation; at most one rule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Orientation {
+    /// The solver's sign.
+    Unoriented,
+    /// `n·(v − p) ≥ 0`: towards a viewpoint (the sensor).
+    Towards([f64; 3]),
+    /// `n·d ≥ 0`: along a direction.
+    Along([f64; 3]),
+    /// Propagated over the k-nearest graph (`orient_consistent`).
+    Consistent,
+}
+
+impl Orientation {
+    /// The rule from the three options of `estimate_normals`; more than one is an error.
+    pub fn from_options(towards: Option<[f64; 3]>, along: Option<[f64; 3]>, consistent: bool) -> Result<Self> {
+        match (towards, along, consistent) {
+            (None, None, false) => Ok(Orientation::Unoriented),
+            (Some(v), None, false) => Ok(Orientation::Towards(v)),
+            (None, Some(d), false) => Ok(Orientation::Along(d)),
+            (None, None, true) => Ok(Orientation::Consistent),
+            _ => Err(Error::invalid("towards, along, consistent", "choose at most one orientation")),
+        }
+    }
+}
+
+/// Unit normals (`estimate_normals`) turned by `orientation`; consistent orientation propagates
+/// over the same neighborhoods.
+pub fn estimate_oriented_normals(
+    points: &[[f64; 3]],
+    nbh: Neighborhood,
+    orientation: Orientation,
+) -> Result<Vec<[f64; 3]>> {
+    let (mut normals, _, _) = estimate_normals(points, nbh)?;
+    match orientation {
+        Orientation::Unoriented => {}
+        Orientation::Towards(v) => {
+            crate::error::check_finite("towards", &v, 3)?;
+            orient_towards(points, &mut normals, v)
+        }
+        Orientation::Along(d) => {
+            crate::error::check_finite("along", &d, 3)?;
+            orient_along(&mut normals, d)
+        }
+        Orientation::Consistent => {
+            let k = match nbh {
+                Neighborhood::Knn(k) | Neighborhood::KnnXy(k) => k,
+                Neighborhood::Hybrid { max_nn, .. } => max_nn,
+            };
+            // The same neighborhood as the normals: the point and its k − 1 others.
+            orient_consistent(points, &mut normals, k - 1)?
+        }
+    }
+    Ok(normals)
+}
+
 /// Consistent orientation by propagation (Hoppe et al. 1992): over the symmetric k-nearest graph
 /// weighted by 1 − |n_i·n_j|, grow a minimum spanning tree (Prim) from the highest point, whose
 /// normal is turned to +z, and flip each point to agree with its parent. Each connected part of
 /// the graph starts again from its highest point.
 pub fn orient_consistent(points: &[[f64; 3]], normals: &mut [[f64; 3]], k: usize) -> Result<()> {
-    if k == 0 {
-        return Err(Error::invalid("k", "must be at least 1"));
-    }
     let n = points.len();
+    check_k("k", k, 1, n, Counting::Others)?;
     if n == 0 {
         return Ok(());
     }
@@ -214,7 +265,9 @@ pub fn principal_curvatures(
     normals: &[[f64; 3]],
     nbh: Neighborhood,
 ) -> Result<Vec<PrincipalCurvature>> {
-    nbh.check()?;
+    nbh.check(points.len())?;
+    crate::error::check_finite_points("points", points)?;
+    crate::error::check_finite_points("normals", normals)?;
     if normals.len() != points.len() {
         return Err(Error::shape(
             "normals",

@@ -35,6 +35,15 @@ pub enum NeighborSpace {
 }
 
 impl NeighborSpace {
+    /// `"xyz"` or `"xy"`.
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "xyz" => Ok(NeighborSpace::Xyz),
+            "xy" => Ok(NeighborSpace::Xy),
+            other => Err(Error::invalid("neighbors", format!("expected \"xyz\" or \"xy\", got {other:?}"))),
+        }
+    }
+
     /// The k nearest in this space.
     fn knn(self, k: usize) -> Neighborhood {
         match self {
@@ -43,6 +52,10 @@ impl NeighborSpace {
         }
     }
 }
+
+/// Deepest octree level: cell indices per axis are u64 counts of `2^depth` cells, and past 40
+/// levels a cell is below 1e-12 of the cloud, finer than the coordinates resolve.
+const MAX_DEPTH: usize = 40;
 
 pub struct OctreeOptions {
     pub d_min: f64,
@@ -54,7 +67,7 @@ pub struct OctreeOptions {
     pub neighbors: NeighborSpace,
     /// Extra levels for leaves whose largest feature degree exceeds `feature_threshold` (0: the
     /// paper's rule).
-    pub refine: u32,
+    pub refine: usize,
     /// Radians.
     pub feature_threshold: f64,
 }
@@ -77,9 +90,7 @@ impl OctreeOptions {
 /// Feature degree of every point (eq 9): the mean unoriented angle to the normals of its `k`
 /// nearest other points, taken in `space`.
 pub fn feature_degree(points: &[[f64; 3]], normals: &[[f64; 3]], k: usize, space: NeighborSpace) -> Result<Vec<f64>> {
-    if k == 0 {
-        return Err(Error::invalid("k", "must be at least 1"));
-    }
+    crate::spatial::check_k("k", k, 1, points.len(), crate::spatial::Counting::Others)?;
     if normals.len() != points.len() {
         return Err(Error::shape(
             "normals",
@@ -130,6 +141,9 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
     if o.eps1 == Some(0) || o.eps2 == Some(0) {
         return Err(Error::invalid("eps1, eps2", "group sizes must be at least 1"));
     }
+    if o.refine > MAX_DEPTH {
+        return Err(Error::invalid("refine", format!("at most {MAX_DEPTH} extra levels, got {}", o.refine)));
+    }
     let n = points.len();
     if n == 0 {
         return Ok(Vec::new());
@@ -138,6 +152,7 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
         if nr.len() != n {
             return Err(Error::shape("normals", format!("({n}, 3): one per point"), format!("({}, 3)", nr.len())));
         }
+        crate::error::check_finite_points("normals", nr)?;
     }
     if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
         return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
@@ -151,7 +166,7 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
     let (lo, hi) = crate::geom::bounds(points);
     let l = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max).max(o.d_min);
     let depth = (l / o.d_min).log2().ceil().max(0.0) as u32;
-    let deepest = depth.checked_add(o.refine).filter(|&d| d <= 40).ok_or_else(|| {
+    let deepest = depth.checked_add(o.refine as u32).filter(|&d| d as usize <= MAX_DEPTH).ok_or_else(|| {
         Error::invalid(
             "d_min",
             format!("{} mm over {l} mm with refine = {} needs an octree deeper than 40 levels", o.d_min, o.refine),

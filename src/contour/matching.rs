@@ -1,6 +1,7 @@
 //! Matching actual contours to theoretical ones (SPEC C2): nearest centroid (paper 000 eq 20),
 //! and a one-to-one assignment minimising the summed centroid distances (Hungarian method),
 //! with contours left unmatched when their centroids are farther apart than a limit.
+use crate::error::{check_finite_points, Error, Result};
 
 /// Mean of the points.
 pub fn centroid(points: &[[f64; 3]]) -> [f64; 3] {
@@ -23,6 +24,22 @@ pub fn nearest_centroid(actual: &[[f64; 3]], theoretical: &[[f64; 3]]) -> Vec<Op
         .iter()
         .map(|a| theoretical.iter().enumerate().min_by(|x, y| dist(a, x.1).total_cmp(&dist(a, y.1))).map(|(i, _)| i))
         .collect()
+}
+
+/// [`assign_one_to_one`] with its arguments checked: finite centroids, `max_distance` ≥ 0 mm
+/// (`None`: no limit).
+pub fn match_contours(
+    actual: &[[f64; 3]],
+    theoretical: &[[f64; 3]],
+    max_distance: Option<f64>,
+) -> Result<Vec<Option<usize>>> {
+    check_finite_points("actual_centroids", actual)?;
+    check_finite_points("theoretical_centroids", theoretical)?;
+    let max_distance = max_distance.unwrap_or(f64::INFINITY);
+    if !(max_distance >= 0.0) {
+        return Err(Error::invalid("max_distance", format!("must be >= 0 mm, got {max_distance}")));
+    }
+    Ok(assign_one_to_one(actual, theoretical, max_distance))
 }
 
 /// One-to-one assignment of actual to theoretical centroids minimising the summed distance;

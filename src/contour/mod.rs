@@ -5,5 +5,5 @@ mod matching;
 mod polyline;
 
 pub use error::{contour_error, ContourError, MatchCase};
-pub use matching::{assign_one_to_one, centroid, nearest_centroid};
+pub use matching::{assign_one_to_one, centroid, match_contours, nearest_centroid};
 pub use polyline::resample_polyline;

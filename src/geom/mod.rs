@@ -3,7 +3,7 @@
 mod rigid;
 mod rotation;
 
-pub use rigid::{kabsch, transform_point, transform_vector, RigidFit};
+pub use rigid::{kabsch, transform_point, transform_rows, transform_vector, RigidFit};
 pub use rotation::{mount_rotation, mount_rotation_angles, mount_rotation_partials, rot_x, rot_y, rot_z, Axis};
 
 /// Axis-aligned bounds `(min, max)` of the points (±∞ when there are none).

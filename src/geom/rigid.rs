@@ -21,6 +21,12 @@ pub fn transform_vector(t: &Matrix4<f64>, v: [f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// One transform applied to many rows, in parallel: points (`vectors = false`) or directions.
+pub fn transform_rows(t: &Matrix4<f64>, rows: &[[f64; 3]], vectors: bool) -> Vec<[f64; 3]> {
+    use rayon::prelude::*;
+    rows.par_iter().map(|&p| if vectors { transform_vector(t, p) } else { transform_point(t, p) }).collect()
+}
+
 /// Result of [`kabsch`]: `dst ≈ rotation · src + translation`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RigidFit {

@@ -28,20 +28,6 @@ pub enum GrooveStatus {
     Failed = 6,
 }
 
-impl GrooveStatus {
-    pub fn describe(self) -> &'static str {
-        match self {
-            GrooveStatus::Converged => "converged",
-            GrooveStatus::MaxIterations => "max iterations",
-            GrooveStatus::NoGroove => "no groove",
-            GrooveStatus::TooFewValid => "too few valid readings",
-            GrooveStatus::TwoGrooves => "two grooves",
-            GrooveStatus::Clipped => "clipped at the window edge",
-            GrooveStatus::Failed => "fit failed",
-        }
-    }
-}
-
 /// The cross-section model fitted to a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TemplateKind {
@@ -50,6 +36,23 @@ pub enum TemplateKind {
     Tanh,
     /// A V with straight flanks and corners rounded over ~1/α (see `VTemplate`).
     V,
+}
+
+impl TemplateKind {
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "tanh" => Ok(TemplateKind::Tanh),
+            "v" => Ok(TemplateKind::V),
+            other => Err(Error::invalid("template", format!("expected \"tanh\" (paper 000) or \"v\", got {other:?}"))),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TemplateKind::Tanh => "tanh",
+            TemplateKind::V => "v",
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -50,7 +50,7 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
                 .filter(|t| !t.is_empty())
                 .map(|t| {
                     t.parse::<f64>()
-                        .map_err(|_| Error::file(path, format!("line {start_line}: {what}: {t:?} is not a number")))
+                        .map_err(|_| Error::format(path, format!("line {start_line}: {what}: {t:?} is not a number")))
                 })
                 .collect()
         };
@@ -58,7 +58,7 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
             "GOTO" => {
                 let v = numbers("GOTO")?;
                 if v.len() != 3 && v.len() != 6 {
-                    return Err(Error::file(
+                    return Err(Error::format(
                         path,
                         format!("line {start_line}: GOTO needs x, y, z or x, y, z, i, j, k; got {} values", v.len()),
                     ));
@@ -76,15 +76,16 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
                 // FEDRAT/f or FEDRAT/MMPM, f: the last number is the feed.
                 let v: Vec<f64> =
                     args.split(|c: char| c == ',' || c.is_whitespace()).filter_map(|t| t.parse::<f64>().ok()).collect();
-                feed =
-                    *v.last().ok_or_else(|| Error::file(path, format!("line {start_line}: FEDRAT without a feed")))?;
+                feed = *v
+                    .last()
+                    .ok_or_else(|| Error::format(path, format!("line {start_line}: FEDRAT without a feed")))?;
             }
             "RAPID" => rapid = true,
             _ => {}
         }
     }
     if !statement.trim().is_empty() {
-        return Err(Error::file(
+        return Err(Error::format(
             path,
             format!("line {start_line}: the last statement is continued ($) past the end of the file"),
         ));
@@ -93,29 +94,45 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
 }
 
 pub fn read_apt(path: &Path) -> Result<Toolpath> {
-    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", &e))?;
     let text = String::from_utf8_lossy(&bytes);
     parse_apt(path, &text)
 }
 
 /// Writes a CL file: `GOTO/x, y, z[, i, j, k]` per point (tool axes when given), `FEDRAT/f`
-/// whenever the feed changes, `RAPID` before the first point of every segment but the first.
+/// whenever the feed changes, `RAPID` before the first point of every segment but the first
+/// (`segments` labels each point; a new label starts a segment).
 pub fn write_apt(
     path: &Path,
     points: &[f64],
     axes: Option<&[f64]>,
     feeds: Option<&[f64]>,
-    segments: Option<&[u32]>,
+    segments: Option<&[f64]>,
 ) -> Result<()> {
     use std::io::Write;
     let n = points.len() / 3;
-    if axes.is_some_and(|a| a.len() != points.len()) {
-        return Err(Error::shape("axes", format!("({n}, 3): one tool axis per point"), "another length"));
+    crate::error::check_finite("points", points, 3)?;
+    if let Some(a) = axes {
+        if a.len() != points.len() {
+            return Err(Error::shape(
+                "axes",
+                format!("({n}, 3): one tool axis per point"),
+                format!("({}, 3)", a.len() / 3),
+            ));
+        }
+        crate::error::check_finite("axes", a, 3)?;
     }
-    if feeds.is_some_and(|f| f.len() != n) || segments.is_some_and(|s| s.len() != n) {
-        return Err(Error::shape("feeds", format!("({n},): one per point"), "another length"));
+    for (name, v) in [("feeds", feeds), ("segments", segments)] {
+        if let Some(v) = v {
+            if v.len() != n {
+                return Err(Error::shape(name, format!("({n},): one per point"), format!("({},)", v.len())));
+            }
+        }
     }
-    let io = |e: std::io::Error| Error::file(path, format!("cannot write: {e}"));
+    if let Some(s) = segments {
+        crate::error::check_finite("segments", s, 1)?;
+    }
+    let io = |e: std::io::Error| Error::io(path, "write", &e);
     let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
     writeln!(w, "PARTNO/ MACHSCAN TOOLPATH\n$$ written by machscan {}", env!("CARGO_PKG_VERSION")).map_err(io)?;
     if axes.is_some() {

@@ -5,17 +5,10 @@
 //! `binary_compressed` stores the fields column by column (all x, then all y, ...) after
 //! LZF compression; `binary` stores packed records row by row.
 use super::lzf::lzf_decompress;
+use super::{CloudFile, CloudRef, Dtype};
 use crate::error::{Error, Result};
 use rayon::prelude::*;
 use std::path::Path;
-
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct PcdData {
-    /// `(N, 3)` row-major.
-    pub points: Vec<f64>,
-    pub normals: Option<Vec<f64>>,
-    pub scalars: Vec<(String, Vec<f64>)>,
-}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Kind {
@@ -64,13 +57,8 @@ enum Data {
     BinaryCompressed,
 }
 
-pub fn read_pcd(path: &Path) -> Result<PcdData> {
-    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
-    parse_pcd(path, &bytes)
-}
-
-pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
-    let bad = |why: String| Error::file(path, why);
+pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<CloudFile> {
+    let bad = |why: String| Error::format(path, why);
     // Header: text lines up to and including the DATA line.
     let mut pos = 0usize;
     let (mut names, mut sizes, mut types, mut counts): (Vec<String>, Vec<usize>, Vec<Kind>, Vec<usize>) =
@@ -314,7 +302,7 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<PcdData> {
             scalars.push((name, table[first[fi] + c].clone()));
         }
     }
-    Ok(PcdData { points, normals, scalars })
+    Ok(CloudFile { points, normals, scalars, triangles: Vec::new() })
 }
 
 /// PCL writes nan as "nan" and sometimes "-nan"; Rust's parser takes "NaN"/"nan" but not "-nan".
@@ -330,83 +318,80 @@ pub enum PcdEncoding {
     BinaryCompressed,
 }
 
-/// Writes x y z (and normal_x/y/z, and named scalars) as `double` (SIZE 8, TYPE F) fields.
-/// `binary_compressed` stores the columns one after the other, LZF-framed.
-pub fn write_pcd(
-    path: &Path,
-    points: &[f64],
-    normals: Option<&[f64]>,
-    scalars: &[(&str, &[f64])],
-    data: PcdEncoding,
-) -> Result<()> {
+/// Writes x y z (and normal_x/y/z, and named scalars) as `dtype` fields (`data` checked by
+/// `write_file`). `binary_compressed` stores the columns one after the other, LZF-framed, as PCL
+/// does.
+pub(super) fn write_pcd(path: &Path, data: &CloudRef<'_>, encoding: PcdEncoding, dtype: Dtype) -> Result<()> {
     use std::io::Write;
-    let n = points.len() / 3;
-    if let Some(nr) = normals {
-        if nr.len() != points.len() {
-            return Err(Error::shape(
-                "normals",
-                format!("({n}, 3): one normal per point"),
-                format!("({}, 3)", nr.len() / 3),
-            ));
-        }
-    }
-    for (name, v) in scalars {
-        if v.len() != n {
-            return Err(Error::shape(name, format!("({n},): one value per point"), format!("({},)", v.len())));
-        }
-        if name.is_empty() || name.contains(char::is_whitespace) {
-            return Err(Error::invalid("scalars", format!("field name {name:?} must be one word")));
-        }
-    }
+    let n = data.points.len() / 3;
     // Columns in field order.
-    let mut names: Vec<String> = vec!["x".into(), "y".into(), "z".into()];
-    let mut cols: Vec<Vec<f64>> = (0..3).map(|k| (0..n).map(|i| points[3 * i + k]).collect()).collect();
-    if let Some(nr) = normals {
-        for (k, name) in ["normal_x", "normal_y", "normal_z"].iter().enumerate() {
-            names.push(name.to_string());
+    let mut names: Vec<&str> = vec!["x", "y", "z"];
+    let mut cols: Vec<Vec<f64>> = (0..3).map(|k| (0..n).map(|i| data.points[3 * i + k]).collect()).collect();
+    if let Some(nr) = data.normals {
+        for (k, name) in ["normal_x", "normal_y", "normal_z"].into_iter().enumerate() {
+            names.push(name);
             cols.push((0..n).map(|i| nr[3 * i + k]).collect());
         }
     }
-    for (name, v) in scalars {
-        names.push(name.to_string());
+    for (name, v) in data.scalars {
+        names.push(name);
         cols.push(v.to_vec());
     }
     let f = names.len();
-    let kind = match data {
+    let kind = match encoding {
         PcdEncoding::Ascii => "ascii",
         PcdEncoding::Binary => "binary",
         PcdEncoding::BinaryCompressed => "binary_compressed",
+    };
+    let size = match dtype {
+        Dtype::F32 => "4",
+        Dtype::F64 => "8",
     };
     let header = format!(
         "# .PCD v0.7 - Point Cloud Data file format (written by machscan {})\nVERSION 0.7\nFIELDS {}\nSIZE {}\nTYPE {}\nCOUNT {}\nWIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {kind}\n",
         env!("CARGO_PKG_VERSION"),
         names.join(" "),
-        vec!["8"; f].join(" "),
+        vec![size; f].join(" "),
         vec!["F"; f].join(" "),
         vec!["1"; f].join(" "),
     );
-    let io = |e: std::io::Error| Error::file(path, format!("cannot write: {e}"));
+    let io = |e: std::io::Error| Error::io(path, "write", &e);
     let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(path).map_err(io)?);
     w.write_all(header.as_bytes()).map_err(io)?;
-    match data {
+    match encoding {
         PcdEncoding::Ascii => {
             for i in 0..n {
-                let line: Vec<String> = cols.iter().map(|c| format!("{}", c[i])).collect();
+                let line: Vec<String> = cols.iter().map(|c| dtype.text(c[i])).collect();
                 writeln!(w, "{}", line.join(" ")).map_err(io)?;
             }
         }
         PcdEncoding::Binary => {
+            let mut row = Vec::with_capacity(8 * f);
             for i in 0..n {
+                row.clear();
                 for c in &cols {
-                    w.write_all(&c[i].to_le_bytes()).map_err(io)?;
+                    dtype.put_le(&mut row, c[i]);
                 }
+                w.write_all(&row).map_err(io)?;
             }
         }
         PcdEncoding::BinaryCompressed => {
-            let raw: Vec<u8> = cols.iter().flat_map(|c| c.iter().flat_map(|v| v.to_le_bytes())).collect();
+            let mut raw = Vec::with_capacity(8 * f * n);
+            for c in &cols {
+                for &v in c {
+                    dtype.put_le(&mut raw, v);
+                }
+            }
             let comp = super::lzf::lzf_store(&raw);
-            w.write_all(&(comp.len() as u32).to_le_bytes()).map_err(io)?;
-            w.write_all(&(raw.len() as u32).to_le_bytes()).map_err(io)?;
+            // The block sizes are 32-bit in the format.
+            let (Ok(comp_len), Ok(raw_len)) = (u32::try_from(comp.len()), u32::try_from(raw.len())) else {
+                return Err(Error::invalid(
+                    "compressed",
+                    format!("{n} points make a block over the 4 GiB binary_compressed can hold: write binary"),
+                ));
+            };
+            w.write_all(&comp_len.to_le_bytes()).map_err(io)?;
+            w.write_all(&raw_len.to_le_bytes()).map_err(io)?;
             w.write_all(&comp).map_err(io)?;
         }
     }

@@ -1,26 +1,14 @@
 //! PLY files (Stanford polygon format): reader for ASCII and binary little/big-endian files
-//! with any scalar vertex properties and faces; writer with `double` coordinates (no precision
-//! loss at machine coordinates of several metres), optional normals and named scalars.
+//! with any scalar vertex properties and faces; writer of float or double vertices with
+//! optional normals, named scalars and triangles.
 //!
 //! The reader never trusts the header: counts are checked against the bytes present before
 //! anything is allocated, and every failure names the file and what is wrong.
+use super::{CloudFile, CloudRef, Dtype};
 use crate::error::{Error, Result};
 use rayon::prelude::*;
 use std::io::{BufWriter, Write};
 use std::path::Path;
-
-/// Everything machscan reads from a PLY file.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct PlyData {
-    /// `(N, 3)` row-major vertex coordinates.
-    pub points: Vec<f64>,
-    /// `(N, 3)` row-major normals when the file has nx, ny, nz.
-    pub normals: Option<Vec<f64>>,
-    /// Every other scalar vertex property, by name, in file order.
-    pub scalars: Vec<(String, Vec<f64>)>,
-    /// Faces as triangles (polygons are fanned from their first vertex), vertex indices.
-    pub triangles: Vec<[u32; 3]>,
-}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Scalar {
@@ -107,7 +95,7 @@ struct Header {
 }
 
 fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
-    let bad = |why: String| Error::file(path, why);
+    let bad = |why: String| Error::format(path, why);
     if !bytes.starts_with(b"ply") {
         return Err(bad("not a PLY file (it does not start with \"ply\")".into()));
     }
@@ -177,15 +165,9 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
     hay.windows(needle.len()).position(|w| w == needle)
 }
 
-/// Reads a PLY file: vertices (x, y, z required), normals, other scalar vertex properties and
-/// faces (`vertex_indices` or `vertex_index`).
-pub fn read_ply(path: &Path) -> Result<PlyData> {
-    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
-    parse_ply(path, &bytes)
-}
-
-/// [`read_ply`] on bytes already in memory (`path` names them in messages).
-pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<PlyData> {
+/// A PLY file's bytes (`path` names them in messages): vertices (x, y, z required), normals,
+/// other scalar vertex properties and faces (`vertex_indices` or `vertex_index`).
+pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<CloudFile> {
     let header = parse_header(path, bytes)?;
     let body = &bytes[header.body_start..];
     match header.format {
@@ -207,7 +189,7 @@ fn vertex_columns(path: &Path, el: &Element) -> Result<VertexColumns> {
         match p {
             Property::Scalar { name, .. } => names.push(name.clone()),
             Property::List { name, .. } => {
-                return Err(Error::file(
+                return Err(Error::format(
                     path,
                     format!("vertex property {name:?} is a list; machscan reads scalar vertex properties only"),
                 ))
@@ -217,7 +199,7 @@ fn vertex_columns(path: &Path, el: &Element) -> Result<VertexColumns> {
     let col = |n: &str| names.iter().position(|x| x == n);
     let xyz = match (col("x"), col("y"), col("z")) {
         (Some(x), Some(y), Some(z)) => [x, y, z],
-        _ => return Err(Error::file(path, "the vertex element has no x, y and z properties")),
+        _ => return Err(Error::format(path, "the vertex element has no x, y and z properties")),
     };
     let normal = match (col("nx"), col("ny"), col("nz")) {
         (Some(a), Some(b), Some(c)) => Some([a, b, c]),
@@ -226,7 +208,7 @@ fn vertex_columns(path: &Path, el: &Element) -> Result<VertexColumns> {
     Ok(VertexColumns { names, xyz, normal })
 }
 
-fn assemble(cols: &VertexColumns, n: usize, table: Vec<Vec<f64>>, triangles: Vec<[u32; 3]>) -> PlyData {
+fn assemble(cols: &VertexColumns, n: usize, table: Vec<Vec<f64>>, triangles: Vec<[u32; 3]>) -> CloudFile {
     let mut points = vec![0.0; 3 * n];
     for (k, &c) in cols.xyz.iter().enumerate() {
         for i in 0..n {
@@ -249,7 +231,7 @@ fn assemble(cols: &VertexColumns, n: usize, table: Vec<Vec<f64>>, triangles: Vec
         .filter(|(c, _)| !used.contains(c))
         .map(|(c, v)| (cols.names[c].clone(), v))
         .collect();
-    PlyData { points, normals, scalars, triangles }
+    CloudFile { points, normals, scalars, triangles }
 }
 
 fn fan(poly: &[u32], out: &mut Vec<[u32; 3]>) {
@@ -260,7 +242,7 @@ fn fan(poly: &[u32], out: &mut Vec<[u32; 3]>) {
 
 fn check_face_indices(path: &Path, triangles: &[[u32; 3]], n: usize) -> Result<()> {
     if let Some(t) = triangles.iter().find(|t| t.iter().any(|&v| v as usize >= n)) {
-        return Err(Error::file(
+        return Err(Error::format(
             path,
             format!("a face refers to vertex {} but there are only {n} vertices", t.iter().max().unwrap_or(&0)),
         ));
@@ -268,7 +250,7 @@ fn check_face_indices(path: &Path, triangles: &[[u32; 3]], n: usize) -> Result<(
     Ok(())
 }
 
-fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Result<PlyData> {
+fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Result<CloudFile> {
     let mut pos = 0usize;
     let mut vertex: Option<(VertexColumns, usize, Vec<Vec<f64>>)> = None;
     let mut triangles = Vec::new();
@@ -284,9 +266,9 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
         if el.name == "vertex" {
             let cols = vertex_columns(path, el)?;
             let stride = fixed.unwrap_or(0);
-            let need = el.count.checked_mul(stride).ok_or_else(|| Error::file(path, "the vertex count overflows"))?;
+            let need = el.count.checked_mul(stride).ok_or_else(|| Error::format(path, "the vertex count overflows"))?;
             if body.len() - pos < need {
-                return Err(Error::file(
+                return Err(Error::format(
                     path,
                     format!(
                         "truncated: the header declares {} vertices ({need} bytes) but only {} bytes follow",
@@ -332,7 +314,7 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
                 match p {
                     Property::Scalar { kind, .. } => {
                         if body.len() - pos < kind.size() {
-                            return Err(Error::file(
+                            return Err(Error::format(
                                 path,
                                 format!("truncated in element {:?}, row {row} of {}", el.name, el.count),
                             ));
@@ -341,7 +323,7 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
                     }
                     Property::List { name, count, item } => {
                         if body.len() - pos < count.size() {
-                            return Err(Error::file(
+                            return Err(Error::format(
                                 path,
                                 format!("truncated in element {:?}, row {row} of {}", el.name, el.count),
                             ));
@@ -349,7 +331,7 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
                         let c = count.decode(&body[pos..], be);
                         pos += count.size();
                         if !(c >= 0.0) {
-                            return Err(Error::file(
+                            return Err(Error::format(
                                 path,
                                 format!("element {:?}, row {row}: negative list length {c}", el.name),
                             ));
@@ -357,7 +339,7 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
                         let c = c as usize;
                         let need = c * item.size();
                         if body.len() - pos < need {
-                            return Err(Error::file(
+                            return Err(Error::format(
                                 path,
                                 format!("truncated in element {:?}, row {row} of {}", el.name, el.count),
                             ));
@@ -375,13 +357,13 @@ fn read_binary(path: &Path, elements: &[Element], body: &[u8], be: bool) -> Resu
             fan(&poly, &mut triangles);
         }
     }
-    let (cols, n, table) = vertex.ok_or_else(|| Error::file(path, "no vertex element"))?;
+    let (cols, n, table) = vertex.ok_or_else(|| Error::format(path, "no vertex element"))?;
     check_face_indices(path, &triangles, n)?;
     Ok(assemble(&cols, n, table, triangles))
 }
 
-fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData> {
-    let text = std::str::from_utf8(body).map_err(|_| Error::file(path, "the ASCII body is not text"))?;
+fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<CloudFile> {
+    let text = std::str::from_utf8(body).map_err(|_| Error::format(path, "the ASCII body is not text"))?;
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
     let mut vertex_rows: Option<(VertexColumns, usize, usize, Vec<f64>)> = None;
     let mut triangles = Vec::new();
@@ -391,7 +373,7 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
             let w = cols.names.len();
             let rows: Vec<(usize, &str)> = lines.by_ref().take(el.count).collect();
             if rows.len() < el.count {
-                return Err(Error::file(
+                return Err(Error::format(
                     path,
                     format!(
                         "truncated: the header declares {} vertices but only {} vertex lines follow",
@@ -422,14 +404,14 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
                 })
                 .min();
             if let Some(e) = bad {
-                return Err(Error::file(path, e));
+                return Err(Error::format(path, e));
             }
             vertex_rows = Some((cols, el.count, w, flat));
             continue;
         }
         for row in 0..el.count {
             let Some((k, line)) = lines.next() else {
-                return Err(Error::file(
+                return Err(Error::format(
                     path,
                     format!("truncated in element {:?}: {row} of {} lines", el.name, el.count),
                 ));
@@ -441,14 +423,14 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
                 .split_whitespace()
                 .map(|t| {
                     t.parse::<f64>()
-                        .map_err(|_| Error::file(path, format!("body line {}: {t:?} is not a number", k + 1)))
+                        .map_err(|_| Error::format(path, format!("body line {}: {t:?} is not a number", k + 1)))
                 })
                 .collect::<Result<_>>()?;
             // The first list property holds the vertex indices (count, then items).
             if let Some(&c) = v.first() {
                 let c = c as usize;
                 if v.len() < 1 + c {
-                    return Err(Error::file(
+                    return Err(Error::format(
                         path,
                         format!("body line {}: the face lists {c} vertices but has {}", k + 1, v.len() - 1),
                     ));
@@ -458,13 +440,13 @@ fn read_ascii(path: &Path, elements: &[Element], body: &[u8]) -> Result<PlyData>
             }
         }
     }
-    let (cols, n, w, flat) = vertex_rows.ok_or_else(|| Error::file(path, "no vertex element"))?;
+    let (cols, n, w, flat) = vertex_rows.ok_or_else(|| Error::format(path, "no vertex element"))?;
     check_face_indices(path, &triangles, n)?;
     Ok(assemble_rows(&cols, n, w, &flat, triangles))
 }
 
 /// [`assemble`] from a row-major `(n, w)` table: one pass per output, no transposition.
-fn assemble_rows(cols: &VertexColumns, n: usize, w: usize, flat: &[f64], triangles: Vec<[u32; 3]>) -> PlyData {
+fn assemble_rows(cols: &VertexColumns, n: usize, w: usize, flat: &[f64], triangles: Vec<[u32; 3]>) -> CloudFile {
     let pick = |c: [usize; 3]| -> Vec<f64> {
         let mut out = vec![0.0; 3 * n];
         out.par_chunks_mut(3).zip(flat.par_chunks(w.max(1))).for_each(|(o, r)| {
@@ -481,75 +463,67 @@ fn assemble_rows(cols: &VertexColumns, n: usize, w: usize, flat: &[f64], triangl
         .filter(|c| !used.contains(c))
         .map(|c| (cols.names[c].clone(), flat.iter().skip(c).step_by(w).copied().collect()))
         .collect();
-    PlyData { points, normals, scalars, triangles }
+    CloudFile { points, normals, scalars, triangles }
 }
 
-/// A named per-point scalar property (e.g. frame index, allowance, curvature).
-pub struct PlyScalar<'a> {
-    pub name: &'a str,
-    pub values: &'a [f64],
-}
-
-/// `points` and `normals` row-major `(N, 3)`; every scalar has N values.
-pub fn write_ply(
-    path: &Path,
-    points: &[f64],
-    normals: Option<&[f64]>,
-    scalars: &[PlyScalar<'_>],
-    binary: bool,
-) -> Result<()> {
-    let n = points.len() / 3;
-    if let Some(nr) = normals {
-        if nr.len() != points.len() {
-            return Err(Error::shape(
-                "normals",
-                format!("({n}, 3): one normal per point"),
-                format!("({}, 3)", nr.len() / 3),
-            ));
-        }
-    }
-    for s in scalars {
-        if s.values.len() != n {
-            return Err(Error::shape(s.name, format!("({n},): one value per point"), format!("({},)", s.values.len())));
-        }
-        if s.name.is_empty() || s.name.contains(char::is_whitespace) {
-            return Err(Error::invalid("scalars", format!("property name {:?} must be one word", s.name)));
-        }
-    }
-    let io = |e: std::io::Error| Error::file(path, format!("cannot write: {e}"));
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut w = BufWriter::with_capacity(1 << 20, file);
+/// Writes `data` (checked by `write_file`): vertices with normals and scalars as `dtype`, and a
+/// `face` element of triangles when there are any (`list uchar int vertex_indices`, what Open3D,
+/// PCL and trimesh read).
+pub(super) fn write_ply(path: &Path, data: &CloudRef<'_>, binary: bool, dtype: Dtype) -> Result<()> {
+    let n = data.points.len() / 3;
+    let ty = match dtype {
+        Dtype::F32 => "float",
+        Dtype::F64 => "double",
+    };
     let mut header = format!(
-        "ply\nformat {} 1.0\ncomment written by machscan {}\nelement vertex {n}\nproperty double x\nproperty double y\nproperty double z\n",
+        "ply\nformat {} 1.0\ncomment written by machscan {}\nelement vertex {n}\nproperty {ty} x\nproperty {ty} y\nproperty {ty} z\n",
         if binary { "binary_little_endian" } else { "ascii" },
         env!("CARGO_PKG_VERSION")
     );
-    if normals.is_some() {
-        header.push_str("property double nx\nproperty double ny\nproperty double nz\n");
+    if data.normals.is_some() {
+        header.push_str(&format!("property {ty} nx\nproperty {ty} ny\nproperty {ty} nz\n"));
     }
-    for s in scalars {
-        header.push_str(&format!("property double {}\n", s.name));
+    for (name, _) in data.scalars {
+        header.push_str(&format!("property {ty} {name}\n"));
+    }
+    let triangles = data.triangles.unwrap_or(&[]);
+    if data.triangles.is_some() {
+        header.push_str(&format!("element face {}\nproperty list uchar int vertex_indices\n", triangles.len()));
     }
     header.push_str("end_header\n");
+    let io = |e: std::io::Error| Error::io(path, "write", &e);
+    let file = std::fs::File::create(path).map_err(io)?;
+    let mut w = BufWriter::with_capacity(1 << 20, file);
     w.write_all(header.as_bytes()).map_err(io)?;
-    let mut row = Vec::with_capacity(6 + scalars.len());
+    let mut row = Vec::with_capacity(6 + data.scalars.len());
+    let mut bytes = Vec::with_capacity(8 * row.capacity());
     for i in 0..n {
         row.clear();
-        row.extend_from_slice(&points[3 * i..3 * i + 3]);
-        if let Some(nr) = normals {
+        row.extend_from_slice(&data.points[3 * i..3 * i + 3]);
+        if let Some(nr) = data.normals {
             row.extend_from_slice(&nr[3 * i..3 * i + 3]);
         }
-        row.extend(scalars.iter().map(|s| s.values[i]));
+        row.extend(data.scalars.iter().map(|(_, v)| v[i]));
         if binary {
-            for v in &row {
-                w.write_all(&v.to_le_bytes()).map_err(io)?;
+            bytes.clear();
+            for &v in &row {
+                dtype.put_le(&mut bytes, v);
             }
+            w.write_all(&bytes).map_err(io)?;
         } else {
-            // `{}` of an f64 prints the shortest text that reads back to the same value.
-            let line: Vec<String> = row.iter().map(|v| format!("{v}")).collect();
+            let line: Vec<String> = row.iter().map(|&v| dtype.text(v)).collect();
             writeln!(w, "{}", line.join(" ")).map_err(io)?;
         }
     }
-    w.flush().map_err(io)?;
-    Ok(())
+    for t in triangles {
+        if binary {
+            w.write_all(&[3u8]).map_err(io)?;
+            for v in t {
+                w.write_all(&(*v as i32).to_le_bytes()).map_err(io)?;
+            }
+        } else {
+            writeln!(w, "3 {} {} {}", t[0], t[1], t[2]).map_err(io)?;
+        }
+    }
+    w.flush().map_err(io)
 }

@@ -1,4 +1,6 @@
-//! Plain text point files: XYZ / CSV / PTS, one point per line, chosen columns.
+//! Plain text point files: XYZ / CSV / PTS, one point per line, chosen columns; and the mesh
+//! text format of the geodesic test meshes.
+use super::{CloudFile, Dtype, TextColumns};
 use crate::error::{Error, Result};
 use rayon::prelude::*;
 use std::path::Path;
@@ -6,9 +8,9 @@ use std::path::Path;
 /// Points from columns `columns` (x, y, z; 0-based) of a text file. `delimiter` None splits on
 /// whitespace and commas. Leading lines that are not numbers (headers) are skipped, and so are
 /// blank lines and lines starting with `#` or `//`.
-pub fn read_xyz(path: &Path, delimiter: Option<char>, columns: [usize; 3]) -> Result<Vec<f64>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
-    let text = std::str::from_utf8(&bytes).map_err(|_| Error::file(path, "not a text file"))?;
+pub fn read_xyz(path: &Path, bytes: &[u8], text_columns: TextColumns) -> Result<Vec<f64>> {
+    let TextColumns { delimiter, columns } = text_columns;
+    let text = std::str::from_utf8(bytes).map_err(|_| Error::format(path, "not a text file"))?;
     let split = |l: &str| -> Vec<String> {
         match delimiter {
             Some(d) => l.split(d).map(|t| t.trim().to_string()).collect(),
@@ -46,29 +48,29 @@ pub fn read_xyz(path: &Path, delimiter: Option<char>, columns: [usize; 3]) -> Re
         .collect();
     let mut out = Vec::with_capacity(3 * rows.len());
     for r in rows {
-        out.extend_from_slice(&r.map_err(|e| Error::file(path, e))?);
+        out.extend_from_slice(&r.map_err(|e| Error::format(path, e))?);
     }
     Ok(out)
 }
 
-/// Writes one point per line, `x<sep>y<sep>z`, shortest round-trip text.
-pub fn write_xyz(path: &Path, points: &[f64], delimiter: char) -> Result<()> {
+/// Writes one point per line, `x<sep>y<sep>z`, the shortest text that reads back to the value
+/// in `dtype`.
+pub(super) fn write_xyz(path: &Path, points: &[f64], delimiter: char, dtype: Dtype) -> Result<()> {
     use std::io::Write;
-    let io = |e: std::io::Error| Error::file(path, format!("cannot write: {e}"));
+    let io = |e: std::io::Error| Error::io(path, "write", &e);
     let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(path).map_err(io)?);
     for p in points.chunks_exact(3) {
-        writeln!(w, "{}{delimiter}{}{delimiter}{}", p[0], p[1], p[2]).map_err(io)?;
+        writeln!(w, "{}{delimiter}{}{delimiter}{}", dtype.text(p[0]), dtype.text(p[1]), dtype.text(p[2]))
+            .map_err(io)?;
     }
     w.flush().map_err(io)
 }
 
-/// Vertices `(V, 3)` row-major and triangles of vertex indices.
-pub type MeshArrays = (Vec<f64>, Vec<[u32; 3]>);
-
 /// The plain mesh text format of the geodesic test meshes (pygeodesic / Kirsanov): a line
 /// `n_vertices n_faces`, then n_vertices lines `x y z` and n_faces lines of three 0-based
 /// vertex indices. `None` when the text does not have that shape (it is then a point file).
-pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<MeshArrays>> {
+pub fn parse_mesh_txt(path: &Path, bytes: &[u8]) -> Result<Option<CloudFile>> {
+    let Ok(text) = std::str::from_utf8(bytes) else { return Ok(None) };
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
     let Some(first) = lines.next() else { return Ok(None) };
     let head: Vec<&str> = first.split_whitespace().collect();
@@ -80,8 +82,8 @@ pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<MeshArrays>> {
         return Ok(None);
     }
     let rest: Vec<&str> = lines.collect();
-    if rest.len() != nv + nf {
-        return Err(Error::file(
+    if nv.checked_add(nf) != Some(rest.len()) {
+        return Err(Error::format(
             path,
             format!("the mesh header announces {nv} vertices and {nf} faces, but {} lines follow", rest.len()),
         ));
@@ -92,9 +94,9 @@ pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<MeshArrays>> {
             .split_whitespace()
             .map(|t| t.parse::<f64>())
             .collect::<std::result::Result<_, _>>()
-            .map_err(|_| Error::file(path, format!("vertex {k}: {l:?} is not three numbers")))?;
+            .map_err(|_| Error::format(path, format!("vertex {k}: {l:?} is not three numbers")))?;
         if v.len() != 3 {
-            return Err(Error::file(path, format!("vertex {k}: {l:?} is not three numbers")));
+            return Err(Error::format(path, format!("vertex {k}: {l:?} is not three numbers")));
         }
         points.extend_from_slice(&v);
     }
@@ -104,11 +106,11 @@ pub fn parse_mesh_txt(path: &Path, text: &str) -> Result<Option<MeshArrays>> {
             .split_whitespace()
             .map(|t| t.parse::<u32>())
             .collect::<std::result::Result<_, _>>()
-            .map_err(|_| Error::file(path, format!("face {k}: {l:?} is not three vertex indices")))?;
+            .map_err(|_| Error::format(path, format!("face {k}: {l:?} is not three vertex indices")))?;
         if v.len() != 3 || v.iter().any(|&i| i as usize >= nv) {
-            return Err(Error::file(path, format!("face {k}: {l:?} is not three vertex indices below {nv}")));
+            return Err(Error::format(path, format!("face {k}: {l:?} is not three vertex indices below {nv}")));
         }
         faces.push([v[0], v[1], v[2]]);
     }
-    Ok(Some((points, faces)))
+    Ok(Some(CloudFile { points, triangles: faces, ..CloudFile::default() }))
 }

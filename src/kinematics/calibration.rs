@@ -6,6 +6,7 @@
 //! the rotation; instead: bring each WCS point into the C2 frame with its known machine
 //! transform, Kabsch for a start, then Levenberg–Marquardt on the exact Euler form, and the
 //! covariance `σ̂² (JᵀJ)⁻¹` with `σ̂² = Σ r² / (3n − 6)`.
+use super::KinematicChain;
 use crate::error::{Error, Result};
 use crate::geom::{kabsch, mount_rotation, mount_rotation_angles, mount_rotation_partials, transform_point};
 use crate::optim::{levenberg_marquardt, LeastSquares, LmOptions, LmStop};
@@ -65,6 +66,26 @@ impl LeastSquares<6> for MountProblem<'_> {
         }
         (jtj, g, cost)
     }
+}
+
+/// [`calibrate_mount`] for an AC head with C2: `poses (n, 6)` row-major X, Y, Z, A, C, C2 at which
+/// each point was seen (`None`: WCS = mount · SCS) and the C2 offset.
+pub fn calibrate_mount_ac_head(
+    scs: &[[f64; 3]],
+    wcs: &[[f64; 3]],
+    poses: Option<&[f64]>,
+    c2_offset: [f64; 3],
+) -> Result<MountCalibration> {
+    let machine: Option<Vec<Matrix4<f64>>> = match poses {
+        None => None,
+        Some(p) => {
+            // The head without its mount: the mount is what is solved for.
+            let head = KinematicChain::ac_head(c2_offset, [0.0; 6])?;
+            head.check_poses("axes", p, Some(scs.len()))?;
+            Some(p.chunks_exact(6).map(|q| head.transform(q)).collect())
+        }
+    };
+    calibrate_mount(scs, wcs, machine.as_deref())
 }
 
 /// `scs`, `wcs`: corresponding points. `machine`: for each point the transform WCS ← C2 frame

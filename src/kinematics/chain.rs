@@ -142,6 +142,8 @@ impl KinematicChain {
     ///
     /// `WCS_T_SCS = [Rz(C)·Rx(A), (X,Y,Z)] · [Rz(C2), L] · [Rz(φ)·Ry(θ)·Rx(ψ), Δ]`.
     pub fn ac_head(c2_offset: [f64; 3], mount: [f64; 6]) -> Result<Self> {
+        crate::error::check_finite("c2_offset", &c2_offset, 3)?;
+        crate::error::check_finite("mount", &mount, 6)?;
         KinematicChain::new(
             vec![
                 Step::TranslateAxes([Some(0), Some(1), Some(2)]),
@@ -160,6 +162,8 @@ impl KinematicChain {
     /// Pose columns X, Y, Z, A, B. Maps tool-frame points to support-side workpiece points:
     /// `mirror(−1,1,−1) · (X,Y,Z) · (−Lba−Lat) · Ry(B) · Lba · Rx(A) · Lat`.
     pub fn ab_mirror_support(lat: [f64; 3], lba: [f64; 3]) -> Result<Self> {
+        crate::error::check_finite("lat", &lat, 3)?;
+        crate::error::check_finite("lba", &lba, 3)?;
         let back = [-lba[0] - lat[0], -lba[1] - lat[1], -lba[2] - lat[2]];
         KinematicChain::new(
             vec![
@@ -178,6 +182,7 @@ impl KinematicChain {
     /// SPEC K6 (paper 003 eq 1): AC cradle table turning about `center` (t = O'_w − O_w).
     /// Pose columns A, C: `P' = Rx(A)·Rz(C)·(P − t) + t` (C turns first, then A).
     pub fn ac_table(center: [f64; 3]) -> Result<Self> {
+        crate::error::check_finite("center", &center, 3)?;
         KinematicChain::new(
             vec![
                 Step::Translate(center),
@@ -263,6 +268,7 @@ impl KinematicChain {
     /// With `vectors = true` the translation is ignored (directions, normals).
     pub fn apply(&self, points: &[f64], poses: &[f64], vectors: bool) -> Result<Vec<f64>> {
         let n = points.len() / 3;
+        crate::error::check_finite(if vectors { "vectors" } else { "points" }, points, 3)?;
         self.check_poses("axes", poses, Some(n))?;
         let w = self.n_axes;
         let mut out = vec![0.0; n * 3];
@@ -274,6 +280,41 @@ impl KinematicChain {
         });
         Ok(out)
     }
+}
+
+/// Points and, when given, normals after a table turn.
+pub type TurnedPoints = (Vec<[f64; 3]>, Option<Vec<[f64; 3]>>);
+
+/// SPEC K6 (paper 003 eq 1): CAD points and normals turned by an AC cradle table at angles
+/// `a`, `c` about `center`: `P' = Rx(a)·Rz(c)·(P − center) + center`, `n' = Rx(a)·Rz(c)·n`.
+pub fn ac_table_rotate(
+    points: &[[f64; 3]],
+    normals: Option<&[[f64; 3]]>,
+    a: f64,
+    c: f64,
+    center: [f64; 3],
+) -> Result<TurnedPoints> {
+    if !(a.is_finite() && c.is_finite()) {
+        return Err(Error::invalid("a, c", format!("table angles must be finite, got a = {a}, c = {c}")));
+    }
+    let t = KinematicChain::ac_table(center)?.transform(&[a, c]);
+    crate::error::check_finite_points("points", points)?;
+    let turned = crate::geom::transform_rows(&t, points, false);
+    let normals = match normals {
+        None => None,
+        Some(nr) => {
+            if nr.len() != points.len() {
+                return Err(Error::shape(
+                    "normals",
+                    format!("({}, 3): one normal per point", points.len()),
+                    format!("({}, 3)", nr.len()),
+                ));
+            }
+            crate::error::check_finite_points("normals", nr)?;
+            Some(crate::geom::transform_rows(&t, nr, true))
+        }
+    };
+    Ok((turned, normals))
 }
 
 #[cfg(test)]

@@ -5,8 +5,8 @@ mod profiler;
 mod scan;
 mod timing;
 
-pub use calibration::{calibrate_mount, MountCalibration};
-pub use chain::{AngleSource, KinematicChain, Step};
-pub use profiler::{profile_to_points, ProfilePoints, Profiler};
+pub use calibration::{calibrate_mount, calibrate_mount_ac_head, MountCalibration};
+pub use chain::{ac_table_rotate, AngleSource, KinematicChain, Step};
+pub use profiler::{profile_to_points, ProfilePoints, Profiler, VENDOR_SENTINEL};
 pub use scan::{frames_to_points, ScanPoints};
 pub use timing::interpolate_poses;

@@ -6,20 +6,36 @@
 //! into points.
 use crate::error::{Error, Result};
 
+/// The "no reading" code profilers of the SR7140 / LJ family write (mm). It is the default
+/// sentinel everywhere: a real height of −99999 mm cannot occur, so dropping it is safe even for
+/// profilers that write NaN instead.
+pub const VENDOR_SENTINEL: f64 = -99999.0;
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Profiler {
     /// Reading spacing δ along the laser line, mm.
     pub pitch: f64,
     /// Index i0 of the reading at SCS x = 0 (paper 000: N/2).
     pub center: f64,
-    /// Readings outside `[lo, hi]` are invalid (the sentinel lies outside it).
+    /// Readings outside `[lo, hi]` are invalid.
     pub valid_lo: f64,
     pub valid_hi: f64,
+    /// A reading equal to this is invalid (the profiler's "no reading" code); NaN never is valid.
+    pub sentinel: Option<f64>,
 }
 
 impl Profiler {
     /// Checks the parameters; `center = None` means `n_readings / 2`.
-    pub fn new(pitch: f64, n_readings: usize, center: Option<f64>, valid_range: Option<(f64, f64)>) -> Result<Self> {
+    pub fn new(
+        pitch: f64,
+        n_readings: usize,
+        center: Option<f64>,
+        valid_range: Option<(f64, f64)>,
+        sentinel: Option<f64>,
+    ) -> Result<Self> {
+        if n_readings == 0 {
+            return Err(Error::shape("frames", "(F, N) with N >= 1 readings per frame", "N = 0"));
+        }
         if !(pitch.is_finite() && pitch > 0.0) {
             return Err(Error::invalid("pitch", format!("must be a positive number of mm, got {pitch}")));
         }
@@ -31,14 +47,16 @@ impl Profiler {
         if lo.is_nan() || hi.is_nan() || lo > hi {
             return Err(Error::invalid("valid_range", format!("must be (lo, hi) with lo <= hi, got ({lo}, {hi})")));
         }
-        Ok(Profiler { pitch, center, valid_lo: lo, valid_hi: hi })
+        // A NaN sentinel means "the profiler writes NaN", which is invalid anyway.
+        let sentinel = sentinel.filter(|s| !s.is_nan());
+        Ok(Profiler { pitch, center, valid_lo: lo, valid_hi: hi, sentinel })
     }
 
-    /// A reading is valid when it is a number inside the measuring range.
+    /// A reading is valid when it is a number inside the measuring range and not the sentinel.
     #[inline]
     pub fn is_valid(&self, d: f64) -> bool {
         // NaN fails both comparisons.
-        d >= self.valid_lo && d <= self.valid_hi && d.is_finite()
+        d >= self.valid_lo && d <= self.valid_hi && d.is_finite() && Some(d) != self.sentinel
     }
 
     /// SCS x of reading `i`.
@@ -60,6 +78,7 @@ pub struct ProfilePoints {
 }
 
 /// Frames `(F, N)` row-major → SCS points of every valid reading, in frame-then-reading order.
-pub fn profile_to_points(frames: &[f64], n_readings: usize, profiler: &Profiler) -> ProfilePoints {
-    crate::kinematics::scan::map_valid_readings(frames, n_readings, profiler, |_, p| p)
+pub fn profile_to_points(frames: &[f64], n_readings: usize, profiler: &Profiler) -> Result<ProfilePoints> {
+    crate::kinematics::scan::check_frames(frames, n_readings)?;
+    Ok(crate::kinematics::scan::map_valid_readings(frames, n_readings, profiler, |_, p| p))
 }

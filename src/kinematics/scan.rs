@@ -20,10 +20,7 @@ pub fn frames_to_points(
     poses: &[f64],
     profiler: &Profiler,
 ) -> Result<ScanPoints> {
-    if n_readings == 0 {
-        return Err(Error::shape("frames", "(F, N) with N >= 1 readings per frame", "N = 0"));
-    }
-    let f = frames.len() / n_readings;
+    let f = check_frames(frames, n_readings)?;
     chain.check_poses("axes", poses, Some(f))?;
     let w = chain.n_axes();
     let transforms: Vec<Matrix4<f64>> =
@@ -32,6 +29,18 @@ pub fn frames_to_points(
         let t = &transforms[k];
         crate::geom::transform_point(t, p)
     }))
+}
+
+/// Checks a row-major `(F, N)` frame array; returns F.
+pub(crate) fn check_frames(frames: &[f64], n_readings: usize) -> Result<usize> {
+    if n_readings == 0 || !frames.len().is_multiple_of(n_readings) {
+        return Err(Error::shape(
+            "frames",
+            "(F, N) with N >= 1 readings per frame",
+            format!("{} values in rows of {n_readings}", frames.len()),
+        ));
+    }
+    Ok(frames.len() / n_readings)
 }
 
 /// The shared two-pass kernel: `map(frame, scs_point)` gives the output point of each valid
@@ -106,7 +115,7 @@ mod tests {
     fn parallel_equals_sequential_bit_for_bit() {
         let (frames, poses) = scan(300, 257);
         let chain = KinematicChain::ac_head([10.0, 0.0, 120.0], [0.01, 0.02, -0.03, 40.0, 1.0, -90.0]).unwrap();
-        let prof = Profiler::new(0.025, 257, None, Some((-5.0, 5.0))).unwrap();
+        let prof = Profiler::new(0.025, 257, None, Some((-5.0, 5.0)), None).unwrap();
         let run = |threads| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -124,14 +133,14 @@ mod tests {
     fn drops_invalid_readings_and_keeps_order() {
         let (frames, poses) = scan(20, 50);
         let chain = KinematicChain::ac_head([0.0; 3], [0.0; 6]).unwrap();
-        let prof = Profiler::new(0.5, 50, Some(10.0), Some((-5.0, 5.0))).unwrap();
+        let prof = Profiler::new(0.5, 50, Some(10.0), Some((-5.0, 5.0)), None).unwrap();
         let out = frames_to_points(&chain, &frames, 50, &poses, &prof).unwrap();
         let valid = frames.iter().filter(|d| d.is_finite() && d.abs() <= 5.0).count();
         assert_eq!(out.frame_index.len(), valid);
         assert_eq!(out.dropped, frames.len() - valid);
         assert!(out.frame_index.windows(2).all(|w| w[0] <= w[1]));
         // Reading 0 of frame 1 (valid): x = (0 − 10)·0.5 before the pose.
-        let local = super::super::profile_to_points(&frames, 50, &prof);
+        let local = super::super::profile_to_points(&frames, 50, &prof).unwrap();
         assert_eq!(local.frame_index, out.frame_index);
         assert!(local.points.chunks(3).all(|p| p[1] == 0.0));
     }
@@ -140,8 +149,22 @@ mod tests {
     fn mismatched_poses_are_an_error() {
         let (frames, poses) = scan(10, 8);
         let chain = KinematicChain::ac_head([0.0; 3], [0.0; 6]).unwrap();
-        let prof = Profiler::new(0.5, 8, None, None).unwrap();
+        let prof = Profiler::new(0.5, 8, None, None, None).unwrap();
         let e = frames_to_points(&chain, &frames, 8, &poses[..54], &prof).unwrap_err();
         assert!(e.to_string().starts_with("axes:"), "{e}");
+    }
+
+    #[test]
+    fn the_sentinel_is_dropped_nan_sentinel_means_none() {
+        let frames = [-99999.0, 1.0, f64::NAN, -99999.0, 2.0, 3.0];
+        let prof = Profiler::new(0.5, 3, None, None, Some(crate::kinematics::VENDOR_SENTINEL)).unwrap();
+        let out = super::super::profile_to_points(&frames, 3, &prof).unwrap();
+        assert_eq!(out.frame_index, vec![0, 1, 1]);
+        assert_eq!(out.dropped, 3);
+        let none = Profiler::new(0.5, 3, None, None, Some(f64::NAN)).unwrap();
+        assert_eq!(none.sentinel, None);
+        let kept = super::super::profile_to_points(&frames, 3, &Profiler::new(0.5, 3, None, None, None).unwrap());
+        assert_eq!(kept.unwrap().frame_index.len(), 5, "without a sentinel −99999 is a reading");
+        assert!(Profiler::new(0.5, 0, None, None, None).is_err());
     }
 }

@@ -1,19 +1,22 @@
-//! Bindings of `crate::cloud`: filters. Every filter returns the kept indices, so attributes
-//! (normals, scalars, frame numbers) can be carried along with `array[indices]`.
-use super::convert::{count, count_opt, f64_array, to_numpy, to_py_err, Dim};
-use super::spatial::as_points;
+//! Bindings of `crate::cloud`: filters, normals, curvature, simplification. Every filter takes
+//! the cloud first and returns the kept indices, so attributes (normals, scalars, frame
+//! numbers) are carried along with `array[indices]`.
+use super::convert::{
+    count, count_opt, enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array,
+};
+use crate::cloud::{NeighborSpace, Neighborhood, OctreeOptions, Orientation};
 use pyo3::prelude::*;
 
-fn points_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 3]>> {
-    let a = f64_array(obj, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
-    let pts = as_points(a.as_slice()?);
-    crate::error::check_finite("points", a.as_slice()?, 3).map_err(to_py_err)?;
-    Ok(pts)
+fn neighborhood(k: usize, radius: Option<f64>) -> Neighborhood {
+    match radius {
+        Some(r) => Neighborhood::Hybrid { radius: r, max_nn: k },
+        None => Neighborhood::Knn(k),
+    }
 }
 
-fn indices<'py>(py: Python<'py>, v: Vec<usize>) -> PyResult<Bound<'py, PyAny>> {
-    let n = v.len();
-    to_numpy(py, v.into_iter().map(|i| i as i64).collect::<Vec<_>>(), &[n])
+/// Optional normals `(N, 3)` matching `n` points.
+fn normals_arg<'py>(obj: Option<&Bound<'py, PyAny>>, n: usize) -> PyResult<Option<F64Array<'py>>> {
+    F64Array::extract_opt(obj, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")
 }
 
 /// Voxel grid: every occupied voxel replaced by the centroid of its points (Open3D's
@@ -40,29 +43,29 @@ fn indices<'py>(py: Python<'py>, v: Vec<usize>) -> PyResult<Bound<'py, PyAny>> {
 /// --------
 /// >>> c = machscan.voxel_downsample(pts, 0.5)
 #[pyfunction]
-#[pyo3(signature = (points, voxel_size, return_index=false))]
+#[pyo3(signature = (points, voxel_size, *, return_index=false))]
 fn voxel_downsample<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
     voxel_size: f64,
     return_index: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let pts = points_arg(points)?;
-    let g = py.detach(|| crate::cloud::voxel_downsample(&pts, voxel_size)).map_err(to_py_err)?;
-    let m = g.centroids.len();
-    let c = to_numpy(py, g.centroids.into_iter().flatten().collect::<Vec<_>>(), &[m, 3])?;
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    let g = enter(py, || crate::cloud::voxel_downsample(pts, voxel_size))?;
+    let c = points_to_numpy(py, g.centroids)?;
     if !return_index {
         return Ok(c);
     }
-    let n = g.voxel_of_point.len();
-    let v = to_numpy(py, g.voxel_of_point.into_iter().map(|x| x as i64).collect::<Vec<_>>(), &[n])?;
+    let v = indices_to_numpy(py, g.voxel_of_point)?;
     Ok(pyo3::types::PyTuple::new(py, [c, v])?.into_any())
 }
 
 /// Statistical outlier removal (Open3D's ``remove_statistical_outlier(nb_neighbors=k,
 /// std_ratio)``): the mean distance of each point to its k nearest points (itself included);
 /// points whose mean is at least ``mean + std_ratio · std`` over the cloud are dropped
-/// (paper 004's "3σ" rule with ``std_ratio = 3``).
+/// (paper 004's "3σ" rule with ``std_ratio = 3``). ``k`` counts the point
+/// itself, 1 ≤ k ≤ N.
 ///
 /// Returns
 /// -------
@@ -70,18 +73,18 @@ fn voxel_downsample<'py>(
 ///
 /// Examples
 /// --------
-/// >>> keep = machscan.statistical_outlier_removal(pts, k=20, std_ratio=2.0)
+/// >>> keep = machscan.remove_statistical_outliers(pts, k=20, std_ratio=2.0)
 #[pyfunction]
-fn statistical_outlier_removal<'py>(
+fn remove_statistical_outliers<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
     k: i64,
     std_ratio: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let k = count("k", k)?;
-    let pts = points_arg(points)?;
-    let keep = py.detach(|| crate::cloud::statistical_outlier_removal(&pts, k, std_ratio)).map_err(to_py_err)?;
-    indices(py, keep)
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    indices_to_numpy(py, enter(py, || crate::cloud::remove_statistical_outliers(pts, k, std_ratio))?)
 }
 
 /// Radius outlier removal (Open3D's ``remove_radius_outlier(nb_points=min_neighbors,
@@ -94,18 +97,18 @@ fn statistical_outlier_removal<'py>(
 ///
 /// Examples
 /// --------
-/// >>> keep = machscan.radius_outlier_removal(pts, radius=0.5, min_neighbors=5)
+/// >>> keep = machscan.remove_radius_outliers(pts, radius=0.5, min_neighbors=5)
 #[pyfunction]
-fn radius_outlier_removal<'py>(
+fn remove_radius_outliers<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
     radius: f64,
     min_neighbors: i64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let min_neighbors = count("min_neighbors", min_neighbors)?;
-    let pts = points_arg(points)?;
-    let keep = py.detach(|| crate::cloud::radius_outlier_removal(&pts, radius, min_neighbors)).map_err(to_py_err)?;
-    indices(py, keep)
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    indices_to_numpy(py, enter(py, || crate::cloud::remove_radius_outliers(pts, radius, min_neighbors))?)
 }
 
 /// Duplicate-point removal (paper 004): in point order, each point not yet removed removes every
@@ -113,9 +116,9 @@ fn radius_outlier_removal<'py>(
 /// points do not open holes. Returns the kept indices, ascending.
 #[pyfunction]
 fn remove_duplicates<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, tolerance: f64) -> PyResult<Bound<'py, PyAny>> {
-    let pts = points_arg(points)?;
-    let keep = py.detach(|| crate::cloud::remove_duplicates(&pts, tolerance)).map_err(to_py_err)?;
-    indices(py, keep)
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    indices_to_numpy(py, enter(py, || crate::cloud::remove_duplicates(pts, tolerance))?)
 }
 
 /// Indices of the points inside the box ``[min_bound, max_bound]`` (bounds included): crop box /
@@ -127,44 +130,43 @@ fn crop_box<'py>(
     min_bound: &Bound<'py, PyAny>,
     max_bound: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let a = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
-    let pts = as_points(a.as_slice()?);
-    let lo = f64_array(min_bound, "min_bound", &[Dim::Is(3)], "(x, y, z) in mm")?;
-    let hi = f64_array(max_bound, "max_bound", &[Dim::Is(3)], "(x, y, z) in mm")?;
-    let (lo, hi) = (lo.as_slice()?, hi.as_slice()?);
-    let keep = crate::cloud::crop_box(&pts, [lo[0], lo[1], lo[2]], [hi[0], hi[1], hi[2]]).map_err(to_py_err)?;
-    indices(py, keep)
+    let arr = F64Array::points(points, "points")?;
+    let lo = f64_vector::<3>(min_bound, "min_bound", "(x, y, z) in mm")?;
+    let hi = f64_vector::<3>(max_bound, "max_bound", "(x, y, z) in mm")?;
+    let pts = arr.rows::<3>()?;
+    indices_to_numpy(py, enter(py, || crate::cloud::crop_box(pts, lo, hi))?)
 }
 
-/// ``count`` points drawn at random without replacement, reproducibly from ``seed``; ascending
-/// indices.
+/// ``count`` points of ``points`` drawn at random without replacement, reproducibly from
+/// ``seed``; ascending indices (all of them when ``count`` ≥ N).
+///
+/// Examples
+/// --------
+/// >>> keep = machscan.random_downsample(pts, 10_000, seed=1)
 #[pyfunction]
-#[pyo3(signature = (n_points, count, seed=0))]
-fn random_downsample<'py>(py: Python<'py>, n_points: i64, count: i64, seed: i64) -> PyResult<Bound<'py, PyAny>> {
-    let (n_points, how_many, seed) =
-        (self::count("n_points", n_points)?, self::count("count", count)?, self::count("seed", seed)?);
-    indices(py, crate::cloud::random_downsample(n_points, how_many, seed as u64))
+#[pyo3(signature = (points, count, *, seed=0))]
+fn random_downsample<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    count: i64,
+    seed: i64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (how_many, seed) = (self::count("count", count)?, self::count("seed", seed)?);
+    let n = F64Array::points(points, "points")?.shape()[0];
+    indices_to_numpy(py, enter(py, || Ok(crate::cloud::random_downsample(n, how_many, seed as u64)))?)
 }
 
-/// Every ``every_k``-th point from the first (Open3D's ``uniform_down_sample``).
+/// Every ``every_k``-th point of ``points`` from the first (Open3D's ``uniform_down_sample``);
+/// ascending indices.
+///
+/// Examples
+/// --------
+/// >>> keep = machscan.uniform_downsample(pts, 5)
 #[pyfunction]
-fn uniform_downsample<'py>(py: Python<'py>, n_points: i64, every_k: i64) -> PyResult<Bound<'py, PyAny>> {
-    let (n_points, every_k) = (count("n_points", n_points)?, count("every_k", every_k)?);
-    indices(py, crate::cloud::uniform_downsample(n_points, every_k).map_err(to_py_err)?)
-}
-
-fn neighborhood(k: usize, radius: Option<f64>) -> crate::cloud::Neighborhood {
-    match radius {
-        Some(r) => crate::cloud::Neighborhood::Hybrid { radius: r, max_nn: k },
-        None => crate::cloud::Neighborhood::Knn(k),
-    }
-}
-
-fn vec3(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<[f64; 3]>> {
-    match obj {
-        Some(o) if !o.is_none() => Ok(Some(super::convert::f64_vector::<3>(o, name, "(x, y, z)")?)),
-        _ => Ok(None),
-    }
+fn uniform_downsample<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, every_k: i64) -> PyResult<Bound<'py, PyAny>> {
+    let every_k = count("every_k", every_k)?;
+    let n = F64Array::points(points, "points")?.shape()[0];
+    indices_to_numpy(py, enter(py, || crate::cloud::uniform_downsample(n, every_k))?)
 }
 
 /// PCA normals (SPEC F): the eigenvector of the smallest eigenvalue of each point's
@@ -181,7 +183,7 @@ fn vec3(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<[f64; 3]>
 /// --------
 /// >>> n = machscan.estimate_normals(pts, k=20, towards=(0, 0, 500))
 #[pyfunction]
-#[pyo3(signature = (points, k=20, radius=None, towards=None, along=None, consistent=false))]
+#[pyo3(signature = (points, k=20, *, radius=None, towards=None, along=None, consistent=false))]
 fn estimate_normals<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
@@ -192,35 +194,19 @@ fn estimate_normals<'py>(
     consistent: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let k = count("k", k)?;
-    let pts = points_arg(points)?;
-    let (towards, along) = (vec3(towards, "towards")?, vec3(along, "along")?);
-    if [towards.is_some(), along.is_some(), consistent].iter().filter(|b| **b).count() > 1 {
-        return Err(pyo3::exceptions::PyValueError::new_err(
-            "towards, along, consistent: choose at most one orientation",
-        ));
-    }
-    let nbh = neighborhood(k, radius);
-    let normals = py
-        .detach(|| -> crate::Result<Vec<[f64; 3]>> {
-            let (mut n, _, _) = crate::cloud::estimate_normals(&pts, nbh)?;
-            if let Some(v) = towards {
-                crate::cloud::orient_towards(&pts, &mut n, v);
-            } else if let Some(d) = along {
-                crate::cloud::orient_along(&mut n, d);
-            } else if consistent {
-                crate::cloud::orient_consistent(&pts, &mut n, k)?;
-            }
-            Ok(n)
-        })
-        .map_err(to_py_err)?;
-    let m = normals.len();
-    to_numpy(py, normals.into_iter().flatten().collect::<Vec<_>>(), &[m, 3])
+    let towards = f64_vector_opt::<3>(towards, "towards", "(x, y, z) in mm")?;
+    let along = f64_vector_opt::<3>(along, "along", "(x, y, z)")?;
+    let orientation = Orientation::from_options(towards, along, consistent)?;
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    let normals = enter(py, || crate::cloud::estimate_oriented_normals(pts, neighborhood(k, radius), orientation))?;
+    points_to_numpy(py, normals)
 }
 
 /// Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighborhood covariance (0 on a
 /// plane, up to 1/3 for isotropic scatter); neighborhoods as in :func:`estimate_normals`.
 #[pyfunction]
-#[pyo3(signature = (points, k=20, radius=None))]
+#[pyo3(signature = (points, k=20, *, radius=None))]
 fn surface_variation<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
@@ -228,8 +214,9 @@ fn surface_variation<'py>(
     radius: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let k = count("k", k)?;
-    let pts = points_arg(points)?;
-    let (_, var, _) = py.detach(|| crate::cloud::estimate_normals(&pts, neighborhood(k, radius))).map_err(to_py_err)?;
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    let (_, var, _) = enter(py, || crate::cloud::estimate_normals(pts, neighborhood(k, radius)))?;
     let n = var.len();
     to_numpy(py, var, &[n])
 }
@@ -254,7 +241,7 @@ fn surface_variation<'py>(
 /// --------
 /// >>> k, d = machscan.principal_curvatures(pts, k=30)
 #[pyfunction]
-#[pyo3(signature = (points, normals=None, k=20, radius=None))]
+#[pyo3(signature = (points, normals=None, k=20, *, radius=None))]
 fn principal_curvatures<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
@@ -263,26 +250,22 @@ fn principal_curvatures<'py>(
     radius: Option<f64>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let k = count("k", k)?;
-    let pts = points_arg(points)?;
-    let n = pts.len();
-    let given = match normals {
-        Some(o) if !o.is_none() => {
-            let a = f64_array(o, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
-            crate::error::check_finite("normals", a.as_slice()?, 3).map_err(to_py_err)?;
-            Some(as_points(a.as_slice()?))
-        }
-        _ => None,
-    };
+    let arr = F64Array::points(points, "points")?;
+    let n = arr.shape()[0];
+    let given = normals_arg(normals, n)?;
+    let (pts, given) = (arr.rows::<3>()?, given.as_ref().map(|a| a.rows::<3>()).transpose()?);
     let nbh = neighborhood(k, radius);
-    let res = py
-        .detach(|| -> crate::Result<_> {
-            let nrm = match given {
-                Some(g) => g,
-                None => crate::cloud::estimate_normals(&pts, nbh)?.0,
-            };
-            crate::cloud::principal_curvatures(&pts, &nrm, nbh)
-        })
-        .map_err(to_py_err)?;
+    let res = enter(py, || {
+        let estimated;
+        let nrm = match given {
+            Some(g) => g,
+            None => {
+                estimated = crate::cloud::estimate_normals(pts, nbh)?.0;
+                &estimated[..]
+            }
+        };
+        crate::cloud::principal_curvatures(pts, nrm, nbh)
+    })?;
     let curv: Vec<f64> = res.iter().flat_map(|r| r.0).collect();
     let dirs: Vec<f64> = res.iter().flat_map(|r| r.1.into_iter().flatten()).collect();
     Ok((to_numpy(py, curv, &[n, 2])?, to_numpy(py, dirs, &[n, 2, 3])?))
@@ -332,7 +315,7 @@ fn principal_curvatures<'py>(
 /// --------
 /// >>> keep = machscan.octree_simplify(pts, d_min=2.0)
 #[pyfunction]
-#[pyo3(signature = (points, d_min, normals=None, k=10, eps1=None, eps2=None, neighbors="xyz", refine=0, feature_threshold=0.05))]
+#[pyo3(signature = (points, d_min, *, normals=None, k=10, eps1=None, eps2=None, neighbors="xyz", refine=0, feature_threshold=0.05))]
 #[allow(clippy::too_many_arguments)]
 fn octree_simplify<'py>(
     py: Python<'py>,
@@ -346,32 +329,14 @@ fn octree_simplify<'py>(
     refine: i64,
     feature_threshold: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let (k, eps1, eps2) = (count("k", k)?, count_opt("eps1", eps1)?, count_opt("eps2", eps2)?);
-    let refine = u32::try_from(count("refine", refine)?).ok().filter(|&r| r <= 40).ok_or_else(|| {
-        pyo3::exceptions::PyValueError::new_err(format!("refine: at most 40 extra levels, got {refine}"))
-    })?;
-    let neighbors = match neighbors {
-        "xyz" => crate::cloud::NeighborSpace::Xyz,
-        "xy" => crate::cloud::NeighborSpace::Xy,
-        other => {
-            return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                "neighbors must be \"xyz\" or \"xy\", got {other:?}"
-            )))
-        }
-    };
-    let pts = points_arg(points)?;
-    let n = pts.len();
-    let nrm = match normals {
-        Some(o) if !o.is_none() => {
-            let a = f64_array(o, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
-            crate::error::check_finite("normals", a.as_slice()?, 3).map_err(to_py_err)?;
-            Some(as_points(a.as_slice()?))
-        }
-        _ => None,
-    };
-    let opts = crate::cloud::OctreeOptions { d_min, k, eps1, eps2, neighbors, refine, feature_threshold };
-    let keep = py.detach(|| crate::cloud::octree_simplify(&pts, nrm.as_deref(), &opts)).map_err(to_py_err)?;
-    indices(py, keep)
+    let (k, eps1, eps2, refine) =
+        (count("k", k)?, count_opt("eps1", eps1)?, count_opt("eps2", eps2)?, count("refine", refine)?);
+    let neighbors = NeighborSpace::parse(neighbors)?;
+    let arr = F64Array::points(points, "points")?;
+    let given = normals_arg(normals, arr.shape()[0])?;
+    let (pts, given) = (arr.rows::<3>()?, given.as_ref().map(|a| a.rows::<3>()).transpose()?);
+    let opts = OctreeOptions { d_min, k, eps1, eps2, neighbors, refine, feature_threshold };
+    indices_to_numpy(py, enter(py, || crate::cloud::octree_simplify(pts, given, &opts))?)
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -380,8 +345,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(surface_variation, m)?)?;
     m.add_function(wrap_pyfunction!(principal_curvatures, m)?)?;
     m.add_function(wrap_pyfunction!(voxel_downsample, m)?)?;
-    m.add_function(wrap_pyfunction!(statistical_outlier_removal, m)?)?;
-    m.add_function(wrap_pyfunction!(radius_outlier_removal, m)?)?;
+    m.add_function(wrap_pyfunction!(remove_statistical_outliers, m)?)?;
+    m.add_function(wrap_pyfunction!(remove_radius_outliers, m)?)?;
     m.add_function(wrap_pyfunction!(remove_duplicates, m)?)?;
     m.add_function(wrap_pyfunction!(crop_box, m)?)?;
     m.add_function(wrap_pyfunction!(random_downsample, m)?)?;

@@ -1,18 +1,30 @@
-//! Array conversion and shape checks shared by every binding.
+//! The seam between Python and the core, shared by every binding:
 //!
-//! Any array-like NumPy can turn into float64 is accepted; it is made C-contiguous float64
-//! (copied only when it is not already), its shape is checked here, and a `ValueError` names the
-//! argument, the expected and the actual shape. Kernels then run on plain slices with the GIL
-//! released.
-use crate::error::Error;
+//! 1. **extract** — `F64Array::extract` takes any array-like NumPy can turn into float64 (lists,
+//!    integer arrays, big-endian or misaligned buffers from `np.frombuffer`, shared memory or
+//!    Dask workers), copies it only when it is not already aligned, C-contiguous float64, and
+//!    checks its shape, naming the argument, the expected and the actual shape;
+//! 2. **enter** — `enter` runs the kernel with the GIL released, maps its error to the Python
+//!    exception once (`python::error`) and lets a Ctrl-C pressed meanwhile through;
+//! 3. **return** — `to_numpy` hands the kernel's `Vec` to NumPy without a copy.
+//!
+//! Value checks (finite, positive, in range) are the core's, so they hold for Rust callers too.
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::PyDict;
 
-pub fn to_py_err(e: Error) -> PyErr {
-    PyValueError::new_err(e.to_string())
+/// Runs `kernel` with the GIL released, then raises its error as the Python exception, or a
+/// `KeyboardInterrupt` when Ctrl-C was pressed while it ran.
+pub fn enter<T, F>(py: Python<'_>, kernel: F) -> PyResult<T>
+where
+    F: FnOnce() -> crate::Result<T> + Send,
+    T: Send,
+{
+    let out = py.detach(kernel);
+    py.check_signals()?;
+    Ok(out?)
 }
 
 /// A count or index argument (k, window, …). Taken from Python as a signed int and checked here:
@@ -61,71 +73,107 @@ fn numpy_module(py: Python<'_>) -> PyResult<&Bound<'_, PyModule>> {
     NUMPY.get_or_try_init(py, || py.import("numpy").map(Bound::unbind)).map(|m| m.bind(py))
 }
 
-/// `obj` as a C-contiguous float64 array of the shape `spec` (with `what` describing the
-/// columns for messages, e.g. "with columns X, Y, Z, A, C, C2").
-pub fn f64_array<'py>(
-    obj: &Bound<'py, PyAny>,
-    name: &str,
-    spec: &[Dim],
-    what: &str,
-) -> PyResult<PyReadonlyArrayDyn<'py, f64>> {
-    let py = obj.py();
-    let np = numpy_module(py)?;
-    let expected = if what.is_empty() { spec_str(spec) } else { format!("{} {}", spec_str(spec), what) };
-    if obj.is_none() {
-        return Err(PyValueError::new_err(format!("{name}: expected an array of shape {expected}, got None")));
+/// A float64 array argument: aligned, C-contiguous, of a checked shape.
+pub struct F64Array<'py> {
+    array: PyReadonlyArrayDyn<'py, f64>,
+}
+
+impl<'py> F64Array<'py> {
+    /// `obj` as float64 of the shape `spec`; `what` describes the columns in messages (e.g. "with
+    /// columns X, Y, Z, A, C, C2").
+    pub fn extract(obj: &Bound<'py, PyAny>, name: &str, spec: &[Dim], what: &str) -> PyResult<Self> {
+        let py = obj.py();
+        let np = numpy_module(py)?;
+        let expected = if what.is_empty() { spec_str(spec) } else { format!("{} {}", spec_str(spec), what) };
+        if obj.is_none() {
+            return Err(PyValueError::new_err(format!("{name}: expected an array of shape {expected}, got None")));
+        }
+        let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
+            PyValueError::new_err(format!(
+                "{name}: expected an array of shape {expected}, but it cannot be converted to an array ({})",
+                e.value(py)
+            ))
+        })?;
+        // Numbers only: NumPy would also turn strings and complex numbers into floats, which
+        // hides a wrong argument rather than converting a right one.
+        let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
+        if !matches!(kind.as_str(), "f" | "i" | "u" | "b") {
+            let dtype = arr.getattr("dtype")?.str()?.to_string();
+            return Err(PyValueError::new_err(format!(
+                "{name}: expected real numbers convertible to float64, got dtype {dtype}"
+            )));
+        }
+        // `require` copies only what is not already aligned, C-contiguous, native float64.
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("dtype", np.getattr("float64")?)?;
+        kwargs.set_item("requirements", "CA")?;
+        let arr = np.call_method("require", (arr,), Some(&kwargs))?;
+        let arr = arr.cast_into::<PyArrayDyn<f64>>().map_err(|e| PyValueError::new_err(format!("{name}: {e}")))?;
+        let shape = arr.shape().to_vec();
+        let ok = shape.len() == spec.len()
+            && shape.iter().zip(spec).all(|(s, d)| match d {
+                Dim::Any(_) => true,
+                Dim::Is(k) => s == k,
+            });
+        if !ok {
+            return Err(PyValueError::new_err(format!("{name}: expected shape {expected}, got {}", shape_str(&shape))));
+        }
+        Ok(F64Array { array: arr.readonly() })
     }
-    let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
-        PyValueError::new_err(format!(
-            "{name}: expected an array of shape {expected}, but it cannot be converted to an array ({})",
-            e.value(py)
-        ))
-    })?;
-    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
-    if !matches!(kind.as_str(), "f" | "i" | "u") {
-        let dtype = arr.getattr("dtype")?.str()?.to_string();
-        return Err(PyValueError::new_err(format!(
-            "{name}: expected real numbers convertible to float64, got dtype {dtype}"
-        )));
+
+    /// An optional argument: `None` stays `None`.
+    pub fn extract_opt(
+        obj: Option<&Bound<'py, PyAny>>,
+        name: &str,
+        spec: &[Dim],
+        what: &str,
+    ) -> PyResult<Option<Self>> {
+        match obj {
+            Some(o) if !o.is_none() => Ok(Some(Self::extract(o, name, spec, what)?)),
+            _ => Ok(None),
+        }
     }
-    let kwargs = PyDict::new(py);
-    kwargs.set_item("dtype", np.getattr("float64")?)?;
-    let arr = np.call_method("ascontiguousarray", (arr,), Some(&kwargs))?;
-    let arr = arr.cast_into::<PyArrayDyn<f64>>().map_err(|e| PyValueError::new_err(format!("{name}: {e}")))?;
-    let shape = arr.shape().to_vec();
-    let ok = shape.len() == spec.len()
-        && shape.iter().zip(spec).all(|(s, d)| match d {
-            Dim::Any(_) => true,
-            Dim::Is(k) => s == k,
-        });
-    if !ok {
-        return Err(PyValueError::new_err(format!("{name}: expected shape {expected}, got {}", shape_str(&shape))));
+
+    /// Points or vectors `(N, 3)`.
+    pub fn points(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Self> {
+        Self::extract(obj, name, &[Dim::Any("N"), Dim::Is(3)], "")
     }
-    Ok(arr.readonly())
+
+    pub fn shape(&self) -> &[usize] {
+        self.array.shape()
+    }
+
+    /// The values, row-major.
+    pub fn values(&self) -> PyResult<&[f64]> {
+        Ok(self.array.as_slice()?)
+    }
+
+    /// The rows of a `(N, K)` array, without a copy.
+    pub fn rows<const K: usize>(&self) -> PyResult<&[[f64; K]]> {
+        let (rows, rest) = self.values()?.as_chunks::<K>();
+        if !rest.is_empty() {
+            return Err(PyValueError::new_err(format!("expected rows of {K} values, got {}", shape_str(self.shape()))));
+        }
+        Ok(rows)
+    }
 }
 
 /// A fixed-length vector argument, e.g. a mount (6 values) or an offset (3 values).
 pub fn f64_vector<const K: usize>(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<[f64; K]> {
-    let arr = f64_array(obj, name, &[Dim::Is(K)], what)?;
-    let s = arr.as_slice()?;
+    let arr = F64Array::extract(obj, name, &[Dim::Is(K)], what)?;
     let mut out = [0.0; K];
-    out.copy_from_slice(s);
-    if let Some(v) = out.iter().find(|v| !v.is_finite()) {
-        return Err(PyValueError::new_err(format!("{name}: must be finite, found {v}")));
-    }
+    out.copy_from_slice(arr.values()?);
     Ok(out)
 }
 
-/// An optional (lo, hi) range.
-pub fn f64_range(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<(f64, f64)>> {
+pub fn f64_vector_opt<const K: usize>(
+    obj: Option<&Bound<'_, PyAny>>,
+    name: &str,
+    what: &str,
+) -> PyResult<Option<[f64; K]>> {
     match obj {
-        None => Ok(None),
-        Some(o) if o.is_none() => Ok(None),
-        Some(o) => {
-            let arr = f64_array(o, name, &[Dim::Is(2)], "(lo, hi)")?;
-            let s = arr.as_slice()?;
-            Ok(Some((s[0], s[1])))
-        }
+        Some(o) if !o.is_none() => Ok(Some(f64_vector::<K>(o, name, what)?)),
+        _ => Ok(None),
     }
 }
 
@@ -136,4 +184,17 @@ pub fn to_numpy<'py, T: numpy::Element>(py: Python<'py>, data: Vec<T>, shape: &[
         return Ok(flat.into_any());
     }
     Ok(flat.reshape(shape.to_vec())?.into_any())
+}
+
+/// Points `(M, 3)` → a NumPy array (no copy).
+pub fn points_to_numpy<'py>(py: Python<'py>, points: Vec<[f64; 3]>) -> PyResult<Bound<'py, PyAny>> {
+    let m = points.len();
+    to_numpy(py, points.into_flattened(), &[m, 3])
+}
+
+/// Indices → int64 NumPy array (what NumPy indexing takes).
+pub fn indices_to_numpy<'py, I: Copy + TryInto<i64>>(py: Python<'py>, v: Vec<I>) -> PyResult<Bound<'py, PyAny>> {
+    let n = v.len();
+    let v: Vec<i64> = v.into_iter().map(|i| i.try_into().unwrap_or(-1)).collect();
+    to_numpy(py, v, &[n])
 }

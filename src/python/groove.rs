@@ -1,22 +1,14 @@
-//! Bindings of `crate::groove`: the batch groove fit.
-use super::convert::{count, count_opt, f64_array, to_numpy, to_py_err, Dim};
+//! Bindings of `crate::groove`: the batch groove fit. The defaults of every option are
+//! `GrooveOptions::default()`, handed to Python by `groove_defaults` (the one source the Python
+//! signatures read), so the fit functions here take every option as a required keyword.
+use super::convert::{count, count_opt, enter, to_numpy, Dim, F64Array};
 use crate::groove::{fit_frames, level_frame, GrooveOptions, TemplateKind};
-use numpy::PyUntypedArrayMethods;
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-/// Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict of
-/// per-frame arrays this returns in a result object.
-#[pyfunction]
-#[pyo3(signature = (x, z, alpha=20.0, nominal_width=0.5, window=None, window_center=None, fit_alpha=false,
-    spike_threshold=Some(0.1), min_depth=0.03, min_valid=12, max_iterations=100, cost_tolerance=0.0,
-    step_tolerance=1e-8, gradient_tolerance=1e-13, template="tanh"))]
 #[allow(clippy::too_many_arguments)]
-fn fit_grooves<'py>(
-    py: Python<'py>,
-    x: &Bound<'py, PyAny>,
-    z: &Bound<'py, PyAny>,
+fn options(
+    template: &str,
     alpha: f64,
     nominal_width: f64,
     window: Option<i64>,
@@ -29,30 +21,76 @@ fn fit_grooves<'py>(
     cost_tolerance: f64,
     step_tolerance: f64,
     gradient_tolerance: f64,
-    template: &str,
-) -> PyResult<Bound<'py, PyDict>> {
-    let (window, window_center) = (count_opt("window", window)?, count_opt("window_center", window_center)?);
-    let (min_valid, max_iterations) = (count("min_valid", min_valid)?, count("max_iterations", max_iterations)?);
-    let template = match template {
-        "tanh" => TemplateKind::Tanh,
-        "v" => TemplateKind::V,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "template: expected \"tanh\" (paper 000) or \"v\", got {other:?}"
-            )))
-        }
-    };
-    let xa = f64_array(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
-    let n = xa.shape()[0];
-    let za = f64_array(z, "z", &[Dim::Any("F"), Dim::Is(n)], "(one column per x, mm)")?;
-    let f = za.shape()[0];
-    let options = GrooveOptions {
-        template,
+) -> PyResult<GrooveOptions> {
+    Ok(GrooveOptions {
+        template: TemplateKind::parse(template)?,
         alpha,
         fit_alpha,
         nominal_width,
+        window: count_opt("window", window)?,
+        window_center: count_opt("window_center", window_center)?,
+        spike_threshold,
+        min_depth,
+        min_valid: count("min_valid", min_valid)?,
+        max_iterations: count("max_iterations", max_iterations)?,
+        cost_tolerance,
+        step_tolerance,
+        gradient_tolerance,
+    })
+}
+
+/// The defaults of the groove fit options (``GrooveOptions::default()`` in the core), by name.
+#[pyfunction]
+fn groove_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let o = GrooveOptions::default();
+    let d = PyDict::new(py);
+    d.set_item("template", o.template.name())?;
+    d.set_item("alpha", o.alpha)?;
+    d.set_item("fit_alpha", o.fit_alpha)?;
+    d.set_item("nominal_width", o.nominal_width)?;
+    d.set_item("window", o.window)?;
+    d.set_item("window_center", o.window_center)?;
+    d.set_item("spike_threshold", o.spike_threshold)?;
+    d.set_item("min_depth", o.min_depth)?;
+    d.set_item("min_valid", o.min_valid)?;
+    d.set_item("max_iterations", o.max_iterations)?;
+    d.set_item("cost_tolerance", o.cost_tolerance)?;
+    d.set_item("step_tolerance", o.step_tolerance)?;
+    d.set_item("gradient_tolerance", o.gradient_tolerance)?;
+    Ok(d)
+}
+
+/// Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` documents it and
+/// wraps the ``GrooveFitArrays`` this returns.
+#[pyfunction]
+#[pyo3(signature = (x, z, *, template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold,
+    min_depth, min_valid, max_iterations, cost_tolerance, step_tolerance, gradient_tolerance))]
+#[allow(clippy::too_many_arguments)]
+fn fit_grooves<'py>(
+    py: Python<'py>,
+    x: &Bound<'py, PyAny>,
+    z: &Bound<'py, PyAny>,
+    template: &str,
+    alpha: f64,
+    nominal_width: f64,
+    window: Option<i64>,
+    window_center: Option<i64>,
+    fit_alpha: bool,
+    spike_threshold: Option<f64>,
+    min_depth: f64,
+    min_valid: i64,
+    max_iterations: i64,
+    cost_tolerance: f64,
+    step_tolerance: f64,
+    gradient_tolerance: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let o = options(
+        template,
+        alpha,
+        nominal_width,
         window,
         window_center,
+        fit_alpha,
         spike_threshold,
         min_depth,
         min_valid,
@@ -60,9 +98,13 @@ fn fit_grooves<'py>(
         cost_tolerance,
         step_tolerance,
         gradient_tolerance,
-    };
-    let (xs, zs) = (xa.as_slice()?, za.as_slice()?);
-    let fits = py.detach(|| fit_frames(xs, zs, &options)).map_err(to_py_err)?;
+    )?;
+    let xa = F64Array::extract(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
+    let n = xa.shape()[0];
+    let za = F64Array::extract(z, "z", &[Dim::Any("F"), Dim::Is(n)], "(one column per x, mm)")?;
+    let f = za.shape()[0];
+    let (xs, zs) = (xa.values()?, za.values()?);
+    let fits = enter(py, || fit_frames(xs, zs, &o))?;
     let d = PyDict::new(py);
     let column = |get: fn(&crate::groove::GrooveFit) -> f64| fits.iter().map(get).collect::<Vec<f64>>();
     d.set_item("x0", to_numpy(py, column(|g| g.x0), &[f])?)?;
@@ -81,10 +123,11 @@ fn fit_grooves<'py>(
 }
 
 /// One frame levelled as the fit sees it (SPEC G steps 1–4); ``machscan.level_groove_frame``
-/// wraps it. Returns a dict with the levelled ``x``, ``z`` (absolute levelled coordinates),
-/// ``tilt``, the initial guess ``start`` (x0, z0, d, w, α) and ``status`` (0 when ready).
+/// wraps the ``LevelledFrameArrays`` this returns: the levelled ``x``, ``z`` (absolute levelled
+/// coordinates), ``tilt``, the initial guess ``start`` (x0, z0, d, w, α) and ``status`` (0 when
+/// ready).
 #[pyfunction]
-#[pyo3(signature = (x, z, alpha=20.0, nominal_width=0.5, window=None, window_center=None, spike_threshold=Some(0.1), min_depth=0.03, min_valid=12))]
+#[pyo3(signature = (x, z, *, alpha, nominal_width, window, window_center, spike_threshold, min_depth, min_valid))]
 #[allow(clippy::too_many_arguments)]
 fn level_groove_frame<'py>(
     py: Python<'py>,
@@ -98,24 +141,26 @@ fn level_groove_frame<'py>(
     min_depth: f64,
     min_valid: i64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (window, window_center) = (count_opt("window", window)?, count_opt("window_center", window_center)?);
-    let min_valid = count("min_valid", min_valid)?;
-    let xa = f64_array(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
-    let n = xa.shape()[0];
-    let za = f64_array(z, "z", &[Dim::Is(n)], "(one frame, one value per x, mm)")?;
-    let options = GrooveOptions {
+    let o = GrooveOptions {
         alpha,
         nominal_width,
-        window,
-        window_center,
+        window: count_opt("window", window)?,
+        window_center: count_opt("window_center", window_center)?,
         spike_threshold,
         min_depth,
-        min_valid,
+        min_valid: count("min_valid", min_valid)?,
         ..GrooveOptions::default()
     };
-    options.validate().map_err(to_py_err)?;
+    let xa = F64Array::extract(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
+    let n = xa.shape()[0];
+    let za = F64Array::extract(z, "z", &[Dim::Is(n)], "(one frame, one value per x, mm)")?;
+    let (xs, zs) = (xa.values()?, za.values()?);
+    let frame = enter(py, || {
+        o.validate()?;
+        Ok(level_frame(xs, zs, &o))
+    })?;
     let d = PyDict::new(py);
-    match level_frame(xa.as_slice()?, za.as_slice()?, &options) {
+    match frame {
         Ok(f) => {
             let (ox, oz) = f.origin;
             let m = f.x.len();
@@ -138,6 +183,7 @@ fn level_groove_frame<'py>(
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(groove_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(fit_grooves, m)?)?;
     m.add_function(wrap_pyfunction!(level_groove_frame, m)?)?;
     Ok(())

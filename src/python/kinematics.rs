@@ -1,31 +1,25 @@
 //! Bindings of `crate::kinematics`: profiler frames, machine chains, pose timing, calibration.
-use super::convert::{f64_array, f64_range, f64_vector, to_numpy, to_py_err, Dim};
+use super::convert::{count, enter, f64_vector, f64_vector_opt, points_to_numpy, to_numpy, Dim, F64Array};
 use crate::geom::Axis;
-use crate::kinematics::{self as kin, AngleSource, KinematicChain, Profiler, Step};
-use nalgebra::Matrix4;
-use numpy::PyUntypedArrayMethods;
+use crate::kinematics::{self as kin, AngleSource, KinematicChain, Profiler, Step, VENDOR_SENTINEL};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 
 const AC_HEAD_AXES: &str = "with columns X, Y, Z, A, C, C2 (mm, rad)";
 
-/// The `frames (F, N)` argument with its shape checked, and the profiler for its N readings.
+/// The `frames (F, N)` argument and the profiler for its N readings.
 fn frames_and_profiler<'py>(
     frames: &Bound<'py, PyAny>,
     pitch: f64,
     center: Option<f64>,
     valid_range: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(numpy::PyReadonlyArrayDyn<'py, f64>, usize, usize, Profiler)> {
-    let arr = f64_array(frames, "frames", &[Dim::Any("F"), Dim::Any("N")], "")?;
-    let (f, n) = (arr.shape()[0], arr.shape()[1]);
-    if f == 0 || n == 0 {
-        return Err(PyValueError::new_err(format!(
-            "frames: expected shape (F, N) with at least one frame and one reading, got ({f}, {n})"
-        )));
-    }
-    let profiler = Profiler::new(pitch, n, center, f64_range(valid_range, "valid_range")?).map_err(to_py_err)?;
-    Ok((arr, f, n, profiler))
+    sentinel: Option<f64>,
+) -> PyResult<(F64Array<'py>, Profiler)> {
+    let arr = F64Array::extract(frames, "frames", &[Dim::Any("F"), Dim::Any("N")], "")?;
+    let valid_range = f64_vector_opt::<2>(valid_range, "valid_range", "(lo, hi) in mm")?.map(|[lo, hi]| (lo, hi));
+    let profiler = Profiler::new(pitch, arr.shape()[1], center, valid_range, sentinel)?;
+    Ok((arr, profiler))
 }
 
 fn points_result<'py>(py: Python<'py>, out: kin::ProfilePoints) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
@@ -37,7 +31,8 @@ fn points_result<'py>(py: Python<'py>, out: kin::ProfilePoints) -> PyResult<(Bou
 ///
 /// Reading ``i`` of a frame becomes the SCS point ``((i - center) * pitch, 0, d_i)``: the laser
 /// line runs along SCS x, ``d_i`` is a height along SCS z (out of the material). Invalid
-/// readings (NaN, the vendor sentinel, anything outside ``valid_range``) are dropped.
+/// readings are dropped: NaN, the ``sentinel`` ("no reading" code, −99999 by default), and
+/// anything outside ``valid_range``.
 ///
 /// Parameters
 /// ----------
@@ -49,6 +44,9 @@ fn points_result<'py>(py: Python<'py>, out: kin::ProfilePoints) -> PyResult<(Bou
 ///     Index of the reading at SCS x = 0; default ``N / 2``.
 /// valid_range : (float, float), optional
 ///     Measuring range ``(lo, hi)`` in mm; readings outside it are invalid.
+/// sentinel : float or None
+///     The profiler's "no reading" code, mm; default ``machscan.SENTINEL`` (−99999). None when
+///     the profiler writes NaN only (−99999 is then still no real height, so the default is safe).
 ///
 /// Returns
 /// -------
@@ -59,21 +57,25 @@ fn points_result<'py>(py: Python<'py>, out: kin::ProfilePoints) -> PyResult<(Bou
 ///
 /// Examples
 /// --------
-/// >>> pts, idx = machscan.profile_to_points([[0.1, float("nan"), 0.3]], pitch=0.025)
+/// >>> pts, idx = machscan.profile_to_points([[0.1, float("nan"), -99999.0, 0.3]], pitch=0.025)
 /// >>> pts.shape
 /// (2, 3)
 #[pyfunction]
-#[pyo3(signature = (frames, pitch, center=None, valid_range=None))]
+#[pyo3(
+    signature = (frames, pitch, *, center=None, valid_range=None, sentinel=Some(VENDOR_SENTINEL)),
+    text_signature = "(frames, pitch, *, center=None, valid_range=None, sentinel=-99999.0)"
+)]
 fn profile_to_points<'py>(
     py: Python<'py>,
     frames: &Bound<'py, PyAny>,
     pitch: f64,
     center: Option<f64>,
     valid_range: Option<&Bound<'py, PyAny>>,
+    sentinel: Option<f64>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let (frames, _, n, profiler) = frames_and_profiler(frames, pitch, center, valid_range)?;
-    let data = frames.as_slice()?;
-    let out = py.detach(|| kin::profile_to_points(data, n, &profiler));
+    let (frames, profiler) = frames_and_profiler(frames, pitch, center, valid_range, sentinel)?;
+    let (data, n) = (frames.values()?, frames.shape()[1]);
+    let out = enter(py, || kin::profile_to_points(data, n, &profiler))?;
     points_result(py, out)
 }
 
@@ -94,8 +96,9 @@ fn profile_to_points<'py>(
 ///     (Lx, Ly, Lz) of the C2 axis from the tool tip, mm.
 /// mount : array_like, shape (6,)
 ///     (theta, psi, phi, dx, dy, dz): mount Euler angles (rad) and translation (mm).
-/// center, valid_range
-///     As in :func:`profile_to_points`.
+/// center, valid_range, sentinel
+///     As in :func:`profile_to_points`: invalid readings (NaN, the sentinel −99999 by default,
+///     outside ``valid_range``) are dropped.
 ///
 /// Returns
 /// -------
@@ -107,7 +110,10 @@ fn profile_to_points<'py>(
 /// --------
 /// >>> pts, idx = machscan.scan_to_wcs(frames, axes, 0.025, (0, 0, 150), (0, 0, 0, 30, 0, -100))
 #[pyfunction]
-#[pyo3(signature = (frames, axes, pitch, c2_offset, mount, center=None, valid_range=None))]
+#[pyo3(
+    signature = (frames, axes, pitch, c2_offset, mount, *, center=None, valid_range=None, sentinel=Some(VENDOR_SENTINEL)),
+    text_signature = "(frames, axes, pitch, c2_offset, mount, *, center=None, valid_range=None, sentinel=-99999.0)"
+)]
 #[allow(clippy::too_many_arguments)]
 fn scan_to_wcs<'py>(
     py: Python<'py>,
@@ -118,11 +124,13 @@ fn scan_to_wcs<'py>(
     mount: &Bound<'py, PyAny>,
     center: Option<f64>,
     valid_range: Option<&Bound<'py, PyAny>>,
+    sentinel: Option<f64>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let chain = ac_head_chain(c2_offset, mount)?;
-    scan_points_with(py, &chain, frames, axes, pitch, center, valid_range)
+    scan_points_with(py, &chain, frames, axes, pitch, center, valid_range, sentinel)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn scan_points_with<'py>(
     py: Python<'py>,
     chain: &KinematicChain,
@@ -131,34 +139,28 @@ fn scan_points_with<'py>(
     pitch: f64,
     center: Option<f64>,
     valid_range: Option<&Bound<'py, PyAny>>,
+    sentinel: Option<f64>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let (frames, f, n, profiler) = frames_and_profiler(frames, pitch, center, valid_range)?;
-    let axes = poses_array(chain, axes, Some(f))?;
-    let (data, poses) = (frames.as_slice()?, axes.as_slice()?);
-    let out = py.detach(|| kin::frames_to_points(chain, data, n, poses, &profiler)).map_err(to_py_err)?;
+    let (frames, profiler) = frames_and_profiler(frames, pitch, center, valid_range, sentinel)?;
+    let axes = poses_array(chain, axes, Some(frames.shape()[0]))?;
+    let (data, n, poses) = (frames.values()?, frames.shape()[1], axes.values()?);
+    let out = enter(py, || kin::frames_to_points(chain, data, n, poses, &profiler))?;
     points_result(py, out)
 }
 
-fn poses_array<'py>(
-    chain: &KinematicChain,
-    axes: &Bound<'py, PyAny>,
-    rows: Option<usize>,
-) -> PyResult<numpy::PyReadonlyArrayDyn<'py, f64>> {
-    let w = chain.n_axes();
+fn poses_array<'py>(chain: &KinematicChain, axes: &Bound<'py, PyAny>, rows: Option<usize>) -> PyResult<F64Array<'py>> {
     let what = format!("with columns {}", chain.axis_names().join(", "));
     let rows_dim = match rows {
         Some(r) => Dim::Is(r),
         None => Dim::Any("F"),
     };
-    let arr = f64_array(axes, "axes", &[rows_dim, Dim::Is(w)], &what)?;
-    crate::error::check_finite("axes", arr.as_slice()?, w).map_err(to_py_err)?;
-    Ok(arr)
+    F64Array::extract(axes, "axes", &[rows_dim, Dim::Is(chain.n_axes())], &what)
 }
 
 fn ac_head_chain(c2_offset: &Bound<'_, PyAny>, mount: &Bound<'_, PyAny>) -> PyResult<KinematicChain> {
     let c2 = f64_vector::<3>(c2_offset, "c2_offset", "(Lx, Ly, Lz) in mm")?;
     let m = f64_vector::<6>(mount, "mount", "(theta, psi, phi, dx, dy, dz) in rad and mm")?;
-    KinematicChain::ac_head(c2, m).map_err(to_py_err)
+    Ok(KinematicChain::ac_head(c2, m)?)
 }
 
 fn transforms_array<'py>(
@@ -167,9 +169,8 @@ fn transforms_array<'py>(
     axes: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let axes = poses_array(chain, axes, None)?;
-    let f = axes.shape()[0];
-    let poses = axes.as_slice()?;
-    let out = py.detach(|| chain.transforms(poses)).map_err(to_py_err)?;
+    let (f, poses) = (axes.shape()[0], axes.values()?);
+    let out = enter(py, || chain.transforms(poses))?;
     to_numpy(py, out, &[f, 4, 4])
 }
 
@@ -239,7 +240,7 @@ fn ab_mirror_support_points<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let lat = f64_vector::<3>(lat, "lat", "(x, y, z) in mm")?;
     let lba = f64_vector::<3>(lba, "lba", "(x, y, z) in mm")?;
-    let chain = KinematicChain::ab_mirror_support(lat, lba).map_err(to_py_err)?;
+    let chain = KinematicChain::ab_mirror_support(lat, lba)?;
     apply_chain(py, &chain, tool_points, "tool_points", axes, false)
 }
 
@@ -251,12 +252,11 @@ fn apply_chain<'py>(
     axes: &Bound<'py, PyAny>,
     vectors: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let pts = f64_array(points, name, &[Dim::Any("N"), Dim::Is(3)], "")?;
+    let pts = F64Array::points(points, name)?;
     let n = pts.shape()[0];
-    crate::error::check_finite(name, pts.as_slice()?, 3).map_err(to_py_err)?;
     let axes = poses_array(chain, axes, Some(n))?;
-    let (p, a) = (pts.as_slice()?, axes.as_slice()?);
-    let out = py.detach(|| chain.apply(p, a, vectors)).map_err(to_py_err)?;
+    let (p, a) = (pts.values()?, axes.values()?);
+    let out = enter(py, || chain.apply(p, a, vectors))?;
     to_numpy(py, out, &[n, 3])
 }
 
@@ -287,42 +287,22 @@ fn apply_chain<'py>(
 fn ac_table_rotate<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
-    normals: &Bound<'py, PyAny>,
+    normals: Option<&Bound<'py, PyAny>>,
     a: f64,
     c: f64,
     center: &Bound<'py, PyAny>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    if !(a.is_finite() && c.is_finite()) {
-        return Err(PyValueError::new_err(format!("a, c: table angles must be finite, got a = {a}, c = {c}")));
-    }
     let center = f64_vector::<3>(center, "center", "(x, y, z) in mm")?;
-    let chain = KinematicChain::ac_table(center).map_err(to_py_err)?;
-    let t = chain.transform(&[a, c]);
-    let pts = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
-    let n = pts.shape()[0];
-    let turned = |name: &str, v: &[f64], vectors: bool| -> PyResult<Vec<f64>> {
-        crate::error::check_finite(name, v, 3).map_err(to_py_err)?;
-        Ok(py.detach(|| map_rows(&t, v, vectors)))
+    let pts = F64Array::points(points, "points")?;
+    let nrm =
+        F64Array::extract_opt(normals, "normals", &[Dim::Is(pts.shape()[0]), Dim::Is(3)], "(one normal per point)")?;
+    let (p, n) = (pts.rows::<3>()?, nrm.as_ref().map(|a| a.rows::<3>()).transpose()?);
+    let (turned, normals) = enter(py, || kin::ac_table_rotate(p, n, a, c, center))?;
+    let normals = match normals {
+        Some(v) => points_to_numpy(py, v)?,
+        None => py.None().into_bound(py),
     };
-    let p_out = turned("points", pts.as_slice()?, false)?;
-    let n_out = if normals.is_none() {
-        py.None().into_bound(py)
-    } else {
-        let nrm = f64_array(normals, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
-        to_numpy(py, turned("normals", nrm.as_slice()?, true)?, &[n, 3])?
-    };
-    Ok((to_numpy(py, p_out, &[n, 3])?, n_out))
-}
-
-fn map_rows(t: &Matrix4<f64>, v: &[f64], vectors: bool) -> Vec<f64> {
-    use rayon::prelude::*;
-    let mut out = vec![0.0; v.len()];
-    out.par_chunks_mut(3).zip(v.par_chunks(3)).for_each(|(o, p)| {
-        let p = [p[0], p[1], p[2]];
-        let q = if vectors { crate::geom::transform_vector(t, p) } else { crate::geom::transform_point(t, p) };
-        o.copy_from_slice(&q);
-    });
-    out
+    Ok((points_to_numpy(py, turned)?, normals))
 }
 
 /// Axis positions at frame times from CNC samples on their own clock (SPEC K7).
@@ -339,7 +319,7 @@ fn map_rows(t: &Matrix4<f64>, v: &[f64], vectors: bool) -> Vec<f64> {
 /// frame_times : array_like, shape (F,)
 ///     Profiler frame times on the same clock, s.
 /// rotary : sequence of int
-///     Columns holding rotary axes in rad; default (3, 4, 5) for X, Y, Z, A, C, C2.
+///     Columns holding rotary axes in rad; default (3, 4, 5), the A, C, C2 of X, Y, Z, A, C, C2.
 ///
 /// Returns
 /// -------
@@ -350,7 +330,10 @@ fn map_rows(t: &Matrix4<f64>, v: &[f64], vectors: bool) -> Vec<f64> {
 /// >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
 /// array([[0.5]])
 #[pyfunction]
-#[pyo3(signature = (sample_times, samples, frame_times, rotary=vec![3, 4, 5]))]
+#[pyo3(
+    signature = (sample_times, samples, frame_times, rotary=vec![3, 4, 5]),
+    text_signature = "(sample_times, samples, frame_times, rotary=(3, 4, 5))"
+)]
 fn interpolate_poses<'py>(
     py: Python<'py>,
     sample_times: &Bound<'py, PyAny>,
@@ -358,22 +341,22 @@ fn interpolate_poses<'py>(
     frame_times: &Bound<'py, PyAny>,
     rotary: Vec<i64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let rotary = rotary.into_iter().map(|c| super::convert::count("rotary", c)).collect::<PyResult<Vec<usize>>>()?;
-    let ts = f64_array(sample_times, "sample_times", &[Dim::Any("S")], "")?;
+    let rotary = rotary.into_iter().map(|c| count("rotary", c)).collect::<PyResult<Vec<usize>>>()?;
+    let ts = F64Array::extract(sample_times, "sample_times", &[Dim::Any("S")], "")?;
     let s = ts.shape()[0];
-    let smp = f64_array(samples, "samples", &[Dim::Is(s), Dim::Any("n_axes")], "(one row per sample time)")?;
+    let smp = F64Array::extract(samples, "samples", &[Dim::Is(s), Dim::Any("n_axes")], "(one row per sample time)")?;
     let w = smp.shape()[1];
-    let ft = f64_array(frame_times, "frame_times", &[Dim::Any("F")], "")?;
+    let ft = F64Array::extract(frame_times, "frame_times", &[Dim::Any("F")], "")?;
     let f = ft.shape()[0];
-    let (a, b, c) = (ts.as_slice()?, smp.as_slice()?, ft.as_slice()?);
-    let out = py.detach(|| kin::interpolate_poses(a, b, c, &rotary)).map_err(to_py_err)?;
+    let (a, b, c) = (ts.values()?, smp.values()?, ft.values()?);
+    let out = enter(py, || kin::interpolate_poses(a, b, c, &rotary))?;
     to_numpy(py, out, &[f, w])
 }
 
 /// Sensor mount calibration from SCS ↔ WCS correspondences (SPEC K4); the Python function
-/// ``machscan.calibrate_mount`` wraps this in a result object.
+/// ``machscan.calibrate_mount`` wraps the ``MountCalibrationArrays`` this returns.
 #[pyfunction]
-#[pyo3(signature = (scs_points, wcs_points, axes=None, c2_offset=None))]
+#[pyo3(signature = (scs_points, wcs_points, *, axes=None, c2_offset=None))]
 fn calibrate_mount<'py>(
     py: Python<'py>,
     scs_points: &Bound<'py, PyAny>,
@@ -381,27 +364,13 @@ fn calibrate_mount<'py>(
     axes: Option<&Bound<'py, PyAny>>,
     c2_offset: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let scs = f64_array(scs_points, "scs_points", &[Dim::Any("n"), Dim::Is(3)], "")?;
+    let scs = F64Array::points(scs_points, "scs_points")?;
     let n = scs.shape()[0];
-    let wcs = f64_array(wcs_points, "wcs_points", &[Dim::Is(n), Dim::Is(3)], "(one point per SCS point)")?;
-    let as_points = |s: &[f64]| s.chunks(3).map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
-    let (scs_p, wcs_p) = (as_points(scs.as_slice()?), as_points(wcs.as_slice()?));
-    let machine: Option<Vec<Matrix4<f64>>> = match axes {
-        Some(ax) if !ax.is_none() => {
-            let c2 = match c2_offset {
-                Some(o) if !o.is_none() => f64_vector::<3>(o, "c2_offset", "(Lx, Ly, Lz) in mm")?,
-                _ => [0.0; 3],
-            };
-            // The head without its mount: the mount is what is solved for.
-            let head = KinematicChain::ac_head(c2, [0.0; 6]).map_err(to_py_err)?;
-            let ax = f64_array(ax, "axes", &[Dim::Is(n), Dim::Is(6)], AC_HEAD_AXES)?;
-            let poses = ax.as_slice()?;
-            crate::error::check_finite("axes", poses, 6).map_err(to_py_err)?;
-            Some(poses.chunks(6).map(|p| head.transform(p)).collect())
-        }
-        _ => None,
-    };
-    let cal = py.detach(|| kin::calibrate_mount(&scs_p, &wcs_p, machine.as_deref())).map_err(to_py_err)?;
+    let wcs = F64Array::extract(wcs_points, "wcs_points", &[Dim::Is(n), Dim::Is(3)], "(one point per SCS point)")?;
+    let poses = F64Array::extract_opt(axes, "axes", &[Dim::Is(n), Dim::Is(6)], AC_HEAD_AXES)?;
+    let c2 = f64_vector_opt::<3>(c2_offset, "c2_offset", "(Lx, Ly, Lz) in mm")?.unwrap_or([0.0; 3]);
+    let (s, w, p) = (scs.rows::<3>()?, wcs.rows::<3>()?, poses.as_ref().map(|a| a.values()).transpose()?);
+    let cal = enter(py, || kin::calibrate_mount_ac_head(s, w, p, c2))?;
     let d = PyDict::new(py);
     d.set_item("params", to_numpy(py, cal.params.to_vec(), &[6])?)?;
     d.set_item("rms", cal.rms)?;
@@ -483,8 +452,8 @@ fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<S
         ),
         "rotate_axis" => Step::Rotate(axis(arg(1)?)?, AngleSource::AxisColumn(column(arg(2)?)?)),
         "rotation" => {
-            let r = f64_array(&arg(1)?, "steps", &[Dim::Is(3), Dim::Is(3)], "rotation matrix")?;
-            let s = r.as_slice()?;
+            let r = F64Array::extract(&arg(1)?, "steps", &[Dim::Is(3), Dim::Is(3)], "rotation matrix")?;
+            let s = r.values()?;
             Step::Rotation(nalgebra::Matrix3::from_row_slice(s))
         }
         "mirror" => Step::Mirror(f64_vector::<3>(&arg(1)?, "steps", "mirror diagonal (±1, ±1, ±1)")?),
@@ -502,7 +471,7 @@ impl PyKinematicChain {
     fn new(steps: &Bound<'_, PyList>, axis_names: Vec<String>) -> PyResult<Self> {
         let parsed =
             steps.iter().enumerate().map(|(k, s)| parse_step(&s, k, &axis_names)).collect::<PyResult<Vec<_>>>()?;
-        Ok(PyKinematicChain { inner: KinematicChain::new(parsed, axis_names).map_err(to_py_err)? })
+        Ok(PyKinematicChain { inner: KinematicChain::new(parsed, axis_names)? })
     }
 
     /// AC double-swing head with C2 and sensor mount (SPEC K2, K3); poses X, Y, Z, A, C, C2.
@@ -516,14 +485,14 @@ impl PyKinematicChain {
     fn ab_mirror_support(lat: &Bound<'_, PyAny>, lba: &Bound<'_, PyAny>) -> PyResult<Self> {
         let lat = f64_vector::<3>(lat, "lat", "(x, y, z) in mm")?;
         let lba = f64_vector::<3>(lba, "lba", "(x, y, z) in mm")?;
-        Ok(PyKinematicChain { inner: KinematicChain::ab_mirror_support(lat, lba).map_err(to_py_err)? })
+        Ok(PyKinematicChain { inner: KinematicChain::ab_mirror_support(lat, lba)? })
     }
 
     /// AC cradle table about ``center`` (SPEC K6); poses A, C.
     #[staticmethod]
     fn ac_table(center: &Bound<'_, PyAny>) -> PyResult<Self> {
         let center = f64_vector::<3>(center, "center", "(x, y, z) in mm")?;
-        Ok(PyKinematicChain { inner: KinematicChain::ac_table(center).map_err(to_py_err)? })
+        Ok(PyKinematicChain { inner: KinematicChain::ac_table(center)? })
     }
 
     /// Number of pose columns.
@@ -564,7 +533,12 @@ impl PyKinematicChain {
     }
 
     /// Frames ``(F, N)`` and poses ``(F, n_axes)`` → ``(points (M, 3), frame_index (M,))``.
-    #[pyo3(signature = (frames, axes, pitch, center=None, valid_range=None))]
+    /// Invalid readings are dropped as in :func:`machscan.profile_to_points`.
+    #[pyo3(
+        signature = (frames, axes, pitch, *, center=None, valid_range=None, sentinel=Some(VENDOR_SENTINEL)),
+        text_signature = "(self, frames, axes, pitch, *, center=None, valid_range=None, sentinel=-99999.0)"
+    )]
+    #[allow(clippy::too_many_arguments)]
     fn scan_points<'py>(
         &self,
         py: Python<'py>,
@@ -573,8 +547,9 @@ impl PyKinematicChain {
         pitch: f64,
         center: Option<f64>,
         valid_range: Option<&Bound<'py, PyAny>>,
+        sentinel: Option<f64>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        scan_points_with(py, &self.inner, frames, axes, pitch, center, valid_range)
+        scan_points_with(py, &self.inner, frames, axes, pitch, center, valid_range, sentinel)
     }
 
     fn __repr__(&self) -> String {
@@ -591,5 +566,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(interpolate_poses, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_mount, m)?)?;
     m.add_class::<PyKinematicChain>()?;
+    m.add("SENTINEL", VENDOR_SENTINEL)?;
     Ok(())
 }

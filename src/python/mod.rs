@@ -1,9 +1,10 @@
 //! The Python face of the core: the only module that uses pyo3 and numpy. One file per core
-//! module; `convert` holds the array conversion, shape checks, error mapping and the helper
-//! that releases the GIL.
+//! module; `convert` holds the seam every binding goes through (extract, enter the core with the
+//! GIL released, return arrays) and `error` the one mapping of core errors to exceptions.
 mod cloud;
 mod contour;
 mod convert;
+mod error;
 mod groove;
 mod io;
 mod kinematics;

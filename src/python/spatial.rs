@@ -1,18 +1,13 @@
 //! Bindings of `crate::spatial`.
-use super::convert::{f64_array, to_numpy, to_py_err, Dim};
-use numpy::PyUntypedArrayMethods;
+use super::convert::{count, count_opt, enter, indices_to_numpy, to_numpy, F64Array};
 use pyo3::prelude::*;
-
-pub(crate) fn as_points(s: &[f64]) -> Vec<[f64; 3]> {
-    s.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect()
-}
 
 /// Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than ``radius`` share a cluster.
 ///
 /// Clusters are the connected components of the neighbor graph: every neighbor within
 /// ``radius`` (the same partition as Open3D's ``cluster_dbscan(eps=radius, min_points=1)``), or
-/// with ``k`` the paper's form, the k nearest within ``radius`` (made symmetric so the result
-/// does not depend on the seed order). Memory is O(N); queries run in parallel.
+/// with ``k`` the paper's form, the k nearest other points within ``radius`` (made symmetric so
+/// the result does not depend on the seed order). Memory is O(N); queries run in parallel.
 ///
 /// Parameters
 /// ----------
@@ -21,7 +16,8 @@ pub(crate) fn as_points(s: &[f64]) -> Vec<[f64; 3]> {
 /// radius : float
 ///     Neighbor distance threshold, mm (paper: 5 mm).
 /// k : int, optional
-///     Number of nearest neighbors considered (paper: 5); default all within ``radius``.
+///     Number of nearest other points considered (paper: 5), 1 ≤ k ≤ N − 1; default all
+///     within ``radius``.
 ///
 /// Returns
 /// -------
@@ -39,12 +35,11 @@ fn euclidean_clusters<'py>(
     radius: f64,
     k: Option<i64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let k = super::convert::count_opt("k", k)?;
-    let arr = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
-    let n = arr.shape()[0];
-    let pts = as_points(arr.as_slice()?);
-    let labels = py.detach(|| crate::spatial::euclidean_clusters(&pts, radius, k)).map_err(to_py_err)?;
-    to_numpy(py, labels.into_iter().map(|l| l as i64).collect::<Vec<_>>(), &[n])
+    let k = count_opt("k", k)?;
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    let labels = enter(py, || crate::spatial::euclidean_clusters(pts, radius, k))?;
+    indices_to_numpy(py, labels)
 }
 
 /// Nearest point of ``points`` for every query (kd-tree, parallel over queries).
@@ -71,30 +66,12 @@ fn nearest_neighbors<'py>(
     points: &Bound<'py, PyAny>,
     queries: &Bound<'py, PyAny>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    use rayon::prelude::*;
-    let p = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
-    let q = f64_array(queries, "queries", &[Dim::Any("M"), Dim::Is(3)], "")?;
-    if p.shape()[0] == 0 {
-        return Err(pyo3::exceptions::PyValueError::new_err(
-            "points: expected at least one point to search, got (0, 3)",
-        ));
-    }
-    let m = q.shape()[0];
-    let (pp, qq) = (as_points(p.as_slice()?), as_points(q.as_slice()?));
-    crate::error::check_finite("queries", q.as_slice()?, 3).map_err(to_py_err)?;
-    let (idx, dist): (Vec<i64>, Vec<f64>) = py
-        .detach(|| -> crate::Result<_> {
-            let index = crate::spatial::PointIndex::new(&pp)?;
-            Ok(qq
-                .par_iter()
-                .map(|x| {
-                    let (i, d) = index.nearest(x);
-                    (i as i64, d)
-                })
-                .unzip())
-        })
-        .map_err(to_py_err)?;
-    Ok((to_numpy(py, idx, &[m])?, to_numpy(py, dist, &[m])?))
+    let p = F64Array::points(points, "points")?;
+    let q = F64Array::points(queries, "queries")?;
+    let (pp, qq) = (p.rows::<3>()?, q.rows::<3>()?);
+    let (idx, dist) = enter(py, || crate::spatial::nearest_neighbors(pp, qq))?;
+    let m = dist.len();
+    Ok((indices_to_numpy(py, idx)?, to_numpy(py, dist, &[m])?))
 }
 
 /// The k nearest points of every point of a cloud (its k-nearest graph), the point itself
@@ -107,7 +84,7 @@ fn nearest_neighbors<'py>(
 /// points : array_like, shape (N, 3)
 ///     mm.
 /// k : int
-///     Neighbors per point (at most N).
+///     Neighbors per point, 1 ≤ k ≤ N (the point counts as its own neighbor).
 /// radius : float, optional
 ///     mm.
 ///
@@ -129,26 +106,11 @@ fn knn_graph<'py>(
     k: i64,
     radius: Option<f64>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let k = super::convert::count("k", k)?;
-    if let Some(r) = radius {
-        if !(r.is_finite() && r > 0.0) {
-            return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                "radius: must be a positive distance in mm, got {r}"
-            )));
-        }
-    }
-    let p = f64_array(points, "points", &[Dim::Any("N"), Dim::Is(3)], "")?;
-    let n = p.shape()[0];
-    let k = k.min(n);
-    let pp = as_points(p.as_slice()?);
-    let (idx, dist): (Vec<i64>, Vec<f64>) = py
-        .detach(|| -> crate::Result<_> {
-            use rayon::prelude::*;
-            let (index, dist2) = crate::spatial::CloudNeighbors::new(&pp)?.knn_graph(k, radius);
-            let idx = index.par_iter().map(|&j| if j == u32::MAX { -1 } else { j as i64 }).collect();
-            Ok((idx, dist2.par_iter().map(|d| d.sqrt()).collect()))
-        })
-        .map_err(to_py_err)?;
+    let k = count("k", k)?;
+    let p = F64Array::points(points, "points")?;
+    let (n, pts) = (p.shape()[0], p.rows::<3>()?);
+    let (idx, dist) = enter(py, || crate::spatial::knn_graph(pts, k, radius))?;
+    let idx: Vec<i64> = idx.into_iter().map(|j| j.map_or(-1, |j| j as i64)).collect();
     Ok((to_numpy(py, idx, &[n, k])?, to_numpy(py, dist, &[n, k])?))
 }
 

@@ -32,13 +32,11 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
 
 /// Labels `(N,)`: the cluster of every point, 0..n_clusters−1.
 pub fn euclidean_clusters(points: &[[f64; 3]], radius: f64, k: Option<usize>) -> Result<Vec<usize>> {
-    if !(radius.is_finite() && radius > 0.0) {
-        return Err(Error::invalid("radius", format!("must be a positive distance in mm, got {radius}")));
-    }
-    if k == Some(0) {
-        return Err(Error::invalid("k", "must be at least 1"));
-    }
+    crate::error::check_positive("radius", radius, "mm")?;
     let n = points.len();
+    if let Some(k) = k {
+        super::check_k("k", k, 1, n, super::Counting::Others)?;
+    }
     if n == 0 {
         return Ok(Vec::new());
     }
