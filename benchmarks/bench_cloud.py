@@ -95,9 +95,9 @@ def main() -> None:
     row("voxel grid, 1 M points", best(lambda: machscan.voxel_downsample(p1m, 1.0)), best(lambda: pc1m.voxel_down_sample(1.0)))
     p200 = scanned_surface(200_000, seed=1)
     pc200 = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p200))
-    row("statistical outliers, 200 k, k=20", best(lambda: machscan.statistical_outlier_removal(p200, 20, 2.0)),
+    row("statistical outliers, 200 k, k=20", best(lambda: machscan.remove_statistical_outliers(p200, 20, 2.0)),
         best(lambda: pc200.remove_statistical_outlier(20, 2.0)))
-    row("radius outliers, 200 k, r=2", best(lambda: machscan.radius_outlier_removal(p200, 2.0, 5)),
+    row("radius outliers, 200 k, r=2", best(lambda: machscan.remove_radius_outliers(p200, 2.0, 5)),
         best(lambda: pc200.remove_radius_outlier(5, 2.0)))
 
     def o3_normals():

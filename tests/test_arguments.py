@@ -11,12 +11,11 @@ X = np.linspace(-1, 1, 64)
 Z = np.zeros((2, 64))
 
 CALLS = [
-    ("k", lambda: machscan.statistical_outlier_removal(P, -1, 2.0)),
-    ("min_neighbors", lambda: machscan.radius_outlier_removal(P, 0.5, -2)),
-    ("n_points", lambda: machscan.random_downsample(-5, 2)),
-    ("count", lambda: machscan.random_downsample(5, -2)),
-    ("seed", lambda: machscan.random_downsample(5, 2, seed=-1)),
-    ("every_k", lambda: machscan.uniform_downsample(5, -1)),
+    ("k", lambda: machscan.remove_statistical_outliers(P, -1, 2.0)),
+    ("min_neighbors", lambda: machscan.remove_radius_outliers(P, 0.5, -2)),
+    ("count", lambda: machscan.random_downsample(P, -2)),
+    ("seed", lambda: machscan.random_downsample(P, 2, seed=-1)),
+    ("every_k", lambda: machscan.uniform_downsample(P, -1)),
     ("k", lambda: machscan.estimate_normals(P, k=-20)),
     ("k", lambda: machscan.surface_variation(P, k=-20)),
     ("k", lambda: machscan.principal_curvatures(P, k=-20)),
@@ -25,9 +24,9 @@ CALLS = [
     ("refine", lambda: machscan.octree_simplify(P, 0.1, refine=-1)),
     ("refine", lambda: machscan.octree_simplify(P, 0.1, refine=41)),
     ("k", lambda: machscan.euclidean_clusters(P, 0.5, k=-1)),
-    ("window", lambda: machscan._core.fit_grooves(X, Z, window=-10)),
-    ("max_iterations", lambda: machscan._core.fit_grooves(X, Z, max_iterations=-1)),
-    ("min_valid", lambda: machscan._core.level_groove_frame(X, Z[0], min_valid=-1)),
+    ("window", lambda: machscan.fit_grooves(X, Z, window=-10)),
+    ("max_iterations", lambda: machscan.fit_grooves(X, Z, criteria=machscan.FitCriteria(max_iterations=-1))),
+    ("min_valid", lambda: machscan.level_groove_frame(X, Z[0], min_valid=-1)),
     ("rotary", lambda: machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.5], rotary=(-1,))),
 ]
 

@@ -44,30 +44,30 @@ def test_voxel_downsample_equals_open3d(name, p):
 
 @pytest.mark.parametrize("name, p", CLOUDS, ids=[c[0] for c in CLOUDS])
 @pytest.mark.parametrize("k, ratio", [(10, 1.0), (20, 2.0), (6, 0.5)])
-def test_statistical_outlier_removal_equals_open3d(name, p, k, ratio):
+def test_remove_statistical_outliers_equals_open3d(name, p, k, ratio):
     _, ref = o3d_cloud(p).remove_statistical_outlier(nb_neighbors=k, std_ratio=ratio)
-    np.testing.assert_array_equal(machscan.statistical_outlier_removal(p, k, ratio), np.asarray(ref))
+    np.testing.assert_array_equal(machscan.remove_statistical_outliers(p, k, ratio), np.asarray(ref))
 
 
 @pytest.mark.parametrize("name, p", CLOUDS, ids=[c[0] for c in CLOUDS])
 @pytest.mark.parametrize("frac, nb", [(0.02, 3), (0.05, 10)])
-def test_radius_outlier_removal_equals_open3d(name, p, frac, nb):
+def test_remove_radius_outliers_equals_open3d(name, p, frac, nb):
     r = np.ptp(p, axis=0).max() * frac
     _, ref = o3d_cloud(p).remove_radius_outlier(nb_points=nb, radius=r)
-    np.testing.assert_array_equal(machscan.radius_outlier_removal(p, r, nb), np.asarray(ref))
+    np.testing.assert_array_equal(machscan.remove_radius_outliers(p, r, nb), np.asarray(ref))
 
 
 def test_radius_counts_are_strict_and_include_the_point():
     p = np.column_stack([np.arange(5.0), np.zeros(5), np.zeros(5)])
     _, ref = o3d_cloud(p).remove_radius_outlier(nb_points=2, radius=1.0 + 1e-9)
-    np.testing.assert_array_equal(machscan.radius_outlier_removal(p, 1.0 + 1e-9, 2), np.asarray(ref))
-    assert len(machscan.radius_outlier_removal(p, 1.0, 0)) == 5 and len(machscan.radius_outlier_removal(p, 1.0, 1)) == 0
+    np.testing.assert_array_equal(machscan.remove_radius_outliers(p, 1.0 + 1e-9, 2), np.asarray(ref))
+    assert len(machscan.remove_radius_outliers(p, 1.0, 0)) == 5 and len(machscan.remove_radius_outliers(p, 1.0, 1)) == 0
 
 
 def test_uniform_and_crop_equal_open3d():
     p = CLOUDS[0][1]
     ref = np.asarray(o3d_cloud(p).uniform_down_sample(7).points)
-    np.testing.assert_array_equal(p[machscan.uniform_downsample(len(p), 7)], ref)
+    np.testing.assert_array_equal(p[machscan.uniform_downsample(p, 7)], ref)
     lo, hi = np.array([-5.0, -8, -3]), np.array([6.0, 4, 9])
     box = open3d.geometry.AxisAlignedBoundingBox(lo, hi)
     ref_idx = np.asarray(box.get_point_indices_within_bounding_box(o3d_cloud(p).points))
@@ -84,8 +84,9 @@ def test_duplicates_removed_without_holes():
 
 
 def test_random_downsample_is_reproducible():
-    a = machscan.random_downsample(10000, 500, seed=3)
-    assert len(np.unique(a)) == 500 and np.array_equal(a, machscan.random_downsample(10000, 500, seed=3))
+    pts = np.zeros((10000, 3))
+    a = machscan.random_downsample(pts, 500, seed=3)
+    assert len(np.unique(a)) == 500 and np.array_equal(a, machscan.random_downsample(pts, 500, seed=3))
 
 
 @pytest.mark.parametrize(
@@ -94,12 +95,12 @@ def test_random_downsample_is_reproducible():
         (lambda: machscan.voxel_downsample(np.zeros((5, 3)), 0.0), "voxel_size"),
         (lambda: machscan.voxel_downsample([[0, 0, np.nan]], 1.0), "points"),
         (lambda: machscan.voxel_downsample(np.array([[0, 0, 0], [1e6, 0, 0]]), 1e-3), "voxel_size"),
-        (lambda: machscan.statistical_outlier_removal(np.zeros((5, 3)), 0, 1.0), "k"),
-        (lambda: machscan.statistical_outlier_removal(np.zeros((5, 3)), 3, -1.0), "std_ratio"),
-        (lambda: machscan.radius_outlier_removal(np.zeros((5, 3)), -1.0, 2), "radius"),
+        (lambda: machscan.remove_statistical_outliers(np.zeros((5, 3)), 0, 1.0), "k"),
+        (lambda: machscan.remove_statistical_outliers(np.zeros((5, 3)), 3, -1.0), "std_ratio"),
+        (lambda: machscan.remove_radius_outliers(np.zeros((5, 3)), -1.0, 2), "radius"),
         (lambda: machscan.remove_duplicates(np.zeros((5, 3)), 0.0), "tolerance"),
         (lambda: machscan.crop_box(np.zeros((5, 3)), (1, 1, 1), (0, 0, 0)), "min_bound"),
-        (lambda: machscan.uniform_downsample(10, 0), "every_k"),
+        (lambda: machscan.uniform_downsample(np.zeros((10, 3)), 0), "every_k"),
     ],
 )
 def test_bad_input(call, name):

@@ -252,7 +252,6 @@ def test_parallel_equals_sequential_in_python():
     "call, name",
     [
         (lambda: machscan.profile_to_points(np.zeros(10), 0.025), "frames"),
-        (lambda: machscan.profile_to_points(np.zeros((0, 10)), 0.025), "frames"),
         (lambda: machscan.profile_to_points(np.zeros((3, 0)), 0.025), "frames"),
         (lambda: machscan.profile_to_points([["a", "b"]], 0.025), "frames"),
         (lambda: machscan.profile_to_points(np.zeros((2, 3)), -1.0), "pitch"),
@@ -297,3 +296,16 @@ def test_array_likes_and_other_dtypes_are_accepted():
     np.testing.assert_array_equal(a, np.eye(4)[None])
     np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(a, c)
+
+
+def test_no_frames_give_no_points_and_the_sentinel_is_dropped_by_default():
+    pts, idx = machscan.profile_to_points(np.zeros((0, 10)), 0.025)
+    assert pts.shape == (0, 3) and idx.shape == (0,)
+    # The example: the vendor code is not a reading.
+    pts, idx = machscan.profile_to_points([[-99999.0, 1.0]], 0.025)
+    assert pts.shape == (1, 3) and pts[0, 2] == 1.0
+    assert machscan.SENTINEL == -99999.0
+    pts, _ = machscan.profile_to_points([[-99999.0, 1.0]], 0.025, sentinel=None)
+    assert len(pts) == 2
+    pts, _ = machscan.profile_to_points([[-9999.0, 1.0]], 0.025, sentinel=-9999.0)
+    assert len(pts) == 1

@@ -4,47 +4,69 @@ From raw line-laser profiler frames and machine axis positions to workpiece poin
 answers: groove width and depth, contour error, part positioning, allowance, toolpaths.
 Units are millimetres and radians throughout; points are ``(N, 3)`` float64 arrays and
 transforms ``(4, 4)`` homogeneous float64 matrices.
+
+The API is organised by domain, and the everyday names are also here at the top level:
+
+- :mod:`machscan.io` — point, mesh and toolpath files;
+- :mod:`machscan.cloud` — filters, neighbors, normals, curvature, simplification, clustering;
+- :mod:`machscan.kinematics` — frames and poses to points, machine chains, mount calibration;
+- :mod:`machscan.scan` — the raw scan container and its files;
+- :mod:`machscan.grooves` — the per-frame groove fit;
+- :mod:`machscan.contours` — CAD polylines, contour matching and the contour error;
+- :mod:`machscan.inspection` — the groove inspection workflow of paper 000;
+- :mod:`machscan.cad` — CAD contours from CSV and APT files;
+- :mod:`machscan.synth` — synthetic scans and parts with exact ground truth;
+- :mod:`machscan.plot` — figures (needs matplotlib).
 """
 
-from machscan._core import (
-    KinematicChain,
-    __version__,
-    ab_mirror_support_points,
-    ac_head_transforms,
-    ac_table_rotate,
+import importlib as _importlib
+import warnings as _warnings
+
+from machscan import cloud, contours, grooves, inspection, io, kinematics, scan
+from machscan._core import __version__
+from machscan.cloud import (
     crop_box,
     estimate_normals,
     euclidean_clusters,
-    interpolate_poses,
     knn_graph,
-    match_contours,
     nearest_neighbors,
     octree_simplify,
     principal_curvatures,
-    profile_to_points,
-    radius_outlier_removal,
     random_downsample,
     remove_duplicates,
-    resample_polyline,
-    scan_to_wcs,
-    statistical_outlier_removal,
+    remove_radius_outliers,
+    remove_statistical_outliers,
     surface_variation,
     uniform_downsample,
     voxel_downsample,
 )
-from machscan.contours import ContourError, contour_error
-from machscan.grooves import GrooveFits, GrooveStatus, LevelledFrame, fit_grooves, level_groove_frame
-from machscan.io import CloudFile, read_points, write_points
+from machscan.contours import ContourErrorResult, contour_error, match_contours, resample_polyline
+from machscan.grooves import FitCriteria, GrooveFits, GrooveStatus, LevelledFrame, fit_grooves, level_groove_frame
 from machscan.inspection import ContourResult, Decomposition, GrooveReport, inspect_grooves
-from machscan.kinematics import MountCalibration, calibrate_mount
+from machscan.io import CloudFile, FileFormatError, TriangleMesh, read_mesh, read_points, write_mesh, write_points
+from machscan.kinematics import (
+    SENTINEL,
+    KinematicChain,
+    MountCalibration,
+    ab_mirror_support_points,
+    ac_head_transforms,
+    ac_table_rotate,
+    calibrate_mount,
+    interpolate_poses,
+    profile_to_points,
+    scan_to_wcs,
+)
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
+    "SENTINEL",
     "__version__",
     "CloudFile",
-    "ContourError",
+    "ContourErrorResult",
     "ContourResult",
     "Decomposition",
+    "FileFormatError",
+    "FitCriteria",
     "GrooveFits",
     "GrooveReport",
     "GrooveStatus",
@@ -53,48 +75,73 @@ __all__ = [
     "MountCalibration",
     "Profiler",
     "Scan",
+    "TriangleMesh",
     "ab_mirror_support_points",
     "ac_head_transforms",
     "ac_table_rotate",
+    "cad",
     "calibrate_mount",
+    "cloud",
     "contour_error",
+    "contours",
     "crop_box",
     "estimate_normals",
     "euclidean_clusters",
     "fit_grooves",
+    "grooves",
     "inspect_grooves",
+    "inspection",
     "interpolate_poses",
     "io",
-    "level_groove_frame",
+    "kinematics",
     "knn_graph",
+    "level_groove_frame",
     "match_contours",
     "nearest_neighbors",
     "octree_simplify",
     "plot",
     "principal_curvatures",
     "profile_to_points",
-    "radius_outlier_removal",
     "random_downsample",
+    "read_mesh",
     "read_points",
     "read_scan_csv",
     "remove_duplicates",
+    "remove_radius_outliers",
+    "remove_statistical_outliers",
     "resample_polyline",
+    "scan",
     "scan_to_wcs",
-    "statistical_outlier_removal",
     "surface_variation",
     "synth",
     "uniform_downsample",
     "voxel_downsample",
+    "write_mesh",
     "write_points",
     "write_scan_csv",
 ]
 
+# Imported on first use: demos, tests and figures need them, a plant script does not (and
+# plot needs matplotlib).
+_LAZY = ("cad", "plot", "synth")
+
+# Older spellings, kept importable with a DeprecationWarning that names the new one.
+_RENAMED = {
+    "statistical_outlier_removal": "remove_statistical_outliers",
+    "radius_outlier_removal": "remove_radius_outliers",
+    "ContourError": "ContourErrorResult",
+}
+
 
 def __getattr__(name: str) -> object:
-    # `machscan.synth` and `machscan.plot` are imported on first use: demos, tests and figures
-    # need them, a plant script does not (and plot needs matplotlib).
-    if name in ("synth", "plot"):
-        import importlib
-
-        return importlib.import_module(f"machscan.{name}")
+    if name in _LAZY:
+        return _importlib.import_module(f"machscan.{name}")
+    if name in _RENAMED:
+        new = _RENAMED[name]
+        _warnings.warn(f"machscan.{name} is now machscan.{new}", DeprecationWarning, stacklevel=2)
+        return globals()[new]
     raise AttributeError(f"module 'machscan' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -1,14 +1,20 @@
 """Type stubs of the compiled core ``machscan._core`` (kept in step with ``src/python/``;
-checked by ``python -m mypy.stubtest machscan._core`` in the test command)."""
+checked by ``python -m mypy.stubtest machscan._core`` in the test command, and the docstrings by
+``scripts/sync_stub_docs.py``).
+
+Functions that hand back several arrays return a ``TypedDict`` declared here, whose keys the
+Python layer's result classes take (``tests/test_seam.py`` checks they agree)."""
 
 from os import PathLike
-from typing import Any, Sequence, final
+from typing import Any, Literal, Sequence, TypedDict, final, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "__version__",
+    "SENTINEL",
+    "FileFormatError",
     "KinematicChain",
     "ab_mirror_support_points",
     "ac_head_transforms",
@@ -19,42 +25,127 @@ __all__ = [
     "estimate_normals",
     "euclidean_clusters",
     "fit_grooves",
+    "groove_defaults",
     "interpolate_poses",
-    "level_groove_frame",
     "knn_graph",
+    "level_groove_frame",
     "match_contours",
     "nearest_neighbors",
     "octree_simplify",
     "principal_curvatures",
     "profile_to_points",
-    "radius_outlier_removal",
     "random_downsample",
     "read_cloud",
     "read_toolpath",
+    "readable_formats",
     "remove_duplicates",
+    "remove_radius_outliers",
+    "remove_statistical_outliers",
     "resample_polyline",
     "scan_to_wcs",
-    "statistical_outlier_removal",
     "surface_variation",
     "uniform_downsample",
     "voxel_downsample",
-    "write_points",
+    "writable_formats",
+    "write_cloud",
     "write_toolpath",
 ]
 
 __version__: str
+SENTINEL: float
+
+_Path = str | PathLike[str]
+_F64 = NDArray[np.float64]
+_I64 = NDArray[np.int64]
+
+class FileFormatError(ValueError):
+    """A file's content does not follow its format (truncated data, a header that promises more than there is, a number that is not one, ...). A ``ValueError``; ``filename`` names the file."""
+
+# ---- results ----------------------------------------------------------------------------------
+
+class _MountCalibrationArrays(TypedDict):
+    params: _F64
+    rms: float
+    std_errors: _F64
+    covariance: _F64
+    residuals: _F64
+    iterations: int
+    converged: bool
+
+class _CloudArrays(TypedDict):
+    points: _F64
+    normals: _F64 | None
+    scalars: dict[str, _F64]
+    triangles: _I64
+
+class _ToolpathArrays(TypedDict):
+    points: _F64
+    axes: _F64
+    feeds: _F64
+    segments: _I64
+
+class _GrooveFitArrays(TypedDict):
+    x0: _F64
+    z0: _F64
+    depth: _F64
+    width: _F64
+    alpha: _F64
+    rms: _F64
+    se_depth: _F64
+    se_width: _F64
+    tilt: _F64
+    iterations: NDArray[np.int32]
+    n_used: NDArray[np.int32]
+    status: NDArray[np.uint8]
+
+class _LevelledFrameArrays(TypedDict):
+    x: _F64
+    z: _F64
+    tilt: float
+    start: _F64
+    status: int
+
+class _GrooveDefaults(TypedDict):
+    template: Literal["tanh", "v"]
+    alpha: float
+    fit_alpha: bool
+    nominal_width: float
+    window: int | None
+    window_center: int | None
+    spike_threshold: float | None
+    min_depth: float
+    min_valid: int
+    max_iterations: int
+    cost_tolerance: float
+    step_tolerance: float
+    gradient_tolerance: float
+
+class _ContourErrorArrays(TypedDict):
+    offset: _F64
+    errors: _F64
+    deviations: _F64
+    matched: _I64
+    cases: NDArray[np.uint8]
+    mean: float
+    std: float
+    max: float
+
+# ---- kinematics -------------------------------------------------------------------------------
 
 def profile_to_points(
     frames: ArrayLike,
     pitch: float,
+    *,
     center: float | None = None,
     valid_range: ArrayLike | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    sentinel: float | None = -99999.0,
+) -> tuple[_F64, _I64]:
     """Profiler frames to points in the sensor coordinate system (SPEC K1, paper 000 eq 5).
 
     Reading ``i`` of a frame becomes the SCS point ``((i - center) * pitch, 0, d_i)``: the laser
     line runs along SCS x, ``d_i`` is a height along SCS z (out of the material). Invalid
-    readings (NaN, the vendor sentinel, anything outside ``valid_range``) are dropped.
+    readings are dropped: NaN, the ``sentinel`` ("no reading" code, −99999 by default), and
+    anything outside ``valid_range``.
 
     Parameters
     ----------
@@ -66,6 +157,9 @@ def profile_to_points(
         Index of the reading at SCS x = 0; default ``N / 2``.
     valid_range : (float, float), optional
         Measuring range ``(lo, hi)`` in mm; readings outside it are invalid.
+    sentinel : float or None
+        The profiler's "no reading" code, mm; default ``machscan.SENTINEL`` (−99999). None when
+        the profiler writes NaN only (−99999 is then still no real height, so the default is safe).
 
     Returns
     -------
@@ -76,20 +170,21 @@ def profile_to_points(
 
     Examples
     --------
-    >>> pts, idx = machscan.profile_to_points([[0.1, float("nan"), 0.3]], pitch=0.025)
+    >>> pts, idx = machscan.profile_to_points([[0.1, float("nan"), -99999.0, 0.3]], pitch=0.025)
     >>> pts.shape
     (2, 3)
     """
-
 def scan_to_wcs(
     frames: ArrayLike,
     axes: ArrayLike,
     pitch: float,
     c2_offset: ArrayLike,
     mount: ArrayLike,
+    *,
     center: float | None = None,
     valid_range: ArrayLike | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    sentinel: float | None = -99999.0,
+) -> tuple[_F64, _I64]:
     """Frames and AC-head poses to workpiece (WCS) points in one parallel call (SPEC K1–K3, K7).
 
     Every valid reading of frame ``k`` is mapped by ``ac_head_transforms(axes)[k]``. The work is
@@ -107,8 +202,9 @@ def scan_to_wcs(
         (Lx, Ly, Lz) of the C2 axis from the tool tip, mm.
     mount : array_like, shape (6,)
         (theta, psi, phi, dx, dy, dz): mount Euler angles (rad) and translation (mm).
-    center, valid_range
-        As in :func:`profile_to_points`.
+    center, valid_range, sentinel
+        As in :func:`profile_to_points`: invalid readings (NaN, the sentinel −99999 by default,
+        outside ``valid_range``) are dropped.
 
     Returns
     -------
@@ -120,8 +216,7 @@ def scan_to_wcs(
     --------
     >>> pts, idx = machscan.scan_to_wcs(frames, axes, 0.025, (0, 0, 150), (0, 0, 0, 30, 0, -100))
     """
-
-def ac_head_transforms(axes: ArrayLike, c2_offset: ArrayLike, mount: ArrayLike) -> NDArray[np.float64]:
+def ac_head_transforms(axes: ArrayLike, c2_offset: ArrayLike, mount: ArrayLike) -> _F64:
     """WCS ← SCS transforms of the AC double-swing head with C2 and sensor mount (SPEC K2, K3).
 
     ``T = [Rz(C)·Rx(A), (X, Y, Z)] · [Rz(C2), (Lx, Ly, Lz)] · [Rz(phi)·Ry(theta)·Rx(psi), (dx, dy, dz)]``.
@@ -145,10 +240,7 @@ def ac_head_transforms(axes: ArrayLike, c2_offset: ArrayLike, mount: ArrayLike) 
     >>> T = machscan.ac_head_transforms([[0, 0, 0, 0, 0, 0]], (0, 0, 0), (0, 0, 0, 0, 0, 0))
     >>> T[0]  # identity
     """
-
-def ab_mirror_support_points(
-    tool_points: ArrayLike, axes: ArrayLike, lat: ArrayLike, lba: ArrayLike
-) -> NDArray[np.float64]:
+def ab_mirror_support_points(tool_points: ArrayLike, axes: ArrayLike, lat: ArrayLike, lba: ArrayLike) -> _F64:
     """Tool points of the milling side to workpiece points of the mirror-milling support side
     (SPEC K5, paper 002 eq 1–6), each point with its own AB-head pose.
 
@@ -173,10 +265,9 @@ def ab_mirror_support_points(
     --------
     >>> machscan.ab_mirror_support_points([[0, 0, 0]], [[0, 0, 0, 0, 0]], (0, 0, 200), (0, 0, 150))
     """
-
 def ac_table_rotate(
     points: ArrayLike, normals: ArrayLike | None, a: float, c: float, center: ArrayLike
-) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+) -> tuple[_F64, _F64 | None]:
     """Turn CAD points and normals with an AC cradle table (SPEC K6, paper 003 eq 1).
 
     ``P' = Rx(a)·Rz(c)·(P − center) + center``, ``n' = Rx(a)·Rz(c)·n`` (C turns first, then A).
@@ -201,13 +292,9 @@ def ac_table_rotate(
     --------
     >>> p, n = machscan.ac_table_rotate([[1, 0, 0]], [[0, 0, 1]], 0.0, np.pi / 2, (0, 0, 0))
     """
-
 def interpolate_poses(
-    sample_times: ArrayLike,
-    samples: ArrayLike,
-    frame_times: ArrayLike,
-    rotary: Sequence[int] = ...,
-) -> NDArray[np.float64]:
+    sample_times: ArrayLike, samples: ArrayLike, frame_times: ArrayLike, rotary: Sequence[int] = (3, 4, 5)
+) -> _F64:
     """Axis positions at frame times from CNC samples on their own clock (SPEC K7).
 
     Linear interpolation; rotary columns are unwrapped first (a C axis crossing ±π turns the
@@ -222,7 +309,7 @@ def interpolate_poses(
     frame_times : array_like, shape (F,)
         Profiler frame times on the same clock, s.
     rotary : sequence of int
-        Columns holding rotary axes in rad; default (3, 4, 5) for X, Y, Z, A, C, C2.
+        Columns holding rotary axes in rad; default (3, 4, 5), the A, C, C2 of X, Y, Z, A, C, C2.
 
     Returns
     -------
@@ -233,60 +320,165 @@ def interpolate_poses(
     >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
     array([[0.5]])
     """
-
 def calibrate_mount(
-    scs_points: ArrayLike,
-    wcs_points: ArrayLike,
-    axes: ArrayLike | None = None,
-    c2_offset: ArrayLike | None = None,
-) -> dict[str, Any]:
+    scs_points: ArrayLike, wcs_points: ArrayLike, *, axes: ArrayLike | None = None, c2_offset: ArrayLike | None = None
+) -> _MountCalibrationArrays:
     """Sensor mount calibration from SCS ↔ WCS correspondences (SPEC K4); the Python function
-    ``machscan.calibrate_mount`` wraps this in a result object.
+    ``machscan.calibrate_mount`` wraps the ``MountCalibrationArrays`` this returns.
+    """
+@final
+class KinematicChain:
+    """A machine model: a chain of elementary transforms mapping the last link (sensor, tool,
+    part) into the WCS (SPEC K7).
+
+    Parameters
+    ----------
+    steps : list of tuple
+        Composed left to right, each one of
+        ``("translate", (x, y, z))`` mm;
+        ``("translate_axes", (ix, iy, iz))`` translation by pose columns (None for 0);
+        ``("rotate", "x"|"y"|"z", angle)`` constant angle, rad;
+        ``("rotate_axis", "x"|"y"|"z", column)`` angle from a pose column (index or axis name);
+        ``("rotation", R)`` a constant 3×3 rotation; ``("mirror", (sx, sy, sz))`` with ±1.
+    axis_names : list of str
+        Names of the pose columns, e.g. ``["X", "Y", "Z", "A", "C"]``.
+
+    Examples
+    --------
+    >>> head = machscan.KinematicChain.ac_head((0, 0, 150), (0, 0, 0, 30, 0, -100))
+    >>> T = head.transforms(axes)          # (F, 4, 4)
+    """
+    def __new__(cls, steps: list[Any], axis_names: Sequence[str]) -> KinematicChain: ...
+    @staticmethod
+    def ac_head(c2_offset: ArrayLike, mount: ArrayLike) -> KinematicChain:
+        """AC double-swing head with C2 and sensor mount (SPEC K2, K3); poses X, Y, Z, A, C, C2."""
+    @staticmethod
+    def ab_mirror_support(lat: ArrayLike, lba: ArrayLike) -> KinematicChain:
+        """AB head, support side of mirror milling (SPEC K5); poses X, Y, Z, A, B."""
+    @staticmethod
+    def ac_table(center: ArrayLike) -> KinematicChain:
+        """AC cradle table about ``center`` (SPEC K6); poses A, C."""
+    @property
+    def n_axes(self) -> int:
+        """Number of pose columns."""
+    @property
+    def axis_names(self) -> list[str]:
+        """Names of the pose columns."""
+    def transforms(self, axes: ArrayLike) -> _F64:
+        """4×4 transforms for poses ``axes (F, n_axes)`` → ``(F, 4, 4)``."""
+    def transform_points(self, points: ArrayLike, axes: ArrayLike) -> _F64:
+        """Points ``(N, 3)``, each with its own pose ``axes (N, n_axes)`` → ``(N, 3)``."""
+    def transform_vectors(self, vectors: ArrayLike, axes: ArrayLike) -> _F64:
+        """Directions or normals ``(N, 3)`` with poses ``(N, n_axes)``: turned, not moved."""
+    def scan_points(
+        self,
+        frames: ArrayLike,
+        axes: ArrayLike,
+        pitch: float,
+        *,
+        center: float | None = None,
+        valid_range: ArrayLike | None = None,
+        sentinel: float | None = -99999.0,
+    ) -> tuple[_F64, _I64]:
+        """Frames ``(F, N)`` and poses ``(F, n_axes)`` → ``(points (M, 3), frame_index (M,))``.
+        Invalid readings are dropped as in :func:`machscan.profile_to_points`.
+        """
+
+# ---- io ---------------------------------------------------------------------------------------
+
+def read_cloud(
+    path: _Path, *, delimiter: str | None = None, columns: tuple[int, int, int] = (0, 1, 2)
+) -> _CloudArrays:
+    """Read a point or mesh file by its extension (see ``machscan.io.read``); returns the
+    ``CloudArrays`` ``points``, ``normals`` (or None), ``scalars`` and ``triangles``.
+    """
+def write_cloud(
+    path: _Path,
+    points: ArrayLike,
+    *,
+    normals: ArrayLike | None = None,
+    scalars: dict[str, ArrayLike] | None = None,
+    triangles: ArrayLike | None = None,
+    binary: bool | None = None,
+    compressed: bool = False,
+    dtype: Literal["float32", "float64"] | None = None,
+) -> None:
+    """Write points, optional normals, named scalars and triangles by the file's extension (see
+    ``machscan.io.write_points`` and ``machscan.io.write_mesh``). ``binary``, ``dtype``: None
+    for the format's default.
+    """
+def readable_formats() -> list[str]:
+    """The extensions ``machscan.io.read`` reads, e.g. ``("ply", "pcd", ...)``."""
+def writable_formats() -> list[str]:
+    """The extensions ``machscan.io.write_points`` and ``write_mesh`` write."""
+def read_toolpath(path: _Path) -> _ToolpathArrays:
+    """Read an APT/CL toolpath: GOTO points, tool axes, feeds and segments (a new segment after every
+    RAPID); ``machscan.io.read_toolpath`` wraps the ``ToolpathArrays`` this returns.
+    """
+def write_toolpath(
+    path: _Path,
+    points: ArrayLike,
+    *,
+    axes: ArrayLike | None = None,
+    feeds: ArrayLike | None = None,
+    segments: ArrayLike | None = None,
+) -> None:
+    """Write an APT/CL toolpath (``GOTO/x,y,z[,i,j,k]``, ``FEDRAT`` when the feed changes,
+    ``RAPID`` between segments); ``machscan.io.write_toolpath`` documents it.
     """
 
+# ---- grooves ----------------------------------------------------------------------------------
+
+def groove_defaults() -> _GrooveDefaults:
+    """The defaults of the groove fit options (``GrooveOptions::default()`` in the core), by name."""
 def fit_grooves(
     x: ArrayLike,
     z: ArrayLike,
-    alpha: float = 20.0,
-    nominal_width: float = 0.5,
-    window: int | None = None,
-    window_center: int | None = None,
-    fit_alpha: bool = False,
-    spike_threshold: float | None = ...,
-    min_depth: float = 0.03,
-    min_valid: int = 12,
-    max_iterations: int = 100,
-    cost_tolerance: float = 0.0,
-    step_tolerance: float = 1e-8,
-    gradient_tolerance: float = 1e-13,
-    template: str = "tanh",
-) -> dict[str, Any]:
-    """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` wraps the dict of
-    per-frame arrays this returns in a result object.
+    *,
+    template: Literal["tanh", "v"],
+    alpha: float,
+    nominal_width: float,
+    window: int | None,
+    window_center: int | None,
+    fit_alpha: bool,
+    spike_threshold: float | None,
+    min_depth: float,
+    min_valid: int,
+    max_iterations: int,
+    cost_tolerance: float,
+    step_tolerance: float,
+    gradient_tolerance: float,
+) -> _GrooveFitArrays:
+    """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` documents it and
+    wraps the ``GrooveFitArrays`` this returns.
     """
-
 def level_groove_frame(
     x: ArrayLike,
     z: ArrayLike,
-    alpha: float = 20.0,
-    nominal_width: float = 0.5,
-    window: int | None = None,
-    window_center: int | None = None,
-    spike_threshold: float | None = ...,
-    min_depth: float = 0.03,
-    min_valid: int = 12,
-) -> dict[str, Any]:
+    *,
+    alpha: float,
+    nominal_width: float,
+    window: int | None,
+    window_center: int | None,
+    spike_threshold: float | None,
+    min_depth: float,
+    min_valid: int,
+) -> _LevelledFrameArrays:
     """One frame levelled as the fit sees it (SPEC G steps 1–4); ``machscan.level_groove_frame``
-    wraps it. Returns a dict with the levelled ``x``, ``z`` (absolute levelled coordinates),
-    ``tilt``, the initial guess ``start`` (x0, z0, d, w, α) and ``status`` (0 when ready)."""
+    wraps the ``LevelledFrameArrays`` this returns: the levelled ``x``, ``z`` (absolute levelled
+    coordinates), ``tilt``, the initial guess ``start`` (x0, z0, d, w, α) and ``status`` (0 when
+    ready).
+    """
 
-def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -> NDArray[np.int64]:
+# ---- spatial and contours ---------------------------------------------------------------------
+
+def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -> _I64:
     """Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than ``radius`` share a cluster.
 
     Clusters are the connected components of the neighbor graph: every neighbor within
     ``radius`` (the same partition as Open3D's ``cluster_dbscan(eps=radius, min_points=1)``), or
-    with ``k`` the paper's form, the k nearest within ``radius`` (made symmetric so the result
-    does not depend on the seed order). Memory is O(N); queries run in parallel.
+    with ``k`` the paper's form, the k nearest other points within ``radius`` (made symmetric so
+    the result does not depend on the seed order). Memory is O(N); queries run in parallel.
 
     Parameters
     ----------
@@ -295,7 +487,8 @@ def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -
     radius : float
         Neighbor distance threshold, mm (paper: 5 mm).
     k : int, optional
-        Number of nearest neighbors considered (paper: 5); default all within ``radius``.
+        Number of nearest other points considered (paper: 5), 1 ≤ k ≤ N − 1; default all
+        within ``radius``.
 
     Returns
     -------
@@ -306,35 +499,7 @@ def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -
     --------
     >>> labels = machscan.euclidean_clusters(centers, radius=5.0, k=5)
     """
-
-def knn_graph(points: ArrayLike, k: int, radius: float | None = None) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-    """The k nearest points of every point of a cloud (its k-nearest graph), the point itself
-    included and first unless an exact duplicate with a lower index precedes it; nearest first,
-    ties by index. With ``radius`` only neighbors strictly closer than it (Open3D's hybrid
-    search), the rows padded with index −1 and distance ``inf``.
-
-    Parameters
-    ----------
-    points : array_like, shape (N, 3)
-        mm.
-    k : int
-        Neighbors per point (at most N).
-    radius : float, optional
-        mm.
-
-    Returns
-    -------
-    index : ndarray of int64, shape (N, k)
-    distance : ndarray, shape (N, k)
-        Euclidean distance, mm.
-
-    Examples
-    --------
-    >>> idx, dist = machscan.knn_graph(pts, k=20)
-    >>> spacing = np.median(dist[:, 1])
-    """
-
-def nearest_neighbors(points: ArrayLike, queries: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+def nearest_neighbors(points: ArrayLike, queries: ArrayLike) -> tuple[_I64, _F64]:
     """Nearest point of ``points`` for every query (kd-tree, parallel over queries).
 
     Parameters
@@ -354,12 +519,41 @@ def nearest_neighbors(points: ArrayLike, queries: ArrayLike) -> tuple[NDArray[np
     --------
     >>> idx, dist = machscan.nearest_neighbors(model, measured)
     """
+def knn_graph(points: ArrayLike, k: int, radius: float | None = None) -> tuple[_I64, _F64]:
+    """The k nearest points of every point of a cloud (its k-nearest graph), the point itself
+    included and first unless an exact duplicate with a lower index precedes it; nearest first,
+    ties by index. With ``radius`` only neighbors strictly closer than it (Open3D's hybrid
+    search), the rows padded with index −1 and distance ``inf``.
 
-def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0, delta2: float = 1.0) -> dict[str, Any]:
-    """Contour error of one contour (SPEC C3–C5); ``machscan.contour_error`` wraps the dict."""
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        mm.
+    k : int
+        Neighbors per point, 1 ≤ k ≤ N (the point counts as its own neighbor).
+    radius : float, optional
+        mm.
 
-def resample_polyline(vertices: ArrayLike, spacing: float, closed: bool = True) -> NDArray[np.float64]:
-    """Points along a polyline every ``spacing`` mm (corners kept), ``(M, 3)``.
+    Returns
+    -------
+    index : ndarray of int64, shape (N, k)
+    distance : ndarray, shape (N, k)
+        Euclidean distance, mm.
+
+    Examples
+    --------
+    >>> idx, dist = machscan.knn_graph(pts, k=20)
+    >>> spacing = np.median(dist[:, 1])
+    """
+def contour_error(
+    theoretical: ArrayLike, actual: ArrayLike, *, delta1: float = 1.0, delta2: float = 1.0
+) -> _ContourErrorArrays:
+    """Contour error of one contour (SPEC C3–C5); ``machscan.contour_error`` wraps the
+    ``ContourErrorArrays`` this returns.
+    """
+def resample_polyline(vertices: ArrayLike, spacing: float, closed: bool = True) -> _F64:
+    """Points along a polyline every ``spacing`` mm at most (equal steps over the whole polyline),
+    ``(M, 3)``.
 
     Parameters
     ----------
@@ -374,72 +568,22 @@ def resample_polyline(vertices: ArrayLike, spacing: float, closed: bool = True) 
     --------
     >>> pts = machscan.resample_polyline(cad_vertices, spacing=0.5, closed=True)
     """
-
 def match_contours(
-    actual_centroids: ArrayLike, theoretical_centroids: ArrayLike, max_distance: float = ...
-) -> NDArray[np.int64]:
+    actual_centroids: ArrayLike, theoretical_centroids: ArrayLike, max_distance: float | None = None
+) -> _I64:
     """Match actual contour centroids to theoretical ones one to one (minimal summed distance);
     ``(n_actual,)`` indices into the theoretical centroids, −1 where none lies within
-    ``max_distance`` mm.
+    ``max_distance`` mm (``None``: no limit).
 
     Examples
     --------
     >>> idx = machscan.match_contours(actual_centroids, cad_centroids, max_distance=10.0)
     """
 
-def read_cloud(
-    path: str | PathLike[str], delimiter: str | None = None, columns: tuple[int, int, int] = ...
-) -> dict[str, Any]:
-    """Read a point cloud file (PLY, PCD, or XYZ/CSV/TXT/PTS text; a .txt starting with
-    `n_vertices n_faces` is read as the geodesic test meshes' format); ``machscan.io.read`` wraps the
-    dict this returns (``points``, ``normals``, ``scalars``, ``triangles``).
-    """
+# ---- cloud ------------------------------------------------------------------------------------
 
-def read_toolpath(path: str | PathLike[str]) -> dict[str, Any]:
-    """Read an APT/CL toolpath: GOTO points, tool axes, feeds and segments (a new segment after every
-    RAPID); ``machscan.io.read_toolpath`` wraps the dict.
-    """
-
-def write_toolpath(
-    path: str | PathLike[str],
-    points: ArrayLike,
-    axes: ArrayLike | None = None,
-    feeds: ArrayLike | None = None,
-    segments: ArrayLike | None = None,
-) -> None:
-    """Write an APT/CL toolpath (``GOTO/x,y,z[,i,j,k]``, ``FEDRAT`` when the feed changes,
-    ``RAPID`` between segments).
-    """
-
-def write_points(
-    path: str | PathLike[str],
-    points: ArrayLike,
-    normals: ArrayLike | None = None,
-    scalars: dict[str, ArrayLike] | None = None,
-    binary: bool = True,
-    compressed: bool = False,
-) -> None:
-    """Write points (and optional normals and scalar properties) to a PLY, PCD or text file (by the
-    extension; ``binary`` picks binary or ASCII PLY/PCD; text files hold x, y, z only).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Output file (``.ply``).
-    points : array_like, shape (N, 3)
-        Points, mm; written as ``double`` so machine coordinates keep full precision.
-    normals : array_like, shape (N, 3), optional
-    scalars : dict of str to array_like (N,), optional
-        Extra per-point properties, e.g. ``{"frame": frame_index}``.
-    binary : bool
-        Binary little-endian (default) or ASCII.
-
-    Examples
-    --------
-    >>> machscan.write_points("scan.ply", points, scalars={"frame": frame_index})
-    """
-
-def voxel_downsample(points: ArrayLike, voxel_size: float, return_index: bool = False) -> Any:
+@overload
+def voxel_downsample(points: ArrayLike, voxel_size: float, *, return_index: Literal[False] = False) -> _F64:
     """Voxel grid: every occupied voxel replaced by the centroid of its points (Open3D's
     ``voxel_down_sample``: origin at the minimum bound less half a voxel, centroids summed in
     point order, so the centroids are bit-identical). Voxels come in the order of their first
@@ -464,12 +608,38 @@ def voxel_downsample(points: ArrayLike, voxel_size: float, return_index: bool = 
     --------
     >>> c = machscan.voxel_downsample(pts, 0.5)
     """
+@overload
+def voxel_downsample(points: ArrayLike, voxel_size: float, *, return_index: Literal[True]) -> tuple[_F64, _I64]:
+    """Voxel grid: every occupied voxel replaced by the centroid of its points (Open3D's
+    ``voxel_down_sample``: origin at the minimum bound less half a voxel, centroids summed in
+    point order, so the centroids are bit-identical). Voxels come in the order of their first
+    point; keys are 64-bit and relative to the minimum bound (no precision loss far from the
+    origin).
 
-def statistical_outlier_removal(points: ArrayLike, k: int, std_ratio: float) -> NDArray[np.int64]:
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        mm.
+    voxel_size : float
+        Voxel edge, mm.
+    return_index : bool
+        Also return the voxel of every input point.
+
+    Returns
+    -------
+    centroids : ndarray (M, 3)
+    voxel_of_point : ndarray of int64 (N,), only with ``return_index``
+
+    Examples
+    --------
+    >>> c = machscan.voxel_downsample(pts, 0.5)
+    """
+def remove_statistical_outliers(points: ArrayLike, k: int, std_ratio: float) -> _I64:
     """Statistical outlier removal (Open3D's ``remove_statistical_outlier(nb_neighbors=k,
     std_ratio)``): the mean distance of each point to its k nearest points (itself included);
     points whose mean is at least ``mean + std_ratio · std`` over the cloud are dropped
-    (paper 004's "3σ" rule with ``std_ratio = 3``).
+    (paper 004's "3σ" rule with ``std_ratio = 3``). ``k`` counts the point
+    itself, 1 ≤ k ≤ N.
 
     Returns
     -------
@@ -477,10 +647,9 @@ def statistical_outlier_removal(points: ArrayLike, k: int, std_ratio: float) -> 
 
     Examples
     --------
-    >>> keep = machscan.statistical_outlier_removal(pts, k=20, std_ratio=2.0)
+    >>> keep = machscan.remove_statistical_outliers(pts, k=20, std_ratio=2.0)
     """
-
-def radius_outlier_removal(points: ArrayLike, radius: float, min_neighbors: int) -> NDArray[np.int64]:
+def remove_radius_outliers(points: ArrayLike, radius: float, min_neighbors: int) -> _I64:
     """Radius outlier removal (Open3D's ``remove_radius_outlier(nb_points=min_neighbors,
     radius)``): a point is kept when more than ``min_neighbors`` points, itself included, lie
     strictly closer than ``radius`` mm.
@@ -491,36 +660,42 @@ def radius_outlier_removal(points: ArrayLike, radius: float, min_neighbors: int)
 
     Examples
     --------
-    >>> keep = machscan.radius_outlier_removal(pts, radius=0.5, min_neighbors=5)
+    >>> keep = machscan.remove_radius_outliers(pts, radius=0.5, min_neighbors=5)
     """
-
-def remove_duplicates(points: ArrayLike, tolerance: float) -> NDArray[np.int64]:
+def remove_duplicates(points: ArrayLike, tolerance: float) -> _I64:
     """Duplicate-point removal (paper 004): in point order, each point not yet removed removes every
     other point within ``tolerance`` mm; removed points never remove others, so chains of close
     points do not open holes. Returns the kept indices, ascending.
     """
-
-def crop_box(points: ArrayLike, min_bound: ArrayLike, max_bound: ArrayLike) -> NDArray[np.int64]:
+def crop_box(points: ArrayLike, min_bound: ArrayLike, max_bound: ArrayLike) -> _I64:
     """Indices of the points inside the box ``[min_bound, max_bound]`` (bounds included): crop box /
     pass-through filter (a pass-through on one axis is a box infinite on the others).
     """
+def random_downsample(points: ArrayLike, count: int, *, seed: int = 0) -> _I64:
+    """``count`` points of ``points`` drawn at random without replacement, reproducibly from
+    ``seed``; ascending indices (all of them when ``count`` ≥ N).
 
-def random_downsample(n_points: int, count: int, seed: int = 0) -> NDArray[np.int64]:
-    """``count`` points drawn at random without replacement, reproducibly from ``seed``; ascending
-    indices.
+    Examples
+    --------
+    >>> keep = machscan.random_downsample(pts, 10_000, seed=1)
     """
+def uniform_downsample(points: ArrayLike, every_k: int) -> _I64:
+    """Every ``every_k``-th point of ``points`` from the first (Open3D's ``uniform_down_sample``);
+    ascending indices.
 
-def uniform_downsample(n_points: int, every_k: int) -> NDArray[np.int64]:
-    """Every ``every_k``-th point from the first (Open3D's ``uniform_down_sample``)."""
-
+    Examples
+    --------
+    >>> keep = machscan.uniform_downsample(pts, 5)
+    """
 def estimate_normals(
     points: ArrayLike,
     k: int = 20,
+    *,
     radius: float | None = None,
     towards: ArrayLike | None = None,
     along: ArrayLike | None = None,
     consistent: bool = False,
-) -> NDArray[np.float64]:
+) -> _F64:
     """PCA normals (SPEC F): the eigenvector of the smallest eigenvalue of each point's
     neighborhood covariance — the k nearest points, the point itself included (Open3D's
     ``KDTreeSearchParamKNN(k)``), or with ``radius`` the nearest ``k`` strictly closer than it
@@ -535,15 +710,13 @@ def estimate_normals(
     --------
     >>> n = machscan.estimate_normals(pts, k=20, towards=(0, 0, 500))
     """
-
-def surface_variation(points: ArrayLike, k: int = 20, radius: float | None = None) -> NDArray[np.float64]:
+def surface_variation(points: ArrayLike, k: int = 20, *, radius: float | None = None) -> _F64:
     """Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighborhood covariance (0 on a
     plane, up to 1/3 for isotropic scatter); neighborhoods as in :func:`estimate_normals`.
     """
-
 def principal_curvatures(
-    points: ArrayLike, normals: ArrayLike | None = None, k: int = 20, radius: float | None = None
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    points: ArrayLike, normals: ArrayLike | None = None, k: int = 20, *, radius: float | None = None
+) -> tuple[_F64, _F64]:
     """Principal curvatures and directions from a local quadric fit (SPEC F).
 
     In each point's frame (tangents u, v; normal n) the neighbors are fitted by
@@ -564,18 +737,18 @@ def principal_curvatures(
     --------
     >>> k, d = machscan.principal_curvatures(pts, k=30)
     """
-
 def octree_simplify(
     points: ArrayLike,
     d_min: float,
+    *,
     normals: ArrayLike | None = None,
     k: int = 10,
     eps1: int | None = None,
     eps2: int | None = None,
-    neighbors: str = "xyz",
+    neighbors: Literal["xyz", "xy"] = "xyz",
     refine: int = 0,
     feature_threshold: float = 0.05,
-) -> NDArray[np.int64]:
+) -> _I64:
     """Octree simplification keeping features and the boundary (SPEC F, paper 002 §2).
 
     Cube of edge L (the largest extent) on the minimum corner, depth ⌈log2(L/d_min)⌉; each
@@ -620,58 +793,3 @@ def octree_simplify(
     --------
     >>> keep = machscan.octree_simplify(pts, d_min=2.0)
     """
-
-@final
-class KinematicChain:
-    """A machine model: a chain of elementary transforms mapping the last link (sensor, tool,
-    part) into the WCS (SPEC K7).
-
-    Parameters
-    ----------
-    steps : list of tuple
-        Composed left to right, each one of
-        ``("translate", (x, y, z))`` mm;
-        ``("translate_axes", (ix, iy, iz))`` translation by pose columns (None for 0);
-        ``("rotate", "x"|"y"|"z", angle)`` constant angle, rad;
-        ``("rotate_axis", "x"|"y"|"z", column)`` angle from a pose column (index or axis name);
-        ``("rotation", R)`` a constant 3×3 rotation; ``("mirror", (sx, sy, sz))`` with ±1.
-    axis_names : list of str
-        Names of the pose columns, e.g. ``["X", "Y", "Z", "A", "C"]``.
-
-    Examples
-    --------
-    >>> head = machscan.KinematicChain.ac_head((0, 0, 150), (0, 0, 0, 30, 0, -100))
-    >>> T = head.transforms(axes)          # (F, 4, 4)
-    """
-
-    def __new__(cls, steps: list[Any], axis_names: Sequence[str]) -> KinematicChain: ...
-    @staticmethod
-    def ac_head(c2_offset: ArrayLike, mount: ArrayLike) -> KinematicChain:
-        """AC double-swing head with C2 and sensor mount (SPEC K2, K3); poses X, Y, Z, A, C, C2."""
-    @staticmethod
-    def ab_mirror_support(lat: ArrayLike, lba: ArrayLike) -> KinematicChain:
-        """AB head, support side of mirror milling (SPEC K5); poses X, Y, Z, A, B."""
-    @staticmethod
-    def ac_table(center: ArrayLike) -> KinematicChain:
-        """AC cradle table about ``center`` (SPEC K6); poses A, C."""
-    @property
-    def n_axes(self) -> int:
-        """Number of pose columns."""
-    @property
-    def axis_names(self) -> list[str]:
-        """Names of the pose columns."""
-    def transforms(self, axes: ArrayLike) -> NDArray[np.float64]:
-        """4×4 transforms for poses ``axes (F, n_axes)`` → ``(F, 4, 4)``."""
-    def transform_points(self, points: ArrayLike, axes: ArrayLike) -> NDArray[np.float64]:
-        """Points ``(N, 3)``, each with its own pose ``axes (N, n_axes)`` → ``(N, 3)``."""
-    def transform_vectors(self, vectors: ArrayLike, axes: ArrayLike) -> NDArray[np.float64]:
-        """Directions or normals ``(N, 3)`` with poses ``(N, n_axes)``: turned, not moved."""
-    def scan_points(
-        self,
-        frames: ArrayLike,
-        axes: ArrayLike,
-        pitch: float,
-        center: float | None = None,
-        valid_range: ArrayLike | None = None,
-    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-        """Frames ``(F, N)`` and poses ``(F, n_axes)`` → ``(points (M, 3), frame_index (M,))``."""

@@ -1,7 +1,8 @@
 """The ``machscan`` command (also ``python -m machscan``).
 
     machscan demo [--out DIR] [--seed 0]            synthetic engraved plate → groove tables
-    machscan grooves SCAN CAD [CAD ...] [--out DIR] raw scan + CAD contours → groove tables (CSV)
+    machscan grooves SCAN CAD [CAD ...] [--out DIR] raw scan + CAD contours → groove tables (CSV);
+                                                    exit status 3 when no contour matched
     machscan points SCAN [--out cloud.ply]          raw scan → workpiece point cloud (PLY)
 """
 
@@ -16,10 +17,30 @@ import numpy as np
 
 
 def _write_cloud(path: Path, points: np.ndarray, frame_index: np.ndarray, binary: bool) -> None:
-    from machscan._core import write_points  # noqa: F401
+    from machscan.io import write_points
 
     path.parent.mkdir(parents=True, exist_ok=True)
     write_points(path, points, scalars={"frame": frame_index}, binary=binary)
+
+
+def _warn(text: str) -> None:
+    print(f"machscan: warning: {text}", file=sys.stderr)
+
+
+def _check_readings(scan) -> None:
+    """Warn when one exact value makes up a large share of the valid readings: a "no reading"
+    code the profiler is not told about (its default sentinel is −99999) turns into points."""
+    valid = scan.frames[scan.valid_mask()]
+    if valid.size == 0:
+        _warn("the scan holds no valid readings (all NaN, sentinel or out of range)")
+        return
+    sample = valid[:: max(1, valid.size // 1_000_000)]
+    values, counts = np.unique(sample, return_counts=True)
+    k = int(np.argmax(counts))
+    share = counts[k] / sample.size
+    if share >= 0.05:
+        _warn(f"{100 * share:.0f} % of the valid readings are exactly {values[k]!r}: if that is the profiler's "
+              f"no-reading code, pass --sentinel {values[k]!r} (or --valid-range) so they are dropped")
 
 
 def _scan_summary(scan, points: np.ndarray, seconds: float) -> list[str]:
@@ -111,17 +132,30 @@ def _grooves(args: argparse.Namespace) -> int:
     from machscan.inspection import inspect_grooves
 
     scan = _load_scan(args)
+    _check_readings(scan)
     cad = read_contours(args.cad)
     report = inspect_grooves(scan, cad, window=args.window, alpha=args.alpha, nominal_width=args.nominal_width,
-                             cluster_radius=args.cluster_radius)
+                             cluster_radius=args.cluster_radius, max_match_distance=args.max_match_distance)
     print(report.summary())
     paths = report.to_csv(args.out)
     print(f"\nwritten   : {', '.join(str(p) for p in paths)}")
+    fitted = int(report.fits.ok.sum())
+    if fitted < 0.5 * len(report.fits):
+        _warn(f"only {fitted} of {len(report.fits)} frames have a fitted groove: check --window, --nominal-width "
+              f"and the invalid readings (--sentinel, --valid-range)")
+    problem = report.matching_problem()
+    if problem:
+        _warn(problem)
+        return 3
+    if not report.contours:
+        _warn("no contour was matched")
+        return 3
     return 0
 
 
 def _points(args: argparse.Namespace) -> int:
     scan = _load_scan(args)
+    _check_readings(scan)
     t0 = time.perf_counter()
     points, frame_index = scan.wcs_points()
     seconds = time.perf_counter() - t0
@@ -133,6 +167,8 @@ def _points(args: argparse.Namespace) -> int:
 
 
 def _scan_arguments(p: argparse.ArgumentParser) -> None:
+    from machscan.scan import SENTINEL
+
     p.add_argument("scan", type=Path, help="raw scan: .npz saved by Scan.save, or a CSV export (one frame per row)")
     g = p.add_argument_group("for a CSV scan")
     g.add_argument("--poses", type=Path, help="poses CSV (X, Y, Z, A, C, C2 per frame, optional leading t)")
@@ -141,11 +177,13 @@ def _scan_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--c2-offset", type=float, nargs=3, metavar=("LX", "LY", "LZ"), help="C2 axis offset, mm")
     g.add_argument("--mount", type=float, nargs=6, metavar=("THETA", "PSI", "PHI", "DX", "DY", "DZ"), help="sensor mount, rad and mm")
     g.add_argument("--valid-range", type=float, nargs=2, metavar=("LO", "HI"), help="measuring range, mm")
-    g.add_argument("--sentinel", type=float, help="value the profiler returns for no reading")
+    g.add_argument("--sentinel", type=float, default=SENTINEL,
+                   help="value the profiler returns for no reading (default: %(default)s)")
 
 
 def build_parser() -> argparse.ArgumentParser:
     from machscan import __version__
+    from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
 
     parser = argparse.ArgumentParser(
         prog="machscan",
@@ -166,9 +204,13 @@ def build_parser() -> argparse.ArgumentParser:
     gr.add_argument("cad", nargs="+", type=Path, help="CAD contours: CSV (contour, x, y, z) or APT/CL files (GOTO points)")
     gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
     gr.add_argument("--window", type=int, default=200, help="readings around the line center fitted per frame (default: %(default)s)")
-    gr.add_argument("--alpha", type=float, default=20.0, help="template shape coefficient, 1/mm (default: %(default)s)")
-    gr.add_argument("--nominal-width", type=float, default=0.5, help="nominal groove width, mm (default: %(default)s)")
+    gr.add_argument("--alpha", type=float, default=GROOVE_DEFAULTS["alpha"],
+                    help="template shape coefficient, 1/mm (default: %(default)s)")
+    gr.add_argument("--nominal-width", type=float, default=GROOVE_DEFAULTS["nominal_width"],
+                    help="nominal groove width, mm (default: %(default)s)")
     gr.add_argument("--cluster-radius", type=float, default=5.0, help="contour segmentation distance, mm (default: %(default)s)")
+    gr.add_argument("--max-match-distance", type=float, default=10.0,
+                    help="largest distance between a scanned contour and its CAD contour, mm (default: %(default)s)")
     gr.set_defaults(run=_grooves)
 
     pts = sub.add_parser("points", help="turn a raw scan into a workpiece point cloud (PLY)")

@@ -1,4 +1,9 @@
-"""Contour error (SPEC C3–C5, paper 000 eq 21–23) as a result object."""
+"""Contours (SPEC C, paper 000 §2.2): CAD polylines resampled, actual contours matched to
+theoretical ones, and the contour error (eq 21–23) as a result object.
+
+Contours are segmented from a cloud of groove centers by :func:`machscan.euclidean_clusters`
+(re-exported here).
+"""
 
 from __future__ import annotations
 
@@ -8,10 +13,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
+from machscan._core import euclidean_clusters, match_contours, resample_polyline
+
+__all__ = ["ContourErrorResult", "contour_error", "euclidean_clusters", "match_contours", "resample_polyline"]
 
 
-@dataclass(frozen=True, repr=False)
-class ContourError:
+@dataclass(frozen=True, eq=False, repr=False)
+class ContourErrorResult:
     """Error of one actual (engraved) contour against its theoretical (CAD) contour.
 
     Attributes
@@ -42,11 +50,11 @@ class ContourError:
     max: float
 
     def __repr__(self) -> str:
-        return (f"ContourError({len(self.errors)} points: {self.mean:.4f} ± {self.std:.4f} mm, "
+        return (f"ContourErrorResult({len(self.errors)} points: {self.mean:.4f} ± {self.std:.4f} mm, "
                 f"max {self.max:.4f} mm, |E| = {np.linalg.norm(self.offset):.4f} mm)")
 
 
-def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0, delta2: float = 1.0) -> ContourError:
+def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0, delta2: float = 1.0) -> ContourErrorResult:
     """Contour error of one contour (SPEC C3–C5, paper 000 eq 21–23).
 
     The actual points are first moved by the offset E = mean(P) − mean(Q). Each theoretical
@@ -65,7 +73,7 @@ def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0
 
     Returns
     -------
-    ContourError
+    ContourErrorResult
         ``.offset`` (E), ``.errors`` (e_i), ``.mean``, ``.std``, ``.max``, ...
 
     Examples
@@ -73,4 +81,4 @@ def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0
     >>> r = machscan.contour_error(cad_points, groove_centers)
     >>> r.mean, r.max
     """
-    return ContourError(**_core.contour_error(theoretical, actual, delta1, delta2))
+    return ContourErrorResult(**_core.contour_error(theoretical, actual, delta1=delta1, delta2=delta2))

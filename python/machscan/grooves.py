@@ -1,14 +1,54 @@
-"""Groove cross-sections (SPEC G, paper 000 §2.1): per-frame template fit as a result object."""
+"""Groove cross-sections (SPEC G, paper 000 §2.1): per-frame template fit as a result object.
+
+Every default of the fit is defined once, in the Rust core (``GrooveOptions::default()``), and
+read from there by the signatures below: :data:`DEFAULTS`.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
 from enum import IntEnum
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
+
+__all__ = [
+    "DEFAULTS",
+    "FitCriteria",
+    "GrooveFits",
+    "GrooveStatus",
+    "LevelledFrame",
+    "Template",
+    "fit_grooves",
+    "level_groove_frame",
+]
+
+#: The defaults of every groove fit option, by name, as the core defines them.
+DEFAULTS = _core.groove_defaults()
+
+Template = Literal["tanh", "v"]
+
+
+@dataclass(frozen=True)
+class FitCriteria:
+    """When the Levenberg–Marquardt fit of a frame stops (grouped as Open3D groups
+    ``ICPConvergenceCriteria``): after ``max_iterations``, or when the step is below
+    ``step_tolerance`` relative to the parameters, the gradient ``‖Jᵀf‖∞`` below
+    ``gradient_tolerance``, or paper 000's cost test ``½ Σ f²/t < cost_tolerance`` (0 turns it
+    off, the default: noisy frames never meet it, quiet ones would stop before converging).
+
+    Examples
+    --------
+    >>> fits = machscan.fit_grooves(x, z, criteria=machscan.grooves.FitCriteria(max_iterations=50))
+    """
+
+    max_iterations: int = DEFAULTS["max_iterations"]
+    step_tolerance: float = DEFAULTS["step_tolerance"]
+    gradient_tolerance: float = DEFAULTS["gradient_tolerance"]
+    cost_tolerance: float = DEFAULTS["cost_tolerance"]
 
 
 class GrooveStatus(IntEnum):
@@ -30,7 +70,7 @@ class GrooveStatus(IntEnum):
     """The fit failed numerically, or ran away to a width outside ¼–4× the nominal width."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class GrooveFits:
     """Per-frame groove fits: every array has one entry per frame.
 
@@ -109,20 +149,17 @@ class GrooveFits:
 def fit_grooves(
     x: ArrayLike,
     z: ArrayLike,
-    alpha: float = 20.0,
-    nominal_width: float = 0.5,
-    window: int | None = None,
+    alpha: float = DEFAULTS["alpha"],
+    nominal_width: float = DEFAULTS["nominal_width"],
+    window: int | None = DEFAULTS["window"],
     *,
-    window_center: int | None = None,
-    fit_alpha: bool = False,
-    spike_threshold: float | None = 0.1,
-    min_depth: float = 0.03,
-    min_valid: int = 12,
-    max_iterations: int = 100,
-    cost_tolerance: float = 0.0,
-    step_tolerance: float = 1e-8,
-    gradient_tolerance: float = 1e-13,
-    template: str = "tanh",
+    template: Template = DEFAULTS["template"],
+    window_center: int | None = DEFAULTS["window_center"],
+    fit_alpha: bool = DEFAULTS["fit_alpha"],
+    spike_threshold: float | None = DEFAULTS["spike_threshold"],
+    min_depth: float = DEFAULTS["min_depth"],
+    min_valid: int = DEFAULTS["min_valid"],
+    criteria: FitCriteria | None = None,
 ) -> GrooveFits:
     """Fit the groove template of paper 000 to every profiler frame (SPEC G).
 
@@ -159,9 +196,10 @@ def fit_grooves(
         Drop readings further than this from their 5-reading median, mm.
     min_depth : float
         Shallowest dip that counts as a groove, mm.
-    min_valid, max_iterations, cost_tolerance, step_tolerance, gradient_tolerance
-        Fit controls; ``cost_tolerance`` is the paper's ``½ Σ f²/t < ε`` test (off by default:
-        noisy frames never meet it, quiet ones would stop before converging).
+    min_valid : int
+        Fewest valid readings in the window.
+    criteria : FitCriteria, optional
+        When the fit stops; default ``FitCriteria()``.
 
     Returns
     -------
@@ -173,14 +211,20 @@ def fit_grooves(
     >>> fits = machscan.fit_grooves(x, z, alpha=20.0, nominal_width=0.5, window=200)
     >>> fits.width[fits.ok].mean()
     """
+    c = FitCriteria() if criteria is None else criteria
+    if not isinstance(c, FitCriteria):
+        raise ValueError(f"criteria: expected a machscan.grooves.FitCriteria, got {type(c).__name__}")
     out = _core.fit_grooves(
-        x, z, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth,
-        min_valid, max_iterations, cost_tolerance, step_tolerance, gradient_tolerance, template,
+        x, z, template=template, alpha=alpha, nominal_width=nominal_width, window=window,
+        window_center=window_center, fit_alpha=fit_alpha, spike_threshold=spike_threshold,
+        min_depth=min_depth, min_valid=min_valid, max_iterations=c.max_iterations,
+        cost_tolerance=c.cost_tolerance, step_tolerance=c.step_tolerance,
+        gradient_tolerance=c.gradient_tolerance,
     )
     return GrooveFits(**out, template=template)
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class LevelledFrame:
     """One frame as the groove fit sees it (SPEC G steps 1–4).
 
@@ -215,14 +259,14 @@ class LevelledFrame:
 def level_groove_frame(
     x: ArrayLike,
     z: ArrayLike,
-    alpha: float = 20.0,
-    nominal_width: float = 0.5,
-    window: int | None = None,
+    alpha: float = DEFAULTS["alpha"],
+    nominal_width: float = DEFAULTS["nominal_width"],
+    window: int | None = DEFAULTS["window"],
     *,
-    window_center: int | None = None,
-    spike_threshold: float | None = 0.1,
-    min_depth: float = 0.03,
-    min_valid: int = 12,
+    window_center: int | None = DEFAULTS["window_center"],
+    spike_threshold: float | None = DEFAULTS["spike_threshold"],
+    min_depth: float = DEFAULTS["min_depth"],
+    min_valid: int = DEFAULTS["min_valid"],
 ) -> LevelledFrame:
     """One frame levelled exactly as :func:`fit_grooves` does before its template fit.
 
@@ -235,6 +279,9 @@ def level_groove_frame(
     >>> lf = machscan.level_groove_frame(x, z[0], window=200)
     >>> lf.x.shape, lf.start
     """
-    out = _core.level_groove_frame(x, z, alpha, nominal_width, window, window_center, spike_threshold, min_depth, min_valid)
+    out = _core.level_groove_frame(
+        x, z, alpha=alpha, nominal_width=nominal_width, window=window, window_center=window_center,
+        spike_threshold=spike_threshold, min_depth=min_depth, min_valid=min_valid,
+    )
     out["status"] = GrooveStatus(out["status"])
     return LevelledFrame(**out)

@@ -17,13 +17,14 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from machscan import _core
-from machscan.contours import ContourError, contour_error
-from machscan.grooves import GrooveFits, fit_grooves
+from machscan._core import euclidean_clusters, match_contours, nearest_neighbors, resample_polyline
+from machscan.contours import ContourErrorResult, contour_error
+from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
+from machscan.grooves import GrooveFits, Template, fit_grooves
 from machscan.scan import Scan
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class ContourResult:
     """One engraved contour matched to its CAD contour.
 
@@ -42,7 +43,7 @@ class ContourResult:
         in scan order and resampled (see :func:`inspect_grooves`).
     width, depth : ndarray (b,)
         Groove width and depth of those frames, mm.
-    error : ContourError
+    error : ContourErrorResult
         The contour error of paper 000 eq (21)–(23).
     offset_error : float
         |E| after the bending is taken out, mm (decomposition).
@@ -59,7 +60,7 @@ class ContourResult:
     actual: NDArray[np.float64]
     width: NDArray[np.float64]
     depth: NDArray[np.float64]
-    error: ContourError
+    error: ContourErrorResult
     offset_error: float
     bending: NDArray[np.float64]
     local: NDArray[np.float64]
@@ -69,7 +70,7 @@ class ContourResult:
                 f"{self.width.mean():.4f} mm, depth {self.depth.mean():.4f} mm, error {self.error.mean:.4f} mm)")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Decomposition:
     """Shares of the contour error (paper 000 §3: offset 17.16 %, bending 74.56 %, local 8.28 %).
 
@@ -96,7 +97,7 @@ class Decomposition:
         return _poly_eval(self.exponents, self.coefficients, np.asarray(x, float), np.asarray(y, float), self.center, self.scale)
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class GrooveReport:
     """Everything :func:`inspect_grooves` measured.
 
@@ -125,6 +126,11 @@ class GrooveReport:
         CAD contours no cluster was matched to (not engraved, or not scanned).
     decomposition : Decomposition or None
         None when no contour was matched.
+    nearest_cad_distance : ndarray (n_clusters,)
+        Distance from each cluster's centroid to the nearest CAD contour centroid, mm: when
+        nothing matched, it says how far off the CAD is (another unit, another origin).
+    max_match_distance : float
+        The matching limit used, mm.
     """
 
     fits: GrooveFits
@@ -136,6 +142,18 @@ class GrooveReport:
     unmatched_clusters: tuple[int, ...]
     unmatched_cad: tuple[int, ...]
     decomposition: Decomposition | None
+    nearest_cad_distance: NDArray[np.float64]
+    max_match_distance: float
+
+    def matching_problem(self) -> str | None:
+        """Why no contour was matched, in words, or None when some were (or nothing was
+        fitted to match)."""
+        if self.contours or len(self.nearest_cad_distance) == 0:
+            return None
+        near = float(self.nearest_cad_distance.min())
+        return (f"no CAD contour within max_match_distance = {self.max_match_distance:g} mm of the "
+                f"{len(self.nearest_cad_distance)} scanned contours: the nearest CAD contour centroid is "
+                f"{near:.4g} mm away. Are the CAD contours in mm and in the workpiece coordinate system?")
 
     @property
     def used(self) -> NDArray[np.bool_]:
@@ -212,7 +230,10 @@ class GrooveReport:
             lines.append("  frames not fitted: " + ", ".join(f"{k} {v}" for k, v in bad.items()))
         if self.suspect.any():
             lines.append(f"  fits left out as suspect (standard error far above the median): {int(self.suspect.sum())}")
-        if self.unmatched_clusters:
+        problem = self.matching_problem()
+        if problem:
+            lines.append("  " + problem)
+        elif self.unmatched_clusters:
             lines.append(f"  clusters with no CAD contour: {list(self.unmatched_clusters)}")
         if self.unmatched_cad:
             lines.append(f"  CAD contours not found in the scan: {list(self.unmatched_cad)}")
@@ -303,9 +324,10 @@ def inspect_grooves(
     cad_contours: Sequence[ArrayLike],
     *,
     window: int = 200,
-    alpha: float = 20.0,
-    nominal_width: float = 0.5,
-    fit_alpha: bool = False,
+    template: Template = GROOVE_DEFAULTS["template"],
+    alpha: float = GROOVE_DEFAULTS["alpha"],
+    nominal_width: float = GROOVE_DEFAULTS["nominal_width"],
+    fit_alpha: bool = GROOVE_DEFAULTS["fit_alpha"],
     cluster_radius: float = 5.0,
     cluster_k: int | None = 5,
     min_cluster_frames: int = 20,
@@ -345,8 +367,9 @@ def inspect_grooves(
         ``cad_spacing`` mm. Or the points of the whole drawing as one array: its contours are
         then found by the same Euclidean clustering as the groove centers and its points are
         used as they are (they should be dense: see step 5).
-    window, alpha, nominal_width, fit_alpha
-        Groove fit settings (see :func:`machscan.fit_grooves`).
+    window, template, alpha, nominal_width, fit_alpha
+        Groove fit settings (see :func:`machscan.fit_grooves`); ``window`` is the paper's t =
+        200 readings around the line center.
     cluster_radius, cluster_k, min_cluster_frames
         Clustering (see :func:`machscan.euclidean_clusters`).
     cad_spacing, actual_spacing, max_match_distance, bending_degree
@@ -378,7 +401,7 @@ def inspect_grooves(
             cad_points = np.column_stack([cad_points, np.zeros(len(cad_points))])
         if cad_points.shape[1] != 3 or len(cad_points) < 3 or not np.isfinite(cad_points).all():
             raise ValueError(f"cad_contours: expected finite (n, 3) points with n >= 3, got {cad_contours.shape}")
-        cad_labels = _core.euclidean_clusters(cad_points, cluster_radius, cluster_k)
+        cad_labels = euclidean_clusters(cad_points, cluster_radius, _cluster_k(cluster_k, len(cad_points)))
         polylines = [cad_points[cad_labels == c] for c in range(int(cad_labels.max()) + 1)]
     else:
         polylines = _as_polylines(cad_contours)
@@ -391,7 +414,8 @@ def inspect_grooves(
     prof = scan.profiler
     x = (np.arange(scan.n_readings) - prof.i0) * prof.pitch
     z = np.where(scan.valid_mask(), scan.frames, np.nan)
-    fits = fit_grooves(x, z, alpha=alpha, nominal_width=nominal_width, window=window, fit_alpha=fit_alpha)
+    fits = fit_grooves(x, z, alpha=alpha, nominal_width=nominal_width, window=window, template=template,
+                       fit_alpha=fit_alpha)
     if not max_se_ratio > 0:
         raise ValueError(f"max_se_ratio: must be positive, got {max_se_ratio}")
     converged = fits.ok
@@ -411,7 +435,7 @@ def inspect_grooves(
     cluster = np.full(len(fits), -1, dtype=np.int64)
     idx_ok = np.nonzero(ok)[0]
     if len(idx_ok):
-        labels = _core.euclidean_clusters(center[idx_ok], cluster_radius, cluster_k)
+        labels = euclidean_clusters(center[idx_ok], cluster_radius, _cluster_k(cluster_k, len(idx_ok)))
         sizes = np.bincount(labels)
         keep = sizes[labels] >= min_cluster_frames
         # Renumber the kept clusters 0.. in order of first frame.
@@ -420,10 +444,12 @@ def inspect_grooves(
         renum[kept_labels] = np.arange(len(kept_labels))
         cluster[idx_ok] = renum[labels]
     n_clusters = int(cluster.max()) + 1
-    theoretical = polylines if cad_cloud else [_core.resample_polyline(p, cad_spacing, True) for p in polylines]
+    theoretical = polylines if cad_cloud else [resample_polyline(p, cad_spacing, closed=True) for p in polylines]
     cad_centroids = np.array([p.mean(0) for p in theoretical])
     cl_centroids = np.array([center[cluster == c].mean(0) for c in range(n_clusters)]).reshape(-1, 3)
-    match = _core.match_contours(cl_centroids, cad_centroids, max_match_distance)
+    match = match_contours(cl_centroids, cad_centroids, max_distance=max_match_distance)
+    nearest_cad = (np.linalg.norm(cl_centroids[:, None, :] - cad_centroids[None, :, :], axis=2).min(axis=1)
+                   if n_clusters else np.zeros(0))
     contour = np.full(len(fits), -1, dtype=np.int64)
     for c, m in enumerate(match):
         if m >= 0:
@@ -439,7 +465,7 @@ def inspect_grooves(
             q = center[cluster == c]
             p = theoretical[m]
             # CAD height under each center: the nearest CAD point's z (the CAD skin is smooth).
-            near, _ = _core.nearest_neighbors(p * [1.0, 1.0, 0.0], q * [1.0, 1.0, 0.0])
+            near, _ = nearest_neighbors(p * [1.0, 1.0, 0.0], q * [1.0, 1.0, 0.0])
             dz_parts.append(q[:, 2] - p[near, 2])
             xs.append(q[:, 0])
             ys.append(q[:, 1])
@@ -484,7 +510,17 @@ def inspect_grooves(
         unmatched_clusters=tuple(c for c, m in enumerate(match) if m < 0),
         unmatched_cad=tuple(k for k in range(len(polylines)) if k not in matched_cad),
         decomposition=decomposition,
+        nearest_cad_distance=nearest_cad,
+        max_match_distance=float(max_match_distance),
     )
+
+
+def _cluster_k(k: int | None, n: int) -> int | None:
+    """The paper's k nearest, for a cloud of n points: every other point when there are fewer
+    than k (the same partition as k = n − 1)."""
+    if k is None or n < 2:
+        return None if n < 2 else k
+    return min(k, n - 1)
 
 
 def _join_centers(q: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
@@ -503,11 +539,11 @@ def _join_centers(q: NDArray[np.float64], spacing: float) -> NDArray[np.float64]
     # Split at unbridged gaps; each piece is resampled at equal arc-length steps.
     cuts = np.nonzero(seg > limit)[0]
     if len(cuts) == 0 and close:
-        return _core.resample_polyline(q, spacing, True)
+        return resample_polyline(q, spacing, closed=True)
     out = []
     start = 0
     for end in list(cuts) + [len(pts) - 1]:
         piece = pts[start:end + 1]
-        out.append(piece if len(piece) == 1 else _core.resample_polyline(piece, spacing, False))
+        out.append(piece if len(piece) == 1 else resample_polyline(piece, spacing, closed=False))
         start = end + 1
     return np.vstack(out)

@@ -1,39 +1,119 @@
-"""Point cloud files: PLY (ASCII, binary little/big endian; any scalar properties; faces),
-PCD (ascii, binary, binary_compressed), and XYZ/CSV text. Readers and writers are in Rust;
-these functions are their Python face.
+"""Point cloud, mesh and toolpath files.
+
+Formats, by extension (:data:`READ_FORMATS`, :data:`WRITE_FORMATS`):
+
+- ``.ply`` — ASCII and binary little/big-endian; any scalar vertex properties; faces.
+- ``.pcd`` — ``ascii``, ``binary`` and ``binary_compressed`` (PCL).
+- ``.stl`` — binary and ASCII; corners with equal coordinates become one vertex.
+- ``.obj`` — ``v``, ``vn`` and ``f`` (any of ``v``, ``v/vt``, ``v//vn``, ``v/vt/vn``).
+- ``.xyz``, ``.csv``, ``.txt``, ``.pts``, ``.asc`` — text, one point per line. A ``.txt`` whose
+  first line is ``n_vertices n_faces`` is the mesh text format of the geodesic test meshes
+  (pygeodesic): that many ``x y z`` lines, then that many lines of three 0-based vertex indices.
+- ``.las``, ``.laz`` — read through laspy (optional dependency).
+
+Readers and writers are in Rust; this module is their Python face. Files machscan writes with
+the default options open in Open3D (legacy and tensor readers), PCL and trimesh: PLY, PCD and
+STL hold float32 values by default, as those libraries write them (``dtype="float64"`` keeps
+full precision in PLY, PCD and the text formats).
+
+Errors: a file that cannot be opened raises the ``OSError`` of its cause
+(``FileNotFoundError``, ``PermissionError``, ``IsADirectoryError``, ...); a file whose content
+is not what its format says raises :class:`FileFormatError` (a ``ValueError``) naming the file;
+bad arguments raise ``ValueError`` naming the argument.
 """
 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
 
+__all__ = [
+    "READ_FORMATS",
+    "WRITE_FORMATS",
+    "CloudFile",
+    "FileFormatError",
+    "Toolpath",
+    "TriangleMesh",
+    "read",
+    "read_mesh",
+    "read_points",
+    "read_toolpath",
+    "write_mesh",
+    "write_points",
+    "write_toolpath",
+]
 
-@dataclass(frozen=True, repr=False)
+#: A file's content does not follow its format (a ``ValueError``; ``.filename`` names the file).
+FileFormatError = _core.FileFormatError
+
+#: Extensions :func:`read` reads.
+READ_FORMATS: tuple[str, ...] = tuple(_core.readable_formats())
+#: Extensions :func:`write_points` and :func:`write_mesh` write.
+WRITE_FORMATS: tuple[str, ...] = tuple(_core.writable_formats())
+
+Dtype = Literal["float32", "float64"]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
 class CloudFile:
-    """What a point file holds.
+    """What a point or mesh file holds.
 
     Attributes
     ----------
     points : ndarray (N, 3)
-        float64 coordinates as stored (PLY float32 coordinates are widened exactly).
+        float64 coordinates as stored (float32 values are widened exactly).
     normals : ndarray (N, 3) or None
-        PLY nx, ny, nz or PCD normal_x, normal_y, normal_z.
+        PLY nx, ny, nz; PCD normal_x, normal_y, normal_z; OBJ vn given per vertex.
     scalars : dict of str to ndarray (N,)
         Every other per-point property by name (curvature, intensity, allowance, ...).
     triangles : ndarray of int64 (T, 3)
-        PLY faces, polygons fanned into triangles; empty for clouds.
+        Faces, polygons fanned into triangles; empty for clouds.
     """
 
     points: NDArray[np.float64]
     normals: NDArray[np.float64] | None
     scalars: dict[str, NDArray[np.float64]]
-    triangles: NDArray[np.int64]
+    triangles: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    def select(self, index: ArrayLike) -> "CloudFile":
+        """The points picked by ``index`` (kept indices from a filter, or a boolean mask) with
+        their normals and scalars; triangles whose three vertices are all kept, renumbered.
+
+        Examples
+        --------
+        >>> cloud = machscan.io.read("scan.ply")
+        >>> clean = cloud.select(machscan.remove_statistical_outliers(cloud.points, 20, 2.0))
+        """
+        idx = np.asarray(index)
+        if idx.dtype == bool:
+            if idx.shape != (len(self.points),):
+                raise ValueError(f"index: expected a boolean mask of shape ({len(self.points)},), got {idx.shape}")
+            idx = np.flatnonzero(idx)
+        elif idx.dtype.kind not in "iu":
+            raise ValueError(f"index: expected integer indices or a boolean mask, got dtype {idx.dtype}")
+        idx = idx.astype(np.int64, copy=False)
+        if idx.size and (idx.min() < -len(self.points) or idx.max() >= len(self.points)):
+            raise ValueError(f"index: indices must lie in [0, {len(self.points)}), got {idx.min()}..{idx.max()}")
+        idx = np.where(idx < 0, idx + len(self.points), idx)
+        new_of_old = np.full(len(self.points), -1, dtype=np.int64)
+        new_of_old[idx] = np.arange(len(idx))
+        tri = new_of_old[self.triangles] if len(self.triangles) else self.triangles
+        tri = tri[(tri >= 0).all(axis=1)] if len(tri) else tri
+        return CloudFile(
+            points=self.points[idx],
+            normals=None if self.normals is None else self.normals[idx],
+            scalars={k: v[idx] for k, v in self.scalars.items()},
+            triangles=tri,
+        )
 
     def __repr__(self) -> str:
         extra = ", normals" if self.normals is not None else ""
@@ -42,25 +122,70 @@ class CloudFile:
         return f"CloudFile({len(self.points)} points{extra})"
 
 
-def read(path: str | os.PathLike[str], *, delimiter: str | None = None, columns: tuple[int, int, int] = (0, 1, 2)) -> CloudFile:
-    """Read a point file, choosing the reader by the extension.
+@dataclass(frozen=True, eq=False, repr=False)
+class TriangleMesh:
+    """A triangle mesh: shared vertices and triangles of vertex indices.
 
-    ``.ply``, ``.pcd``, ``.las``/``.laz`` (through laspy, an optional dependency), and text
-    files ``.xyz``, ``.csv``, ``.txt``, ``.pts``, ``.asc`` (one point per line; ``columns`` picks x, y, z, 0-based; ``delimiter`` None splits on
-    whitespace and commas; header lines are skipped).
+    Attributes
+    ----------
+    vertices : ndarray (V, 3)
+        mm.
+    triangles : ndarray of int64 (T, 3)
+        Vertex indices, counter-clockwise seen from outside (the right-hand rule gives the
+        outward normal).
+    normals : ndarray (V, 3) or None
+        Vertex normals when the file has them.
+    """
 
-    Bad files raise ``ValueError`` naming the file and what is wrong (truncated data, a header
-    that promises more than there is, an unknown property type, a bad LZF stream); a file that
-    cannot be opened raises ``OSError``.
+    vertices: NDArray[np.float64]
+    triangles: NDArray[np.int64]
+    normals: NDArray[np.float64] | None = None
+
+    def __repr__(self) -> str:
+        return f"TriangleMesh({len(self.vertices)} vertices, {len(self.triangles)} triangles)"
+
+
+def read(
+    path: str | os.PathLike[str],
+    *,
+    delimiter: str | None = None,
+    columns: tuple[int, int, int] = (0, 1, 2),
+) -> CloudFile:
+    """Read a point or mesh file, choosing the reader by the extension (see the module).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    delimiter : str, optional
+        Text files: the cell separator; None splits on whitespace and commas. Header lines (a
+        first cell that is not a number) are skipped.
+    columns : (int, int, int)
+        Text files: the 0-based columns of x, y, z.
+
+    Returns
+    -------
+    CloudFile
+        ``points``, ``normals``, ``scalars``, ``triangles``.
+
+    Raises
+    ------
+    FileNotFoundError, PermissionError, OSError
+        The file cannot be opened.
+    FileFormatError
+        The content is not what the format says (truncated data, a header that promises more
+        than there is, an unknown property type, a bad LZF stream), naming the file.
+    ValueError
+        An unknown extension (the message lists :data:`READ_FORMATS`).
 
     Examples
     --------
-    >>> cloud = machscan.io.read("scan.pcd")
-    >>> cloud.points.shape, cloud.scalars.keys()
+    >>> cloud = machscan.io.read("../shared/data/pcl-bunny-icp/bun0.pcd")
+    >>> cloud.points.shape
+    (397, 3)
     """
     if os.fspath(path).lower().endswith((".las", ".laz")):
         return _read_las(path)
-    return CloudFile(**_core.read_cloud(path, delimiter, tuple(columns)))
+    return CloudFile(**_core.read_cloud(path, delimiter=delimiter, columns=tuple(columns)))
 
 
 def _read_las(path: str | os.PathLike[str]) -> CloudFile:
@@ -70,11 +195,17 @@ def _read_las(path: str | os.PathLike[str]) -> CloudFile:
         import laspy
     except ImportError:
         raise ImportError("reading LAS needs laspy: pip install laspy (and lazrs for .laz)") from None
+    p = os.fspath(path)
+    if not os.path.exists(p):
+        raise FileNotFoundError(2, "No such file or directory", p)
     try:
-        las = laspy.read(os.fspath(path))
+        las = laspy.read(p)
     except Exception as e:  # laspy raises its own error types for bad files
-        raise ValueError(f"{os.fspath(path)}: not a readable LAS file ({e})") from None
-    pts = np.column_stack([np.asarray(las.x, dtype=np.float64), np.asarray(las.y, dtype=np.float64), np.asarray(las.z, dtype=np.float64)])
+        err = FileFormatError(f"{p}: not a readable LAS file ({e})")
+        err.filename = p
+        raise err from None
+    pts = np.column_stack([np.asarray(las.x, dtype=np.float64), np.asarray(las.y, dtype=np.float64),
+                           np.asarray(las.z, dtype=np.float64)])
     scalars = {}
     for name in las.point_format.dimension_names:
         if name.lower() in ("x", "y", "z"):
@@ -84,42 +215,114 @@ def _read_las(path: str | os.PathLike[str]) -> CloudFile:
 
 
 def read_points(path: str | os.PathLike[str]) -> NDArray[np.float64]:
-    """The ``(N, 3)`` float64 points of any supported point file (see :func:`read`).
+    """The ``(N, 3)`` float64 points of any supported file (see :func:`machscan.io.read`).
 
     Examples
     --------
-    >>> pts = machscan.read_points("bunny.pcd")
+    >>> pts = machscan.read_points("../shared/data/pcl-bunny-icp/bun0.pcd")
     """
     return read(path).points
+
+
+def read_mesh(path: str | os.PathLike[str]) -> TriangleMesh:
+    """A triangle mesh from a ``.ply``, ``.stl``, ``.obj`` or mesh ``.txt`` file.
+
+    STL files hold a soup of triangles: corners with equal coordinates become one vertex, in
+    order of first use (what trimesh does too). Raises :class:`FileFormatError` when the file
+    has no faces.
+
+    Examples
+    --------
+    >>> mesh = machscan.io.read_mesh("../shared/data/stanford-bunny-mesh/stanford_bunny.ply")
+    >>> mesh.vertices.shape, mesh.triangles.shape
+    """
+    c = read(path)
+    if len(c.triangles) == 0:
+        err = FileFormatError(f"{os.fspath(path)}: holds no faces; read it with machscan.io.read as a point cloud")
+        err.filename = os.fspath(path)
+        raise err
+    return TriangleMesh(vertices=c.points, triangles=c.triangles, normals=c.normals)
 
 
 def write_points(
     path: str | os.PathLike[str],
     points: ArrayLike,
     normals: ArrayLike | None = None,
-    binary: bool = True,
     *,
     scalars: dict[str, ArrayLike] | None = None,
+    binary: bool | None = None,
     compressed: bool = False,
+    dtype: Dtype | None = None,
 ) -> None:
     """Write points (mm), optional normals and named scalars; the format follows the extension.
 
-    ``.ply`` and ``.pcd``: coordinates, normals and scalars as ``double`` so machine coordinates
-    keep full precision; binary (little-endian) by default, ASCII with ``binary=False``
-    (shortest round-trip text); ``compressed=True`` writes PCD ``binary_compressed``.
-    ``.xyz``/``.csv``/``.txt``/``.pts``: x, y, z per line only.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.ply``, ``.pcd``, or a text format (``.xyz``, ``.csv``, ``.txt``, ``.pts``, ``.asc``:
+        x, y, z per line only).
+    points : array_like, shape (N, 3)
+    normals : array_like, shape (N, 3), optional
+    scalars : dict of str to array_like (N,), optional
+        Extra per-point fields, e.g. ``{"frame": frame_index}``; names are words (letters,
+        digits, _) other than the fields machscan writes itself (x, y, z, nx, ny, nz,
+        normal_x, normal_y, normal_z).
+    binary : bool, optional
+        PLY and PCD: binary little-endian (the default) or ASCII. Text formats refuse True.
+    compressed : bool
+        PCD only: ``binary_compressed`` (LZF). Refused for other formats and with
+        ``binary=False``.
+    dtype : {"float32", "float64"}, optional
+        Number type of every field. Default float32 for PLY and PCD (what Open3D and PCL read
+        everywhere; Open3D's legacy PCD reader reads 8-byte coordinates as zeros), full
+        float64 precision for text.
 
     Examples
     --------
     >>> machscan.write_points("cloud.ply", pts, scalars={"allowance": a})
+    >>> machscan.write_points("cloud.pcd", pts, compressed=True, dtype="float64")
     """
-    _core.write_points(path, points, normals, scalars, binary, compressed)
+    _core.write_cloud(path, points, normals=normals, scalars=scalars, binary=binary, compressed=compressed, dtype=dtype)
+
+
+def write_mesh(
+    path: str | os.PathLike[str],
+    vertices: ArrayLike,
+    triangles: ArrayLike,
+    *,
+    normals: ArrayLike | None = None,
+    binary: bool | None = None,
+    dtype: Dtype | None = None,
+) -> None:
+    """Write a triangle mesh: ``.ply`` (vertices, optional vertex normals, faces), ``.stl``
+    (binary by default or ASCII; facet normals from the right-hand rule; float32 only) or
+    ``.obj`` (text; ``v``, ``vn``, ``f``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    vertices : array_like, shape (V, 3)
+        mm.
+    triangles : array_like of int, shape (T, 3)
+        Vertex indices.
+    normals : array_like, shape (V, 3), optional
+        Vertex normals (PLY, OBJ).
+    binary : bool, optional
+        PLY and STL: binary (default) or ASCII.
+    dtype : {"float32", "float64"}, optional
+        Default float32 for PLY and STL, float64 for OBJ.
+
+    Examples
+    --------
+    >>> machscan.io.write_mesh("part.stl", mesh.vertices, mesh.triangles)
+    """
+    _core.write_cloud(path, vertices, normals=normals, triangles=triangles, binary=binary, dtype=dtype)
 
 
 write = write_points
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Toolpath:
     """An APT/CL toolpath.
 
@@ -165,10 +368,10 @@ def write_toolpath(
     segments: ArrayLike | None = None,
 ) -> None:
     """Write an APT/CL toolpath: ``GOTO/x,y,z[,i,j,k]`` per point (shortest round-trip numbers),
-    ``FEDRAT`` whenever the feed changes, ``RAPID`` between segments.
+    ``FEDRAT`` whenever the feed changes, ``RAPID`` where the segment label changes.
 
     Examples
     --------
     >>> machscan.io.write_toolpath("path.cl", pts, axes=normals, feeds=f)
     """
-    _core.write_toolpath(path, points, axes, feeds, segments)
+    _core.write_toolpath(path, points, axes=axes, feeds=feeds, segments=segments)

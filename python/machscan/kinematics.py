@@ -1,7 +1,9 @@
-"""Sensor mount calibration (SPEC K4) as a result object.
+"""Kinematics (SPEC K): profiler frames and machine axis positions to workpiece points,
+machine models as chains of elementary transforms, pose timing, and the sensor mount
+calibration (SPEC K4) with its result object.
 
-The transform chains themselves live in the extension (:class:`machscan.KinematicChain`,
-:func:`machscan.ac_head_transforms`, ...); this module adds the Python-side result types.
+Invalid readings — NaN, the profiler's "no reading" code :data:`SENTINEL` (−99999 by default)
+and anything outside a ``valid_range`` — are dropped by every function that makes points.
 """
 
 from __future__ import annotations
@@ -12,12 +14,37 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
+from machscan._core import (
+    KinematicChain,
+    ab_mirror_support_points,
+    ac_head_transforms,
+    ac_table_rotate,
+    interpolate_poses,
+    profile_to_points,
+    scan_to_wcs,
+)
+
+__all__ = [
+    "SENTINEL",
+    "KinematicChain",
+    "MountCalibration",
+    "ab_mirror_support_points",
+    "ac_head_transforms",
+    "ac_table_rotate",
+    "calibrate_mount",
+    "interpolate_poses",
+    "profile_to_points",
+    "scan_to_wcs",
+]
+
+#: The "no reading" code of the SR7140 / LJ family of profilers, mm: dropped by default.
+SENTINEL: float = _core.SENTINEL
 
 _NAMES = ("theta", "psi", "phi", "dx", "dy", "dz")
 _UNITS = ("rad", "rad", "rad", "mm", "mm", "mm")
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class MountCalibration:
     """Result of :func:`calibrate_mount`.
 
@@ -102,5 +129,5 @@ def calibrate_mount(
     >>> cal = machscan.calibrate_mount(scs, wcs)
     >>> print(cal.summary())
     """
-    out = _core.calibrate_mount(scs_points, wcs_points, axes, c2_offset)
+    out = _core.calibrate_mount(scs_points, wcs_points, axes=axes, c2_offset=c2_offset)
     return MountCalibration(**out)

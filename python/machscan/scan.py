@@ -14,8 +14,12 @@ Conventions (shared with the Rust core):
 * A reading is invalid when it is NaN, equal to the profiler's sentinel, or outside
   ``valid_range = (lo, hi)`` (bounds inclusive). Invalid readings never become points.
 
-This module is pure NumPy; the methods that compute points call the compiled core
-(``machscan.profile_to_points`` / ``machscan.scan_to_wcs``) and import it lazily.
+The methods that compute points call the compiled core (``machscan.profile_to_points`` /
+``machscan.scan_to_wcs``).
+
+Building a scan from your own data: a ``Scan`` takes NumPy arrays of frames, poses and frame
+times with a :class:`Profiler` and the machine's C2 offset and mount; a CSV export (one frame per
+row, one pose per row) is read by :func:`read_scan_csv`.
 """
 
 from __future__ import annotations
@@ -37,8 +41,11 @@ __all__ = [
     "write_scan_csv",
 ]
 
-#: Value a profiler returns for a reading it could not take (vendor-like "no data" code).
-SENTINEL = -99999.0
+from machscan import _core
+
+#: Value a profiler returns for a reading it could not take (the SR7140 / LJ "no data" code);
+#: the default sentinel of :class:`Profiler` and of every function that makes points.
+SENTINEL: float = _core.SENTINEL
 
 #: Version of the ``.npz`` layout written by :meth:`Scan.save`.
 _NPZ_VERSION = 1
@@ -67,9 +74,10 @@ class Profiler:
         Measuring range ``(lo, hi)`` in mm along SCS z; readings outside it (bounds inclusive)
         are invalid. ``None``: every finite reading is valid.
     sentinel : float, optional
-        The "no data" code the profiler writes for readings it could not take (for instance
-        :data:`SENTINEL`). ``None`` if it writes NaN. Readings equal to the sentinel are invalid
-        whether or not ``valid_range`` is set.
+        The "no data" code the profiler writes for readings it could not take; default
+        :data:`SENTINEL` (−99999, a height no real reading has, so the default is safe for
+        profilers that write NaN too). ``None`` keeps every finite value as a reading.
+        Readings equal to the sentinel are invalid whether or not ``valid_range`` is set.
     name : str
         Model name, for reports.
     noise : float, optional
@@ -98,7 +106,7 @@ class Profiler:
     pitch: float
     center: float | None = None
     valid_range: tuple[float, float] | None = None
-    sentinel: float | None = None
+    sentinel: float | None = SENTINEL
     name: str = "profiler"
     noise: float | None = None
     frame_rate: float | None = None
@@ -218,7 +226,7 @@ class Profiler:
             pitch=float(d["pitch"]),
             center=d.get("center"),
             valid_range=None if vr is None else (float(vr[0]), float(vr[1])),
-            sentinel=d.get("sentinel"),
+            sentinel=d.get("sentinel", SENTINEL),
             name=d.get("name", "profiler"),
             noise=d.get("noise"),
             frame_rate=d.get("frame_rate"),
@@ -410,17 +418,6 @@ class Scan:
 
     # ---- points (compiled core) ---------------------------------------------------------------
 
-    def _core_frames(self) -> np.ndarray:
-        """Frames for the core, which treats NaN and ``valid_range`` as invalid.
-
-        The sentinel is turned into NaN only when ``valid_range`` would not already reject it.
-        """
-        s = self.profiler.sentinel
-        vr = self.profiler.valid_range
-        if s is None or (vr is not None and not (vr[0] <= s <= vr[1])):
-            return self.frames
-        return np.where(self.frames == s, np.nan, self.frames)
-
     def scs_points(self) -> tuple[np.ndarray, np.ndarray]:
         """All valid readings as SCS points (SPEC K1).
 
@@ -431,11 +428,9 @@ class Scan:
         frame_index : ndarray of int64, shape (M,)
             Frame of every point.
         """
-        from machscan import profile_to_points  # compiled core, imported lazily
-
         p = self.profiler
-        return profile_to_points(
-            self._core_frames(), p.pitch, center=p.center, valid_range=p.valid_range
+        return _core.profile_to_points(
+            self.frames, p.pitch, center=p.center, valid_range=p.valid_range, sentinel=p.sentinel
         )
 
     def wcs_points(self) -> tuple[np.ndarray, np.ndarray]:
@@ -447,24 +442,21 @@ class Scan:
             WCS points in mm, frame-major then reading order.
         frame_index : ndarray of int64, shape (M,)
         """
-        from machscan import scan_to_wcs  # compiled core, imported lazily
-
         p = self.profiler
-        return scan_to_wcs(
-            self._core_frames(),
+        return _core.scan_to_wcs(
+            self.frames,
             self.poses,
             p.pitch,
             self.c2_offset,
             self.mount,
             center=p.center,
             valid_range=p.valid_range,
+            sentinel=p.sentinel,
         )
 
     def transforms(self) -> np.ndarray:
         """WCS <- SCS transform of every frame, shape (F, 4, 4) (``machscan.ac_head_transforms``)."""
-        from machscan import ac_head_transforms  # compiled core, imported lazily
-
-        return ac_head_transforms(self.poses, self.c2_offset, self.mount)
+        return _core.ac_head_transforms(self.poses, self.c2_offset, self.mount)
 
     # ---- selection ----------------------------------------------------------------------------
 

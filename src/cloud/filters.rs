@@ -20,9 +20,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 fn check_points(points: &[[f64; 3]]) -> Result<()> {
-    if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
-        return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
-    }
+    crate::error::check_finite_points("points", points)?;
     Ok(())
 }
 
@@ -124,6 +122,7 @@ pub fn voxel_downsample(points: &[[f64; 3]], voxel: f64) -> Result<VoxelGrid> {
 
 /// Kept indices, ascending.
 pub fn remove_statistical_outliers(points: &[[f64; 3]], k: usize, std_ratio: f64) -> Result<Vec<usize>> {
+    check_points(points)?;
     check_k("k", k, 1, points.len(), Counting::WithSelf)?;
     if !(std_ratio.is_finite() && std_ratio >= 0.0) {
         return Err(Error::invalid("std_ratio", format!("must be >= 0, got {std_ratio}")));

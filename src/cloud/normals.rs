@@ -85,8 +85,8 @@ fn local_pca(nbrs: &[Neighbor]) -> Option<([f64; 3], [Vector3<f64>; 3])> {
 /// the surface variation λ0/(λ0+λ1+λ2). A point with fewer than 3 neighbors gets (0, 0, 1)
 /// (as Open3D) and variation 0, and is counted in the third return value.
 pub fn estimate_normals(points: &[[f64; 3]], nbh: Neighborhood) -> Result<(Vec<[f64; 3]>, Vec<f64>, usize)> {
-    nbh.check(points.len())?;
     crate::error::check_finite_points("points", points)?;
+    nbh.check(points.len())?;
     if points.is_empty() {
         return Ok((Vec::new(), Vec::new(), 0));
     }
@@ -265,9 +265,9 @@ pub fn principal_curvatures(
     normals: &[[f64; 3]],
     nbh: Neighborhood,
 ) -> Result<Vec<PrincipalCurvature>> {
-    nbh.check(points.len())?;
     crate::error::check_finite_points("points", points)?;
     crate::error::check_finite_points("normals", normals)?;
+    nbh.check(points.len())?;
     if normals.len() != points.len() {
         return Err(Error::shape(
             "normals",

@@ -154,9 +154,7 @@ pub fn octree_simplify(points: &[[f64; 3]], normals: Option<&[[f64; 3]]>, o: &Oc
         }
         crate::error::check_finite_points("normals", nr)?;
     }
-    if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
-        return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
-    }
+    crate::error::check_finite_points("points", points)?;
     if !(o.feature_threshold.is_finite() && o.feature_threshold >= 0.0) {
         return Err(Error::invalid(
             "feature_threshold",

@@ -41,9 +41,7 @@ fn check(name: &str, pts: &[[f64; 3]]) -> Result<()> {
     if pts.is_empty() {
         return Err(Error::shape(name, "(n, 3) with n >= 1 points", "(0, 3)"));
     }
-    if let Some(i) = pts.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
-        return Err(Error::invalid(name, format!("must be finite, found {:?} at row {i}", pts[i])));
-    }
+    crate::error::check_finite_points(name, pts)?;
     Ok(())
 }
 

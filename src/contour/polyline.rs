@@ -22,9 +22,7 @@ pub fn resample_polyline(vertices: &[[f64; 3]], spacing: f64, closed: bool) -> R
             format!("({}, 3)", vertices.len()),
         ));
     }
-    if let Some(i) = vertices.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
-        return Err(Error::invalid("vertices", format!("must be finite, found {:?} at row {i}", vertices[i])));
-    }
+    crate::error::check_finite_points("vertices", vertices)?;
     let n = vertices.len();
     let segments = if closed { n } else { n - 1 };
     let seg = |s: usize| (vertices[s], vertices[(s + 1) % n]);

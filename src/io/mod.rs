@@ -600,12 +600,11 @@ mod round_trips {
     fn contradictions_and_what_a_format_cannot_hold_are_refused() {
         let points = [0.0, 0.0, 0.0];
         let a = [1.0];
-        let (x, normal_x, words, plain): (
-            [(&str, &[f64]); 1],
-            [(&str, &[f64]); 1],
-            [(&str, &[f64]); 1],
-            [(&str, &[f64]); 1],
-        ) = ([("x", &a)], [("Normal_X", &a)], [("two words", &a)], [("a", &a)]);
+        type Fields<'a> = [(&'a str, &'a [f64]); 1];
+        let x: Fields<'_> = [("x", &a)];
+        let normal_x: Fields<'_> = [("Normal_X", &a)];
+        let words: Fields<'_> = [("two words", &a)];
+        let plain: Fields<'_> = [("a", &a)];
         let cases: Vec<(&str, CloudRef<'_>, WriteOptions, &str)> = vec![
             (
                 "c.ply",

@@ -43,9 +43,7 @@ pub fn euclidean_clusters(points: &[[f64; 3]], radius: f64, k: Option<usize>) ->
     if n >= u32::MAX as usize {
         return Err(Error::invalid("points", format!("{n} points exceed the 2^32 − 1 labels can hold")));
     }
-    if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
-        return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
-    }
+    crate::error::check_finite_points("points", points)?;
     let mut parent: Vec<u32> = (0..n as u32).collect();
     match k {
         None => union_within_radius_grid(points, radius, &mut parent),

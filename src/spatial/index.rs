@@ -20,9 +20,7 @@ impl PointIndex {
                 format!("{} points exceed the 2^32 − 1 an index can hold", points.len()),
             ));
         }
-        if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
-            return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
-        }
+        crate::error::check_finite_points("points", points)?;
         let tree = ImmutableKdTree::new_from_slice(points)
             .map_err(|e| Error::invalid("points", format!("cannot build the kd-tree: {e:?}")))?;
         Ok(PointIndex { tree, len: points.len() })

@@ -61,6 +61,7 @@ pub fn nearest_neighbors(points: &[[f64; 3]], queries: &[[f64; 3]]) -> Result<(V
 /// first, ties by index; with `radius` only neighbors strictly closer than it, rows padded with
 /// `None` and ∞.
 pub fn knn_graph(points: &[[f64; 3]], k: usize, radius: Option<f64>) -> Result<(Vec<Option<usize>>, Vec<f64>)> {
+    check_finite_points("points", points)?;
     check_k("k", k, 1, points.len(), Counting::WithSelf)?;
     if let Some(r) = radius {
         check_positive("radius", r, "mm")?;

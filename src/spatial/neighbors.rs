@@ -95,9 +95,7 @@ impl CloudNeighbors {
         if n >= u32::MAX as usize {
             return Err(Error::invalid("points", format!("{n} points exceed the 2^32 − 1 an index can hold")));
         }
-        if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
-            return Err(Error::invalid("points", format!("must be finite, found {:?} at row {i}", points[i])));
-        }
+        crate::error::check_finite_points("points", points)?;
         // Points travel with their indices while splitting: sequential access, no indirection.
         let mut items: Vec<([f64; 3], u32)> = points.par_iter().enumerate().map(|(i, p)| (*p, i as u32)).collect();
         let (lo, hi) = crate::geom::bounds(points);
