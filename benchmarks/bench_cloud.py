@@ -23,11 +23,10 @@ import tempfile
 import time
 from pathlib import Path
 
+import machscan
 import numpy as np
 import open3d
 from scipy.spatial import cKDTree
-
-import machscan
 
 
 def best(fn, repeat=3):
@@ -86,8 +85,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as d:
         print("reading 1 M points:")
         for name, path in files(Path(d), p1m).items():
-            ms = best(lambda: machscan.read_points(path))
-            o3 = best(lambda: open3d.io.read_point_cloud(str(path)))
+            ms = best(lambda path=path: machscan.read_points(path))
+            o3 = best(lambda path=path: open3d.io.read_point_cloud(str(path)))
             assert np.allclose(machscan.read_points(path), np.asarray(open3d.io.read_point_cloud(str(path)).points))
             row(name, ms, o3)
     pc1m = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p1m))

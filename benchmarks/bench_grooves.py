@@ -17,10 +17,9 @@ import argparse
 import os
 import time
 
+import machscan
 import numpy as np
 from scipy.optimize import least_squares
-
-import machscan
 
 
 def template(x, x0, z0, d, w, a=20.0):
@@ -28,7 +27,7 @@ def template(x, x0, z0, d, w, a=20.0):
 
 
 def jacobian(p, xs, a=20.0):
-    x0, z0, d, w = p
+    x0, _z0, d, w = p
     ta, tb = np.tanh(a * (xs - x0 - w / 4)), np.tanh(a * (xs - x0 + w / 4))
     sa, sb = 1 - ta * ta, 1 - tb * tb
     return -np.column_stack([0.5 * d * a * (sb - sa), np.ones_like(xs), 0.5 * (ta - tb), -0.125 * d * a * (sa + sb)])

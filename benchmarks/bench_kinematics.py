@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-import machscan  # noqa: E402
-from kinematics_reference import scan_to_wcs_np  # noqa: E402
+import machscan
+from kinematics_reference import scan_to_wcs_np
 
 
 def best_of(fn, repeat):
@@ -56,9 +56,10 @@ def main() -> None:
     )
     assert np.array_equal(i1, i2) and np.allclose(p1, p2, rtol=0, atol=1e-9), "results differ"
     m = len(i1)
-    print(f"machine: {os.cpu_count()} cores; frames {f} x readings {n} = {f * n / 1e6:.1f} M readings, {m / 1e6:.2f} M valid points")
-    print(f"machscan.scan_to_wcs : best {ms_best * 1e3:8.1f} ms  median {ms_med * 1e3:8.1f} ms  {m / ms_best / 1e6:7.1f} M points/s")
-    print(f"NumPy reference      : best {np_best * 1e3:8.1f} ms  median {np_med * 1e3:8.1f} ms  {m / np_best / 1e6:7.1f} M points/s")
+    print(f"machine: {os.cpu_count()} cores; frames {f} x readings {n} = {f * n / 1e6:.1f} M readings, "
+          f"{m / 1e6:.2f} M valid points")
+    for name, b, med in (("machscan.scan_to_wcs", ms_best, ms_med), ("NumPy reference", np_best, np_med)):
+        print(f"{name:<21}: best {b * 1e3:8.1f} ms  median {med * 1e3:8.1f} ms  {m / b / 1e6:7.1f} M points/s")
     print(f"ratio (NumPy / machscan, best): {np_best / ms_best:.1f}x")
 
 

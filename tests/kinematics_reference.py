@@ -27,17 +27,17 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "ac_head_transforms_np",
+    "interpolate_poses_np",
+    "mount_rotation",
+    "mount_transform",
+    "profile_to_points_np",
+    "reading_x",
     "rot_x",
     "rot_y",
     "rot_z",
-    "mount_rotation",
-    "mount_transform",
-    "ac_head_transforms_np",
-    "reading_x",
-    "valid_mask_np",
-    "profile_to_points_np",
     "scan_to_wcs_np",
-    "interpolate_poses_np",
+    "valid_mask_np",
 ]
 
 

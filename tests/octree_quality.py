@@ -14,13 +14,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import machscan
 import matplotlib.tri as mtri
 import numpy as np
 import open3d
-from scipy.spatial import Delaunay
-
-import machscan
 from machscan.synth import pocket_plate
+from scipy.spatial import Delaunay
 
 
 @dataclass(frozen=True)

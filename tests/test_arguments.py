@@ -1,10 +1,9 @@
 """Count arguments (k, window, …) given a negative int raise ValueError naming the argument,
 not pyo3's bare OverflowError."""
 
+import machscan
 import numpy as np
 import pytest
-
-import machscan
 
 P = np.random.default_rng(0).random((50, 3))
 X = np.linspace(-1, 1, 64)
@@ -41,5 +40,5 @@ def test_negative_count_names_the_argument(name, call):
 def test_read_cloud_columns(tmp_path):
     path = tmp_path / "p.xyz"
     path.write_text("1 2 3\n4 5 6\n")
-    with pytest.raises(ValueError, match="^columns"):
+    with pytest.raises(ValueError, match=r"^columns"):
         machscan._core.read_cloud(path, columns=(0, -1, 2))

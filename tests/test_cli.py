@@ -3,10 +3,9 @@
 import subprocess
 import sys
 
+import machscan
 import numpy as np
 import pytest
-
-import machscan
 from machscan import synth
 from machscan.cad import read_contours, read_contours_apt, read_contours_csv, write_contours_csv
 from machscan.cli import main
@@ -73,7 +72,7 @@ def test_grooves_command_on_a_csv_scan_and_apt_contours(small):
 
 
 def test_grooves_command_reports_errors(small, capsys):
-    d, scan, truth = small
+    d, _scan, _truth = small
     assert main(["grooves", str(d / "frames.csv"), str(d / "cad.csv")]) == 2
     assert "--poses" in capsys.readouterr().err
 

@@ -3,16 +3,15 @@ eq (21)–(23), matching against scipy's assignment."""
 
 from pathlib import Path
 
+import machscan
 import numpy as np
+import open3d
 import pytest
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-import machscan
-
-import open3d  # noqa: E402  (a test dependency: installed by scripts/test.sh)
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
@@ -28,7 +27,7 @@ def canonical(labels):
 def contour_like_cloud(seed, n_per=3000):
     rng = np.random.default_rng(seed)
     pts = []
-    for c in range(12):
+    for _ in range(12):
         t = rng.uniform(0, 2 * np.pi, n_per)
         r = rng.uniform(5, 20)
         cx, cy = rng.uniform(-200, 200, 2)
@@ -78,11 +77,11 @@ def brute_contour_error(P, Q, d1=1.0, d2=1.0):
     Qs = Q + E
     D = np.linalg.norm(P[:, None, :] - Qs[None, :, :], axis=2)  # (a, b)
     j = D.argmin(1)  # M_P
-    l = D.argmin(0)  # M_Q
+    mq = D.argmin(0)  # M_Q
     e = np.empty(len(P))
     for i in range(len(P)):
         dist = D[i, j[i]]
-        ks = np.nonzero(l == i)[0]
+        ks = np.nonzero(mq == i)[0]
         if len(ks):
             dist = max(dist, D[i, ks].max())
         e[i] = d1 * np.linalg.norm(E) + d2 * dist

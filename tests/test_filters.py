@@ -3,11 +3,10 @@ centroids compared as sets, Open3D returns them in hash-map order)."""
 
 from pathlib import Path
 
+import machscan
 import numpy as np
 import open3d
 import pytest
-
-import machscan
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
@@ -36,7 +35,9 @@ def test_voxel_downsample_equals_open3d(name, p):
     got = machscan.voxel_downsample(p, size)
     ref = np.asarray(o3d_cloud(p).voxel_down_sample(size).points)
     assert got.shape == ref.shape
-    key = lambda a: a[np.lexsort(a.T[::-1])]
+    def key(a):
+        return a[np.lexsort(a.T[::-1])]
+
     np.testing.assert_array_equal(key(got), key(ref))
     c, idx = machscan.voxel_downsample(p, size, return_index=True)
     np.testing.assert_allclose(c[idx], p, atol=size * np.sqrt(3))

@@ -6,12 +6,11 @@ import subprocess
 import sys
 import textwrap
 
+import machscan
 import numpy as np
 import pytest
-from scipy.optimize import least_squares
-
-import machscan
 from machscan import GrooveStatus
+from scipy.optimize import least_squares
 
 X = (np.arange(200) - 100) * 0.025
 
@@ -50,7 +49,7 @@ def test_agrees_with_scipy_lm_on_the_same_levelled_frames():
             return zs - template(xs, *p)
 
         def jac(p):
-            x0, z0, d, w = p
+            x0, _z0, d, w = p
             a, b = np.tanh(20 * (xs - x0 - w / 4)), np.tanh(20 * (xs - x0 + w / 4))
             sa, sb = 1 - a * a, 1 - b * b
             return -np.column_stack([0.5 * d * 20 * (sb - sa), np.ones_like(xs), 0.5 * (a - b), -0.25 * 0.5 * d * 20 * (sa + sb)])
@@ -65,7 +64,7 @@ def test_agrees_with_scipy_lm_on_the_same_levelled_frames():
 
 
 def test_noisy_frames_statistics_and_standard_errors():
-    z, x0, d, w = noisy_frames(2000, seed=2)
+    z, _x0, d, w = noisy_frames(2000, seed=2)
     fits = machscan.fit_grooves(X, z)
     assert fits.ok.all()
     # Center of a tilted frame is not where the untilted truth is; compare depth/width only.

@@ -1,9 +1,8 @@
 """Groove inspection end to end on synthetic scans with exact truth (issue #3 §4)."""
 
+import machscan
 import numpy as np
 import pytest
-
-import machscan
 from machscan import synth
 from machscan.inspection import inspect_grooves
 
@@ -15,7 +14,7 @@ def run():
 
 
 def test_width_and_depth_per_frame_against_truth(run):
-    scan, truth, r = run
+    _scan, truth, r = run
     ok = r.fits.ok
     assert ok.mean() > 0.99
     w_err = np.abs(r.fits.width[ok] - truth.width[ok])
@@ -25,7 +24,7 @@ def test_width_and_depth_per_frame_against_truth(run):
 
 
 def test_groove_centers_in_the_wcs(run):
-    scan, truth, r = run
+    _scan, truth, r = run
     ok = r.used
     assert ok.mean() > 0.98
     err = np.linalg.norm(r.center_wcs[ok] - truth.center_wcs[ok], axis=1)
@@ -34,7 +33,7 @@ def test_groove_centers_in_the_wcs(run):
 
 
 def test_every_contour_found_and_matched(run):
-    scan, truth, r = run
+    _scan, truth, r = run
     assert [c.cad_index for c in r.contours] == list(range(11))
     assert r.unmatched_cad == () and r.unmatched_clusters == ()
     for c in r.contours:
@@ -42,7 +41,7 @@ def test_every_contour_found_and_matched(run):
 
 
 def test_contour_error_recovers_the_truth(run):
-    scan, truth, r = run
+    _scan, truth, r = run
     for c in r.contours:
         true_contour = machscan.resample_polyline(np.asarray(truth.engraved_polylines[c.cad_index]), 0.002, True)
         ref = machscan.contour_error(c.theoretical, true_contour)
@@ -52,7 +51,7 @@ def test_contour_error_recovers_the_truth(run):
 
 
 def test_decomposition_shares_within_5_points_of_truth(run):
-    scan, truth, r = run
+    _scan, truth, r = run
     off = np.linalg.norm(truth.center_offset, axis=1).mean()
     bend = np.abs(truth.center_bend).mean()
     loc = np.abs(truth.center_local).mean()
@@ -64,7 +63,7 @@ def test_decomposition_shares_within_5_points_of_truth(run):
 
 
 def test_tables_and_csv(run, tmp_path):
-    scan, truth, r = run
+    scan, _truth, r = run
     text = r.summary()
     assert "shares of the error" in text and "all" in text
     paths = r.to_csv(tmp_path)
@@ -131,8 +130,8 @@ def test_suspect_fits_are_left_out():
     # Without the screen that frame dominates contour 10's maximum error.
     loose = inspect_grooves(scan, truth.nominal_polylines, max_se_ratio=1e9)
     assert not loose.suspect.any()
-    c10 = [c for c in r.contours if c.cad_index == 10][0]
-    c10_loose = [c for c in loose.contours if c.cad_index == 10][0]
+    c10 = next(c for c in r.contours if c.cad_index == 10)
+    c10_loose = next(c for c in loose.contours if c.cad_index == 10)
     assert c10_loose.error.max > c10.error.max + 0.02
 
 

@@ -1,15 +1,13 @@
 """Kinematics (SPEC K1–K7) against independent NumPy implementations and the papers' closed forms."""
 
-import hashlib
 import os
 import subprocess
 import sys
 import textwrap
 
+import machscan
 import numpy as np
 import pytest
-
-import machscan
 from kinematics_reference import ac_head_transforms_np, scan_to_wcs_np
 
 RNG = np.random.default_rng(20261122)

@@ -1,12 +1,11 @@
 """k-nearest graph of a cloud's own points (`spatial::CloudNeighbors`) against scipy's cKDTree
 and Open3D's nearest-neighbor search on the same points."""
 
+import machscan
 import numpy as np
 import open3d
 import pytest
 from scipy.spatial import cKDTree
-
-import machscan
 
 
 def surface(n, seed=0, offset=0.0):
@@ -49,7 +48,7 @@ def test_radius_pads_rows():
 
 def test_ties_by_index_on_a_grid():
     g = np.stack(np.meshgrid(np.arange(7.0), np.arange(5.0), [0.0]), -1).reshape(-1, 3)
-    idx, dist = machscan.knn_graph(g, 5)
+    idx, _dist = machscan.knn_graph(g, 5)
     d_all = np.linalg.norm(g[:, None] - g[None], axis=2)
     expected = np.lexsort((np.broadcast_to(np.arange(len(g)), d_all.shape), d_all), axis=1)[:, :5]
     np.testing.assert_array_equal(idx, expected)
@@ -62,5 +61,5 @@ def test_small_and_bad_input():
     for kwargs, name in ((dict(k=-1), "k"), (dict(k=3, radius=0.0), "radius"), (dict(k=3, radius=np.nan), "radius")):
         with pytest.raises(ValueError, match=f"^{name}"):
             machscan.knn_graph(np.zeros((3, 3)), **kwargs)
-    with pytest.raises(ValueError, match="^points"):
+    with pytest.raises(ValueError, match=r"^points"):
         machscan.knn_graph(np.full((3, 3), np.nan), 2)

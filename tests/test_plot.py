@@ -8,13 +8,12 @@ import pytest
 
 matplotlib = pytest.importorskip("matplotlib")
 matplotlib.use("Agg")
+import machscan  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+from machscan import plot  # noqa: E402
 from matplotlib.collections import LineCollection, PathCollection  # noqa: E402
 from matplotlib.container import BarContainer  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
-
-import machscan  # noqa: E402
-from machscan import plot  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +61,7 @@ def test_width_depth_along_one_contour(run):
     report, _, _ = run
     c = report.contours[3]
     fig = plot.width_depth_along(report, contour=c.cad_index)
-    aw, ad = fig.axes
+    aw, _ad = fig.axes
     assert len(_data_lines(aw, "contour ")) == 1
     mean_line = _data_lines(aw, "mean")[0]
     assert mean_line.get_ydata()[0] == pytest.approx(c.width.mean())
@@ -212,7 +211,7 @@ def test_every_figure_saves_as_png(run, tmp_path):
 
 
 def test_not_a_report():
-    with pytest.raises(ValueError, match="expected a machscan.GrooveReport"):
+    with pytest.raises(ValueError, match=r"expected a machscan\.GrooveReport"):
         plot.contour_error_map(object())
 
 
@@ -236,7 +235,7 @@ def test_levelled_frame_draws_the_v_template_for_v_fits():
     fits = machscan.fit_grooves(x, z[None, :], template="v", alpha=80.0)
     assert fits.template == "v" and fits.select([0]).template == "v"
     fig = machscan.plot.levelled_frame(x, z, 0, fits)
-    line = [ln for ln in fig.axes[0].get_lines() if ln.get_label() == "fitted template"][0]
+    line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "fitted template")
     lf = machscan.level_groove_frame(x, z)
     # The drawn curve passes through the readings as closely as the fit's own rms.
     resid = lf.z - np.interp(lf.x, line.get_xdata(), line.get_ydata())

@@ -11,12 +11,9 @@ import json
 import math
 import zipfile
 
+import machscan
 import numpy as np
 import pytest
-
-import machscan
-from machscan.scan import SENTINEL, Profiler, Scan, read_scan_csv, write_scan_csv
-
 from kinematics_reference import (
     ac_head_transforms_np,
     interpolate_poses_np,
@@ -29,6 +26,7 @@ from kinematics_reference import (
     scan_to_wcs_np,
     valid_mask_np,
 )
+from machscan.scan import SENTINEL, Profiler, Scan, read_scan_csv, write_scan_csv
 
 # --------------------------------------------------------------------------------------------
 # helpers
@@ -519,7 +517,7 @@ def test_rust_scan_methods_match_reference():
     np.testing.assert_array_equal(fi, efi)
     np.testing.assert_allclose(pts, exp, rtol=0, atol=1e-9)
     assert fi.size == int(s.valid_mask().sum())
-    spts, sfi = s.scs_points()
+    spts, _sfi = s.scs_points()
     np.testing.assert_allclose(spts, profile_to_points_np(s.frames, p.pitch,
                                                           valid_range=p.valid_range)[0], atol=1e-12)
     np.testing.assert_allclose(s.transforms(), ac_head_transforms_np(s.poses, s.c2_offset, s.mount),

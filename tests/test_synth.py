@@ -7,13 +7,10 @@ developing without it, deselect them with ``-k "not rust"``.
 
 from __future__ import annotations
 
-import math
-
+import machscan
 import numpy as np
 import pytest
-from scipy.spatial import cKDTree
-
-import machscan
+from kinematics_reference import ac_head_transforms_np, interpolate_poses_np, scan_to_wcs_np
 from machscan import synth
 from machscan.scan import SENTINEL, Scan
 from machscan.synth import (
@@ -25,8 +22,7 @@ from machscan.synth import (
     groove_scan,
     surface_error,
 )
-
-from kinematics_reference import ac_head_transforms_np, interpolate_poses_np, scan_to_wcs_np
+from scipy.spatial import cKDTree
 
 QUIET = dict(noise=0.0, dropout=0.0, flank_dropout=0.0, spike_rate=0.0)
 
@@ -298,7 +294,7 @@ def test_dropouts_runs_sentinel_and_flanks(noisy, clean):
     lost = scan.frames == SENTINEL
     assert not np.isnan(scan.frames).any()
     cscan, _ = clean
-    pts, fi = _wcs(cscan, truth.mount_true)  # positions of every reading, from the clean twin
+    pts, _fi = _wcs(cscan, truth.mount_true)  # positions of every reading, from the clean twin
     valid_clean = cscan.profiler.valid_mask(cscan.frames)
     lost_at = lost[valid_clean]
     on_plate = truth.on_plate(pts[:, 0], pts[:, 1])
@@ -361,7 +357,7 @@ def test_frame_times_are_real_profiler_times(noisy):
 
 
 def test_axis_samples_cover_frames_and_interpolate_to_the_poses(noisy):
-    scan, truth = noisy
+    scan, _truth = noisy
     at, samples = scan.axis_times, scan.axis_samples
     assert at[0] < scan.frame_times[0] and at[-1] > scan.frame_times[-1]
     np.testing.assert_allclose(np.diff(at), 1e-3, rtol=1e-9)
@@ -424,7 +420,7 @@ def test_custom_contours_and_save_round_trip(tmp_path):
 
 
 def test_rust_wcs_points_of_synthetic_scan_match_reference(noisy):
-    scan, truth = noisy
+    scan, _truth = noisy
     pts, fi = scan.wcs_points()
     exp, efi = _wcs(scan)
     np.testing.assert_array_equal(fi, efi)

@@ -60,7 +60,6 @@ from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
     "SENTINEL",
-    "__version__",
     "CloudFile",
     "ContourErrorResult",
     "ContourResult",
@@ -76,6 +75,7 @@ __all__ = [
     "Profiler",
     "Scan",
     "TriangleMesh",
+    "__version__",
     "ab_mirror_support_points",
     "ac_head_transforms",
     "ac_table_rotate",

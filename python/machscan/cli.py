@@ -175,7 +175,8 @@ def _scan_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--pitch", type=float, help="reading spacing, mm")
     g.add_argument("--readings", type=int, help="readings per frame (default: the file's)")
     g.add_argument("--c2-offset", type=float, nargs=3, metavar=("LX", "LY", "LZ"), help="C2 axis offset, mm")
-    g.add_argument("--mount", type=float, nargs=6, metavar=("THETA", "PSI", "PHI", "DX", "DY", "DZ"), help="sensor mount, rad and mm")
+    g.add_argument("--mount", type=float, nargs=6, metavar=("THETA", "PSI", "PHI", "DX", "DY", "DZ"),
+                   help="sensor mount, rad and mm")
     g.add_argument("--valid-range", type=float, nargs=2, metavar=("LO", "HI"), help="measuring range, mm")
     g.add_argument("--sentinel", type=float, default=SENTINEL,
                    help="value the profiler returns for no reading (default: %(default)s)")
@@ -196,14 +197,16 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="run the groove inspection on a built-in synthetic scan")
     demo.add_argument("--out", type=Path, default=Path("machscan-demo"), help="output folder (default: %(default)s)")
     demo.add_argument("--seed", type=int, default=0, help="seed of the synthetic scan (default: %(default)s)")
-    demo.add_argument("--cloud-every", type=int, default=10, help="write the workpiece points of every Nth frame (default: %(default)s)")
+    demo.add_argument("--cloud-every", type=int, default=10,
+                      help="write the workpiece points of every Nth frame (default: %(default)s)")
     demo.set_defaults(run=_demo)
 
     gr = sub.add_parser("grooves", help="groove width, depth and contour error from a raw scan and CAD contours")
     _scan_arguments(gr)
     gr.add_argument("cad", nargs="+", type=Path, help="CAD contours: CSV (contour, x, y, z) or APT/CL files (GOTO points)")
     gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
-    gr.add_argument("--window", type=int, default=200, help="readings around the line center fitted per frame (default: %(default)s)")
+    gr.add_argument("--window", type=int, default=200,
+                    help="readings around the line center fitted per frame (default: %(default)s)")
     gr.add_argument("--alpha", type=float, default=GROOVE_DEFAULTS["alpha"],
                     help="template shape coefficient, 1/mm (default: %(default)s)")
     gr.add_argument("--nominal-width", type=float, default=GROOVE_DEFAULTS["nominal_width"],

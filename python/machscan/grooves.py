@@ -124,7 +124,7 @@ class GrooveFits:
         """Number of frames per status."""
         return {s.name.lower(): int(np.count_nonzero(self.status == s)) for s in GrooveStatus}
 
-    def select(self, index: ArrayLike) -> "GrooveFits":
+    def select(self, index: ArrayLike) -> GrooveFits:
         """The fits of a subset of frames (boolean mask or indices)."""
         arrays = {f.name: getattr(self, f.name)[index] for f in fields(self) if f.name != "template"}
         return GrooveFits(**arrays, template=self.template)

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import csv
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -251,7 +251,8 @@ class GrooveReport:
         out.mkdir(parents=True, exist_ok=True)
         paths = []
         f = self.fits
-        frame_cols = {"frame": np.arange(len(f)), "status": f.status, "suspect": self.suspect.astype(np.int64), "x0_scs": f.x0, "z0_scs": f.z0,
+        frame_cols = {"frame": np.arange(len(f)), "status": f.status, "suspect": self.suspect.astype(np.int64),
+                      "x0_scs": f.x0, "z0_scs": f.z0,
                       "x_wcs": self.center_wcs[:, 0], "y_wcs": self.center_wcs[:, 1], "z_wcs": self.center_wcs[:, 2],
                       "width": f.width, "depth": f.depth, "se_width": f.se_width, "se_depth": f.se_depth,
                       "rms": f.rms, "cluster": self.cluster, "contour": self.contour}
@@ -260,7 +261,7 @@ class GrooveReport:
             w = csv.writer(fh)
             w.writerow(frame_cols)
             for row in zip(*frame_cols.values()):
-                w.writerow(["" if isinstance(v, float) and np.isnan(v) else f"{v:.10g}" if isinstance(v, (float, np.floating)) else int(v) for v in row])
+                w.writerow([_cell(v) for v in row])
         paths.append(path)
         for name, rows in (("widths.csv", self.width_depth_rows()), ("contour_errors.csv", self.contour_error_rows())):
             path = out / name
@@ -271,6 +272,13 @@ class GrooveReport:
                     w.writerows(rows)
             paths.append(path)
         return paths
+
+
+def _cell(v: object) -> str | int:
+    """A CSV cell: empty for NaN, 10 significant digits for floats, integers as they are."""
+    if isinstance(v, (float, np.floating)):
+        return "" if np.isnan(v) else f"{v:.10g}"
+    return int(v)  # type: ignore[call-overload]
 
 
 # ---- the bending surface ------------------------------------------------------------------

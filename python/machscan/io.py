@@ -84,7 +84,7 @@ class CloudFile:
     def __len__(self) -> int:
         return len(self.points)
 
-    def select(self, index: ArrayLike) -> "CloudFile":
+    def select(self, index: ArrayLike) -> CloudFile:
         """The points picked by ``index`` (kept indices from a filter, or a boolean mask) with
         their normals and scalars; triangles whose three vertices are all kept, renumbered.
 

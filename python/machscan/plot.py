@@ -24,7 +24,8 @@ Examples
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,12 +39,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
 __all__ = [
+    "contour_error_map",
+    "error_along",
+    "error_decomposition",
+    "levelled_frame",
     "width_depth_along",
     "width_depth_histograms",
-    "contour_error_map",
-    "error_decomposition",
-    "error_along",
-    "levelled_frame",
 ]
 
 _MISSING = "machscan.plot needs matplotlib: pip install machscan[plot]"

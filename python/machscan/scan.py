@@ -28,8 +28,9 @@ import io
 import json
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -148,7 +149,7 @@ class Profiler:
         object.__setattr__(self, "name", str(self.name))
 
     @classmethod
-    def sr7140(cls, readings: int = 3200) -> "Profiler":
+    def sr7140(cls, readings: int = 3200) -> Profiler:
         """An SR7140-like profiler, as used in paper 000 §3.
 
         3200 readings at 0.025 mm pitch (an 80 mm line), Z accuracy +-0.024 mm in the paper,
@@ -218,7 +219,7 @@ class Profiler:
         }
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> "Profiler":
+    def from_dict(cls, d: Mapping[str, Any]) -> Profiler:
         """Profiler from :meth:`to_dict` output."""
         vr = d.get("valid_range")
         return cls(
@@ -460,7 +461,7 @@ class Scan:
 
     # ---- selection ----------------------------------------------------------------------------
 
-    def select(self, index) -> "Scan":
+    def select(self, index) -> Scan:
         """A new scan with the frames picked by ``index`` (slice, integer array or boolean mask).
 
         Axis samples, profiler, offsets and metadata are carried over unchanged.
@@ -538,7 +539,7 @@ class Scan:
             np.savez(fh, **arrays)  # type: ignore[arg-type]
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "Scan":
+    def load(cls, path: str | os.PathLike) -> Scan:
         """Read a scan written by :meth:`save`."""
         p = os.fspath(path)
         with np.load(p, allow_pickle=False) as z:

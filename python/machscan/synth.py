@@ -38,27 +38,27 @@ Model summary (numbers from paper 000 unless marked as assumptions):
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 
 from .scan import SENTINEL, Profiler, Scan
 
 __all__ = [
-    "ContourShape",
-    "PeriodicProfile",
-    "Deflection",
-    "GrooveTruth",
-    "default_contours",
-    "groove_scan",
-    "flat_plate_scan",
-    "pocket_plate",
-    "SurfaceError",
-    "surface_error",
     "DEFAULT_C2_OFFSET",
     "DEFAULT_MOUNT",
     "PLATE",
+    "ContourShape",
+    "Deflection",
+    "GrooveTruth",
+    "PeriodicProfile",
+    "SurfaceError",
+    "default_contours",
+    "flat_plate_scan",
+    "groove_scan",
+    "pocket_plate",
+    "surface_error",
 ]
 
 #: Plate rectangle ``(x0, y0, x1, y1)`` in the WCS, mm (paper 000 §3: 200 mm x 200 mm).
@@ -262,7 +262,7 @@ class ContourShape:
 
     def polyline(self, step: float = 0.1) -> np.ndarray:
         """Points every ~``step`` mm along the contour (not repeating the first), shape (n, 2)."""
-        n = max(int(math.ceil(self.length / step)), 8)
+        n = max(math.ceil(self.length / step), 8)
         return self.point(np.arange(n) * (self.length / n))
 
     def describe(self) -> dict:
@@ -346,10 +346,10 @@ class PeriodicProfile:
 
     @staticmethod
     def random(rng: np.random.Generator, period: float, mean: float, rms: float,
-               wavelengths: tuple[float, float], n: int) -> "PeriodicProfile":
+               wavelengths: tuple[float, float], n: int) -> PeriodicProfile:
         """``n`` random harmonics with wavelengths in ``wavelengths`` (mm) and the given RMS."""
-        kmin = max(1, int(math.ceil(period / wavelengths[1])))
-        kmax = max(kmin, int(math.floor(period / wavelengths[0])))
+        kmin = max(1, math.ceil(period / wavelengths[1]))
+        kmax = max(kmin, math.floor(period / wavelengths[0]))
         pool = np.arange(kmin, kmax + 1)
         ks = np.sort(rng.choice(pool, size=min(n, pool.size), replace=False))
         amps = rng.normal(0.0, 1.0, ks.size)
@@ -360,7 +360,7 @@ class PeriodicProfile:
         phases = rng.uniform(0.0, _TWO_PI, ks.size)
         return PeriodicProfile(float(period), float(mean), ks.astype(np.int64), amps, phases)
 
-    def plus(self, other: "PeriodicProfile") -> "PeriodicProfile":
+    def plus(self, other: PeriodicProfile) -> PeriodicProfile:
         """Sum of two profiles with the same period."""
         return PeriodicProfile(
             self.period,
@@ -370,7 +370,7 @@ class PeriodicProfile:
             np.concatenate([self.phases, other.phases]),
         )
 
-    def scaled(self, factor: float) -> "PeriodicProfile":
+    def scaled(self, factor: float) -> PeriodicProfile:
         """The variation ``f - mean`` multiplied by ``factor``."""
         return PeriodicProfile(self.period, self.mean, self.harmonics,
                                self.amplitudes * factor, self.phases)
@@ -423,7 +423,7 @@ class Deflection:
         return out
 
     @staticmethod
-    def flat() -> "Deflection":
+    def flat() -> Deflection:
         """No deflection."""
         return Deflection((100.0, 100.0), 100.0, np.zeros((0, 2), dtype=np.int64), np.zeros(0))
 
@@ -647,7 +647,7 @@ def _engraved_xy(shape: ContourShape, offset, wiggle: PeriodicProfile, u) -> np.
     return shape.point(u) + np.asarray(offset) + wiggle(u)[..., None] * shape.normal(u)
 
 
-def _groove_height_k(t: "GrooveTruth | _Design", k: int, x, y):
+def _groove_height_k(t: GrooveTruth | _Design, k: int, x, y):
     """Groove contribution (height relative to the surface) of contour ``k`` at ``(x, y)``."""
     shape = t.contours[k]
     xy = np.stack([x - t.offsets[k, 0], y - t.offsets[k, 1]], axis=-1)
@@ -890,7 +890,7 @@ def groove_scan(
     f_contour, f_u, f_t = [], [], []
     for k, sh in enumerate(shapes):
         L = sh.length
-        n_raw = int(math.floor(L / step - 1e-9)) + 1  # raw frames with u < L
+        n_raw = math.floor(L / step - 1e-9) + 1  # raw frames with u < L
         j = np.arange(0, n_raw, keep_every)
         pass_starts.append(t)
         f_contour.append(np.full(j.size, k, dtype=np.int64))
@@ -936,7 +936,7 @@ def groove_scan(
     # ---- raw CNC samples ---------------------------------------------------------------------
     t_end = t_start[-1] + (shapes[-1].length + lead_in) / feed + lead
     phase = 0.317e-3  # the CNC clock is not aligned with the profiler
-    axis_times = phase + np.arange(int(math.floor((t_end - phase) * axis_rate)) + 1) / axis_rate
+    axis_times = phase + np.arange(math.floor((t_end - phase) * axis_rate) + 1) / axis_rate
     axis_samples = np.zeros((axis_times.size, 6))
     kt: list[float] = []
     kp: list[np.ndarray] = []
@@ -994,7 +994,7 @@ def groove_scan(
             cands.append((k, np.nonzero(mask)))
         # fixed-point iterations: two on the smooth surface everywhere, more on the grooves
         h = np.zeros((c, n))
-        for it in range(2):
+        for _ in range(2):
             qx = ox + h * ax_
             qy = oy + h * ay_
             on = (qx >= x0p) & (qx <= x1p) & (qy >= y0p) & (qy <= y1p)
@@ -1005,7 +1005,7 @@ def groove_scan(
             h = (z - oz) / az_
         for k, (fi, ii) in cands:
             azk = az_[fi, 0]
-            for it in range(3):
+            for _ in range(3):
                 qx = ox[fi, ii] + h[fi, ii] * ax_[fi, 0]
                 qy = oy[fi, ii] + h[fi, ii] * ay_[fi, 0]
                 on = (qx >= x0p) & (qx <= x1p) & (qy >= y0p) & (qy <= y1p)
@@ -1106,7 +1106,7 @@ def groove_scan(
     nominal_polylines = []
     engraved_polylines = []
     for k, sh in enumerate(shapes):
-        m = max(int(math.ceil(sh.length / 0.05)), 8)
+        m = max(math.ceil(sh.length / 0.05), 8)
         u = np.arange(m) * (sh.length / m)
         nominal_polylines.append(np.column_stack([sh.point(u), np.zeros(m)]))
         xy = _engraved_xy(sh, design.offsets[k], design.wiggle[k], u)
@@ -1243,8 +1243,8 @@ def surface_error(points, frame_index, truth: GrooveTruth, *, clearance: float =
     # A 0.5 mm grid over the plate says which contour, if any, may be within reach of a cell;
     # the exact signed distance is then evaluated only for the points of those cells.
     cell = 0.5
-    nx = int(math.ceil((x1 - x0) / cell))
-    ny = int(math.ceil((y1 - y0) / cell))
+    nx = math.ceil((x1 - x0) / cell)
+    ny = math.ceil((y1 - y0) / cell)
     gx, gy = np.meshgrid(x0 + (np.arange(nx) + 0.5) * cell, y0 + (np.arange(ny) + 0.5) * cell,
                          indexing="ij")
     owner = np.full((nx, ny), -1, dtype=np.int64)
