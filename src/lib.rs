@@ -17,3 +17,6 @@ pub mod python;
 pub mod spatial;
 
 pub use error::{Error, Result};
+
+#[cfg(test)]
+mod thread_independence;

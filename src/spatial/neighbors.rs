@@ -511,17 +511,23 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    fn brute_knn(points: &[[f64; 3]], i: usize, k: usize, cap2: f64) -> Vec<(usize, f64)> {
+    /// Every point of the cloud by (squared distance to point i, index): sorted once per point,
+    /// and every k and radius checked against prefixes of it.
+    fn brute_sorted(points: &[[f64; 3]], i: usize) -> Vec<(usize, f64)> {
         let q = points[i];
         let mut all: Vec<(usize, f64)> = points
             .iter()
             .enumerate()
             .map(|(j, p)| (j, (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)))
-            .filter(|&(_, d2)| d2 < cap2)
             .collect();
         all.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-        all.truncate(k);
         all
+    }
+
+    /// The k nearest strictly closer than √cap2, from a sorted list.
+    fn nearest(sorted: &[(usize, f64)], k: usize, cap2: f64) -> &[(usize, f64)] {
+        let within = sorted.partition_point(|&(_, d2)| d2 < cap2);
+        &sorted[..within.min(k)]
     }
 
     fn cloud(n: usize, seed: u64) -> Vec<[f64; 3]> {
@@ -550,11 +556,18 @@ mod tests {
     fn knn_equals_brute_force() {
         let pts = cloud(3000, 1);
         let tree = CloudNeighbors::new(&pts).unwrap();
-        for k in [1, 5, 20, 33, 70] {
-            let got = tree.map_knn(k, None, |_, nb| nb.iter().map(|n| (n.index, n.dist2)).collect::<Vec<_>>());
-            for (i, g) in got.iter().enumerate() {
-                assert_eq!(g, &brute_knn(&pts, i, k, f64::INFINITY), "k {k} point {i}");
+        let ks = [1, 5, 20, 33, 70];
+        let got: Vec<Vec<Vec<(usize, f64)>>> = ks
+            .iter()
+            .map(|&k| tree.map_knn(k, None, |_, nb| nb.iter().map(|n| (n.index, n.dist2)).collect()))
+            .collect();
+        for i in 0..pts.len() {
+            let sorted = brute_sorted(&pts, i);
+            for (&k, g) in ks.iter().zip(&got) {
+                assert_eq!(g[i], nearest(&sorted, k, f64::INFINITY), "k {k} point {i}");
             }
+        }
+        for k in ks {
             assert!(tree.map_knn(k, None, |_, nb| nb.iter().all(|n| n.point == pts[n.index])).iter().all(|&ok| ok));
         }
     }
@@ -563,10 +576,15 @@ mod tests {
     fn hybrid_equals_brute_force() {
         let pts = cloud(2000, 2);
         let tree = CloudNeighbors::new(&pts).unwrap();
-        for (k, r) in [(10, 0.3), (30, 1.0), (5, 100.0)] {
-            let got = tree.map_knn(k, Some(r), |_, nb| nb.iter().map(|n| (n.index, n.dist2)).collect::<Vec<_>>());
-            for (i, g) in got.iter().enumerate() {
-                assert_eq!(g, &brute_knn(&pts, i, k, r * r), "k {k} r {r} point {i}");
+        let cases = [(10, 0.3), (30, 1.0), (5, 100.0)];
+        let got: Vec<Vec<Vec<(usize, f64)>>> = cases
+            .iter()
+            .map(|&(k, r)| tree.map_knn(k, Some(r), |_, nb| nb.iter().map(|n| (n.index, n.dist2)).collect()))
+            .collect();
+        for i in 0..pts.len() {
+            let sorted = brute_sorted(&pts, i);
+            for (&(k, r), g) in cases.iter().zip(&got) {
+                assert_eq!(g[i], nearest(&sorted, k, r * r), "k {k} r {r} point {i}");
             }
         }
     }
@@ -593,10 +611,12 @@ mod tests {
     fn counts_equal_brute_force() {
         let pts = cloud(2500, 3);
         let tree = CloudNeighbors::new(&pts).unwrap();
-        for r in [0.2, 0.5, 3.0] {
-            let got = tree.count_within(r);
-            for (i, &c) in got.iter().enumerate() {
-                assert_eq!(c, brute_knn(&pts, i, usize::MAX, r * r).len(), "r {r} point {i}");
+        let radii = [0.2, 0.5, 3.0];
+        let got: Vec<Vec<usize>> = radii.iter().map(|&r| tree.count_within(r)).collect();
+        for i in 0..pts.len() {
+            let sorted = brute_sorted(&pts, i);
+            for (&r, g) in radii.iter().zip(&got) {
+                assert_eq!(g[i], nearest(&sorted, usize::MAX, r * r).len(), "r {r} point {i}");
             }
         }
     }
@@ -645,7 +665,8 @@ mod tests {
             let tree = CloudNeighbors::new(&pts).unwrap();
             let got = tree.map_knn(k, None, |_, nb| nb.iter().map(|n| (n.index, n.dist2)).collect::<Vec<_>>());
             for (i, g) in got.iter().enumerate() {
-                prop_assert_eq!(g, &brute_knn(&pts, i, k, f64::INFINITY));
+                let sorted = brute_sorted(&pts, i);
+                prop_assert_eq!(g.as_slice(), nearest(&sorted, k, f64::INFINITY));
             }
         }
     }

@@ -1,0 +1,199 @@
+//! Every rayon kernel gives bit-identical results on 1, 2 and 4 threads (DESIGN: fixed-order
+//! reductions, no concurrent pushes). One rstest template, `threads`, runs each test case with
+//! the kernel on a pool of that many threads and compares with the result on one thread.
+use crate::cloud::{self, NeighborSpace, Neighborhood, OctreeOptions, Orientation};
+use crate::groove::{fit_frames, GrooveOptions, TanhTemplate};
+use crate::kinematics::{frames_to_points, KinematicChain, Profiler};
+use rstest::rstest;
+use rstest_reuse::{apply, template};
+
+#[template]
+#[rstest]
+#[case(1)]
+#[case(2)]
+#[case(4)]
+fn threads(#[case] threads: usize) {}
+
+/// `f()` on a pool of `threads` threads, and on one thread.
+fn on_threads_and_one<T: Send>(threads: usize, f: impl Fn() -> T + Send + Sync) -> (T, T) {
+    let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().expect("a thread pool");
+    (pool(threads).install(&f), pool(1).install(&f))
+}
+
+fn lcg(seed: &mut u64) -> f64 {
+    *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
+}
+
+/// A wavy scanned surface with some outliers: enough points that every kernel splits its work.
+fn surface(n: usize) -> Vec<[f64; 3]> {
+    let mut s = 7u64;
+    (0..n)
+        .map(|i| {
+            let (x, y) = (lcg(&mut s) * 60.0, lcg(&mut s) * 40.0);
+            let z = 0.5 * (0.2 * x).sin() * (0.15 * y).cos() + 0.01 * lcg(&mut s);
+            if i % 997 == 0 {
+                [x, y, z + 5.0 * lcg(&mut s)]
+            } else {
+                [x, y, z]
+            }
+        })
+        .collect()
+}
+
+fn bits(v: &[[f64; 3]]) -> Vec<[u64; 3]> {
+    v.iter().map(|p| p.map(f64::to_bits)).collect()
+}
+
+#[apply(threads)]
+fn voxel_grid(#[case] threads: usize) {
+    let pts = surface(12_000);
+    let (a, b) = on_threads_and_one(threads, || cloud::voxel_downsample(&pts, 0.7).unwrap());
+    assert_eq!(bits(&a.centroids), bits(&b.centroids));
+    assert_eq!(a.voxel_of_point, b.voxel_of_point);
+}
+
+#[apply(threads)]
+fn outlier_filters_and_duplicates(#[case] threads: usize) {
+    let pts = surface(10_000);
+    let (a, b) = on_threads_and_one(threads, || {
+        (
+            cloud::remove_statistical_outliers(&pts, 16, 2.0).unwrap(),
+            cloud::remove_radius_outliers(&pts, 0.6, 4).unwrap(),
+            cloud::remove_duplicates(&pts, 0.05).unwrap(),
+            cloud::crop_box(&pts, [10.0, 5.0, -1.0], [40.0, 30.0, 1.0]).unwrap(),
+        )
+    });
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn normals_orientation_and_curvature(#[case] threads: usize) {
+    let pts = surface(8_000);
+    let (a, b) = on_threads_and_one(threads, || {
+        let consistent =
+            cloud::estimate_oriented_normals(&pts, Neighborhood::Knn(12), Orientation::Consistent).unwrap();
+        let hybrid = cloud::estimate_oriented_normals(
+            &pts,
+            Neighborhood::Hybrid { radius: 1.0, max_nn: 20 },
+            Orientation::Unoriented,
+        )
+        .unwrap();
+        let curv = cloud::principal_curvatures(&pts, &consistent, Neighborhood::Knn(20)).unwrap();
+        (bits(&consistent), bits(&hybrid), curv.iter().map(|c| c.0.map(f64::to_bits)).collect::<Vec<_>>())
+    });
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn octree_simplification(#[case] threads: usize) {
+    let pts = surface(8_000);
+    let mut o = OctreeOptions::new(2.0);
+    o.neighbors = NeighborSpace::Xy;
+    o.refine = 2;
+    let (a, b) = on_threads_and_one(threads, || {
+        (
+            cloud::octree_simplify(&pts, None, &OctreeOptions::new(1.5)).unwrap(),
+            cloud::octree_simplify(&pts, None, &o).unwrap(),
+        )
+    });
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn clustering_both_forms(#[case] threads: usize) {
+    let pts = surface(12_000);
+    let (a, b) = on_threads_and_one(threads, || {
+        (
+            crate::spatial::euclidean_clusters(&pts, 0.3, None).unwrap(),
+            crate::spatial::euclidean_clusters(&pts, 0.5, Some(5)).unwrap(),
+        )
+    });
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn neighbor_queries(#[case] threads: usize) {
+    let pts = surface(10_000);
+    let queries: Vec<[f64; 3]> = pts.iter().step_by(7).map(|p| [p[0] + 0.01, p[1] - 0.02, p[2]]).collect();
+    let (a, b) = on_threads_and_one(threads, || {
+        let (idx, dist) = crate::spatial::knn_graph(&pts, 9, Some(0.8)).unwrap();
+        let (ni, nd) = crate::spatial::nearest_neighbors(&pts, &queries).unwrap();
+        (
+            idx,
+            dist.iter().map(|d| d.to_bits()).collect::<Vec<_>>(),
+            ni,
+            nd.iter().map(|d| d.to_bits()).collect::<Vec<_>>(),
+        )
+    });
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn contour_error(#[case] threads: usize) {
+    let mut s = 3u64;
+    let p: Vec<[f64; 3]> =
+        (0..5000).map(|i| (i as f64 * 0.00126).sin_cos()).map(|(y, x)| [30.0 * x, 30.0 * y, 0.0]).collect();
+    let q: Vec<[f64; 3]> = p.iter().map(|v| [v[0] + 0.1 * lcg(&mut s), v[1] + 0.1 * lcg(&mut s), 0.02]).collect();
+    let (a, b) = on_threads_and_one(threads, || crate::contour::contour_error(&p, &q, 1.0, 1.0).unwrap());
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn chains_and_scans(#[case] threads: usize) {
+    let chain = KinematicChain::ac_head([10.0, 0.0, 120.0], [0.01, 0.02, -0.03, 40.0, 1.0, -90.0]).unwrap();
+    let (f, n) = (700, 301);
+    let mut s = 5u64;
+    let frames: Vec<f64> =
+        (0..f * n).map(|i| if i % 37 == 0 { f64::NAN } else { (i % n) as f64 * 0.003 + lcg(&mut s) }).collect();
+    let poses: Vec<f64> = (0..f * 6).map(|_| lcg(&mut s) * 2.0 - 1.0).collect();
+    let prof = Profiler::new(0.025, n, None, Some((-5.0, 5.0)), Some(-99999.0)).unwrap();
+    let pts: Vec<[f64; 3]> = surface(5_000);
+    let (a, b) = on_threads_and_one(threads, || {
+        let scan = frames_to_points(&chain, &frames, n, &poses, &prof).unwrap();
+        let transforms = chain.transforms(&poses).unwrap();
+        let turned = crate::kinematics::ac_table_rotate(&pts, Some(&pts), 0.3, -1.1, [1.0, 2.0, 3.0]).unwrap();
+        (
+            scan.points.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            scan.frame_index,
+            transforms.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            bits(&turned.0),
+        )
+    });
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn groove_fits(#[case] threads: usize) {
+    let mut s = 9u64;
+    let x: Vec<f64> = (0..200).map(|i| (i as f64 - 100.0) * 0.025).collect();
+    let mut z = Vec::new();
+    for _ in 0..400 {
+        let t = TanhTemplate { x0: 0.2 * lcg(&mut s) - 0.1, z0: 0.0, depth: 0.31, width: 0.48, alpha: 20.0 };
+        z.extend(x.iter().map(|&xi| t.value(xi) + 0.008 * (lcg(&mut s) - 0.5)));
+    }
+    let (a, b) = on_threads_and_one(threads, || fit_frames(&x, &z, &GrooveOptions::default()).unwrap());
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn readers(#[case] threads: usize) {
+    let pts: Vec<f64> = surface(8_000).into_iter().flatten().collect();
+    let dir = std::env::temp_dir();
+    let files: Vec<std::path::PathBuf> = ["ply", "pcd", "xyz"]
+        .iter()
+        .map(|e| dir.join(format!("machscan-threads-{}-{threads}.{e}", std::process::id())))
+        .collect();
+    for (path, binary) in files.iter().zip([false, true, false]) {
+        let data = crate::io::CloudRef { points: &pts, ..Default::default() };
+        crate::io::write_file(path, &data, crate::io::WriteOptions { binary: Some(binary), ..Default::default() })
+            .unwrap();
+    }
+    let (a, b) = on_threads_and_one(threads, || {
+        files.iter().map(|p| crate::io::read_file(p, crate::io::TextColumns::default()).unwrap()).collect::<Vec<_>>()
+    });
+    for p in &files {
+        std::fs::remove_file(p).ok();
+    }
+    assert_eq!(a, b);
+}
