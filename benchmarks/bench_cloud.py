@@ -23,10 +23,11 @@ import tempfile
 import time
 from pathlib import Path
 
-import machscan
 import numpy as np
 import open3d
 from scipy.spatial import cKDTree
+
+import machscan
 
 
 def best(fn, repeat=3):

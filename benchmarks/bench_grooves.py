@@ -17,9 +17,10 @@ import argparse
 import os
 import time
 
-import machscan
 import numpy as np
 from scipy.optimize import least_squares
+
+import machscan
 
 
 def template(x, x0, z0, d, w, a=20.0):

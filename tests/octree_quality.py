@@ -14,12 +14,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import machscan
 import matplotlib.tri as mtri
 import numpy as np
 import open3d
-from machscan.synth import pocket_plate
 from scipy.spatial import Delaunay
+
+import machscan
+from machscan.synth import pocket_plate
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,10 @@
 """Count arguments (k, window, …) given a negative int raise ValueError naming the argument,
 not pyo3's bare OverflowError."""
 
-import machscan
 import numpy as np
 import pytest
+
+import machscan
 
 P = np.random.default_rng(0).random((50, 3))
 X = np.linspace(-1, 1, 64)

@@ -3,9 +3,10 @@
 import subprocess
 import sys
 
-import machscan
 import numpy as np
 import pytest
+
+import machscan
 from machscan import synth
 from machscan.cad import read_contours, read_contours_apt, read_contours_csv, write_contours_csv
 from machscan.cli import main

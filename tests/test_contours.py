@@ -3,7 +3,6 @@ eq (21)–(23), matching against scipy's assignment."""
 
 from pathlib import Path
 
-import machscan
 import numpy as np
 import open3d
 import pytest
@@ -11,6 +10,8 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
+
+import machscan
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 

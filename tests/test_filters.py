@@ -3,10 +3,11 @@ centroids compared as sets, Open3D returns them in hash-map order)."""
 
 from pathlib import Path
 
-import machscan
 import numpy as np
 import open3d
 import pytest
+
+import machscan
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 

@@ -6,11 +6,12 @@ import subprocess
 import sys
 import textwrap
 
-import machscan
 import numpy as np
 import pytest
-from machscan import GrooveStatus
 from scipy.optimize import least_squares
+
+import machscan
+from machscan import GrooveStatus
 
 X = (np.arange(200) - 100) * 0.025
 

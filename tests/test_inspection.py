@@ -1,8 +1,9 @@
 """Groove inspection end to end on synthetic scans with exact truth (issue #3 §4)."""
 
-import machscan
 import numpy as np
 import pytest
+
+import machscan
 from machscan import synth
 from machscan.inspection import inspect_grooves
 

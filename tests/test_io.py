@@ -5,10 +5,11 @@ readers and trimesh, byte orders, malformed files, and the exception of every fa
 import struct
 from pathlib import Path
 
-import machscan
 import numpy as np
 import open3d
 import pytest
+
+import machscan
 from machscan import io
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"

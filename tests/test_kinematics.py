@@ -5,9 +5,10 @@ import subprocess
 import sys
 import textwrap
 
-import machscan
 import numpy as np
 import pytest
+
+import machscan
 from kinematics_reference import ac_head_transforms_np, scan_to_wcs_np
 
 RNG = np.random.default_rng(20261122)

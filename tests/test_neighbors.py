@@ -1,11 +1,12 @@
 """k-nearest graph of a cloud's own points (`spatial::CloudNeighbors`) against scipy's cKDTree
 and Open3D's nearest-neighbor search on the same points."""
 
-import machscan
 import numpy as np
 import open3d
 import pytest
 from scipy.spatial import cKDTree
+
+import machscan
 
 
 def surface(n, seed=0, offset=0.0):

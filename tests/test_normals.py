@@ -3,10 +3,11 @@ spheres and cylinders of known radius."""
 
 from pathlib import Path
 
-import machscan
 import numpy as np
 import open3d
 import pytest
+
+import machscan
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 RNG = np.random.default_rng(0)

@@ -1,9 +1,10 @@
 """Octree simplification (paper 002 §2): definition checks, and the measured comparison with
 Open3D's voxel grid at the same number of points on a part with steps and a free boundary."""
 
-import machscan
 import numpy as np
 import pytest
+
+import machscan
 from machscan.synth import pocket_plate
 from octree_quality import compare, compare_held_out
 

@@ -8,12 +8,13 @@ import pytest
 
 matplotlib = pytest.importorskip("matplotlib")
 matplotlib.use("Agg")
-import machscan  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
-from machscan import plot  # noqa: E402
 from matplotlib.collections import LineCollection, PathCollection  # noqa: E402
 from matplotlib.container import BarContainer  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
+
+import machscan  # noqa: E402
+from machscan import plot  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -11,9 +11,10 @@ import json
 import math
 import zipfile
 
-import machscan
 import numpy as np
 import pytest
+
+import machscan
 from kinematics_reference import (
     ac_head_transforms_np,
     interpolate_poses_np,

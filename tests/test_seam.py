@@ -122,7 +122,7 @@ def _public_callables():
     for m in modules:
         for name in getattr(m, "__all__", []):
             obj = getattr(m, name)
-            if callable(obj) and not inspect.isclass(obj) or inspect.isbuiltin(obj):
+            if (callable(obj) and not inspect.isclass(obj)) or inspect.isbuiltin(obj):
                 seen[f"{m.__name__}.{name}"] = obj
             elif inspect.isclass(obj):
                 for meth_name, meth in vars(obj).items():

@@ -7,9 +7,11 @@ developing without it, deselect them with ``-k "not rust"``.
 
 from __future__ import annotations
 
-import machscan
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
+
+import machscan
 from kinematics_reference import ac_head_transforms_np, interpolate_poses_np, scan_to_wcs_np
 from machscan import synth
 from machscan.scan import SENTINEL, Scan
@@ -22,7 +24,6 @@ from machscan.synth import (
     groove_scan,
     surface_error,
 )
-from scipy.spatial import cKDTree
 
 QUIET = dict(noise=0.0, dropout=0.0, flank_dropout=0.0, spike_rate=0.0)
 
