@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The README's test command: installs what the tests need (system libraries included) and runs
-# every test: the Rust unit tests, the stub check of the extension, and pytest.
+# every check: formatting and lints (cargo fmt, clippy, ruff), the Rust unit tests, the stub check
+# of the extension, and pytest over the tests and the notebooks.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -15,8 +16,17 @@ if [ ${#need[@]} -gt 0 ]; then
   $SUDO apt-get update -qq && $SUDO apt-get install -y -qq "${need[@]}" >/dev/null
 fi
 
+echo "== cargo fmt --check"
+cargo fmt --check
+
 echo "== building and installing machscan (release) with its test dependencies"
 python -m pip install --quiet --disable-pip-version-check ".[test]"
+
+echo "== ruff"
+python -m ruff check python tests benchmarks scripts
+
+echo "== cargo clippy"
+cargo clippy --quiet --all-targets -- -D warnings
 
 echo "== cargo test"
 cargo test --quiet

@@ -1,0 +1,34 @@
+"""The README tour runs as written: every ```python block, in order, in one namespace, from the
+repository root (where `../shared/data` is)."""
+
+import os
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def blocks():
+    text = (ROOT / "README.md").read_text()
+    return re.findall(r"```python\n(.*?)```", text, flags=re.S)
+
+
+def test_the_readme_starts_with_its_two_commands():
+    text = (ROOT / "README.md").read_text()
+    first = re.search(r"```bash\n(.*?)```", text, flags=re.S).group(1).strip().splitlines()
+    assert first == ["pip install . && machscan demo", "bash scripts/test.sh"]
+    assert "bash scripts/test.sh" in (ROOT / ".ci" / "run").read_text()
+
+
+def test_the_tour_runs_as_written(monkeypatch):
+    pytest.importorskip("matplotlib")
+    code = blocks()
+    assert len(code) >= 4
+    monkeypatch.chdir(ROOT)
+    namespace: dict = {"__name__": "readme"}
+    for k, block in enumerate(code):
+        exec(compile(block, f"README.md python block {k + 1}", "exec"), namespace)
+    assert os.path.isdir(namespace["out"])
+    assert namespace["report"].contours, "the tour's inspection matched its contours"
