@@ -1,7 +1,6 @@
 """Clustering against Open3D, contour error against a brute-force transcription of paper 000
 eq (21)–(23), matching against scipy's assignment."""
 
-from pathlib import Path
 
 import numpy as np
 import open3d
@@ -12,8 +11,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 import machscan
-
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+from paths import DATA
 
 
 def canonical(labels):

@@ -1,15 +1,13 @@
 """Filters against Open3D's definitions on the same input: identical index sets (voxel
 centroids compared as sets, Open3D returns them in hash-map order)."""
 
-from pathlib import Path
 
 import numpy as np
 import open3d
 import pytest
 
 import machscan
-
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+from paths import DATA
 
 
 def o3d_cloud(p):

@@ -9,9 +9,9 @@ from machscan.inspection import inspect_grooves
 
 
 @pytest.fixture(scope="module")
-def run():
-    scan, truth = synth.groove_scan(seed=0)
-    return scan, truth, inspect_grooves(scan, truth.nominal_polylines)
+def run(groove_scan, groove_report):
+    scan, truth = groove_scan
+    return scan, truth, groove_report
 
 
 def test_width_and_depth_per_frame_against_truth(run):
@@ -121,9 +121,8 @@ def test_scan_without_grooves_gives_an_empty_report():
     assert "0 contours matched" in r.summary()
 
 
-def test_suspect_fits_are_left_out():
-    scan, truth = synth.groove_scan(seed=0)
-    r = inspect_grooves(scan, truth.nominal_polylines)
+def test_suspect_fits_are_left_out(run):
+    scan, truth, r = run
     # Seed 0 frame 3449 lost its flank readings: it converges to a width the data do not fix.
     assert r.suspect[3449] and not r.used[3449]
     assert r.fits.ok[3449] and abs(r.fits.width[3449] - truth.width[3449]) > 0.2

@@ -11,8 +11,8 @@ import pytest
 
 import machscan
 from machscan import io
+from paths import DATA
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 PCDS = ["bun0.pcd", "bun4.pcd", "bunny.pcd", "milk.pcd"]
 
 

@@ -1,15 +1,14 @@
 """Normals against Open3D's estimate_normals on the same neighborhoods; curvature against
 spheres and cylinders of known radius."""
 
-from pathlib import Path
 
 import numpy as np
 import open3d
 import pytest
 
 import machscan
+from paths import DATA
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 RNG = np.random.default_rng(0)
 
 

@@ -18,8 +18,8 @@ from machscan import plot  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def run():
-    scan, truth = machscan.synth.groove_scan(seed=0, readings=800, keep_every=100)
+def run(small_groove_scan):
+    scan, truth = small_groove_scan
     report = machscan.inspect_grooves(scan, truth.nominal_polylines)
     x = (np.arange(scan.n_readings) - scan.profiler.i0) * scan.profiler.pitch
     z = np.where(scan.valid_mask(), scan.frames, np.nan)
