@@ -127,3 +127,42 @@ def test_malformed_cad_files_name_the_file(tmp_path, name, text, msg):
     with pytest.raises(ValueError) as exc:
         read_contours([tmp_path / name])
     assert name in str(exc.value) and msg in str(exc.value)
+
+
+def test_cad_in_the_wrong_unit_says_how_far_and_exits_non_zero(small, capsys):
+    d, scan, truth = small
+    write_contours_csv(d / "cad_inch.csv", [np.asarray(c) / 25.4 for c in truth.nominal_polylines])
+    assert main(["grooves", str(d / "scan.npz"), str(d / "cad_inch.csv"), "--out", str(d / "inch")]) == 3
+    captured = capsys.readouterr()
+    assert "max_match_distance = 10 mm" in captured.out and "nearest CAD contour centroid is" in captured.err
+    report = inspect_grooves(scan, [np.asarray(c) / 25.4 for c in truth.nominal_polylines])
+    assert report.contours == () and report.nearest_cad_distance.min() > 10.0
+    assert "nearest CAD contour centroid" in report.matching_problem()
+
+
+def test_an_unknown_no_reading_code_is_warned_about(small, tmp_path, capsys):
+    d, scan, truth = small
+    frames = scan.frames.copy()
+    frames[~scan.valid_mask()] = -9999.0  # another vendor's code, not the default sentinel
+    other = machscan.Scan(frames, scan.poses, scan.frame_times,
+                          machscan.Profiler(readings=scan.n_readings, pitch=scan.profiler.pitch),
+                          scan.c2_offset, scan.mount)
+    frames[:, :100] = -9999.0  # and a stretch the sensor never saw
+    other = machscan.Scan(frames, scan.poses, scan.frame_times, other.profiler, scan.c2_offset, scan.mount)
+    other.save(tmp_path / "other.npz")
+    assert main(["points", str(tmp_path / "other.npz"), "--out", str(tmp_path / "c.ply")]) == 0
+    err = capsys.readouterr().err
+    assert "-9999.0" in err and "--sentinel" in err
+
+
+def test_points_drop_the_vendor_sentinel_by_default(small, tmp_path, capsys):
+    d, scan, _ = small
+    bare = machscan.Scan(scan.frames, scan.poses, scan.frame_times,
+                         machscan.Profiler(readings=scan.n_readings, pitch=scan.profiler.pitch),
+                         scan.c2_offset, scan.mount)
+    bare.save(tmp_path / "bare.npz")
+    assert main(["points", str(tmp_path / "bare.npz"), "--out", str(tmp_path / "c.ply")]) == 0
+    out = capsys.readouterr().out
+    n_sentinel = int((scan.frames == machscan.SENTINEL).sum())
+    assert n_sentinel > 0 and f"dropped   : {int((~np.isfinite(scan.frames)).sum()) + n_sentinel:,}" in out
+    assert machscan.read_points(tmp_path / "c.ply")[:, 2].min() > -1000
