@@ -172,8 +172,15 @@ fn groove_fits(#[case] threads: usize) {
         let t = TanhTemplate { x0: 0.2 * lcg(&mut s) - 0.1, z0: 0.0, depth: 0.31, width: 0.48, alpha: 20.0 };
         z.extend(x.iter().map(|&xi| t.value(xi) + 0.008 * (lcg(&mut s) - 0.5)));
     }
-    let (a, b) = on_threads_and_one(threads, || fit_frames(&x, &z, &GrooveOptions::default()).unwrap());
-    assert_eq!(a, b);
+    // Both methods; compared bit for bit (NaN fields included).
+    let key = |f: &crate::groove::GrooveFit| {
+        [f.x0, f.z0, f.width, f.depth, f.alpha, f.rms, f.se_width, f.tilt].map(f64::to_bits).to_vec()
+    };
+    for template in [crate::groove::TemplateKind::Auto, crate::groove::TemplateKind::Tanh] {
+        let o = GrooveOptions { template, ..GrooveOptions::default() };
+        let (a, b) = on_threads_and_one(threads, || fit_frames(&x, &z, &o).unwrap());
+        assert!(a.iter().zip(&b).all(|(p, q)| key(p) == key(q) && p.status == q.status && p.model == q.model));
+    }
 }
 
 #[apply(threads)]

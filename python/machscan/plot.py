@@ -60,18 +60,6 @@ def _pyplot() -> Any:
     return plt
 
 
-def _colors(n: int) -> list[Any]:
-    """n distinguishable colors: tab10, then tab20's light shades beyond ten."""
-    import matplotlib
-
-    if n <= 10:
-        cmap = matplotlib.colormaps["tab10"]
-        return [cmap(i) for i in range(n)]
-    cmap = matplotlib.colormaps["tab20"]
-    order = list(range(0, 20, 2)) + list(range(1, 20, 2))
-    return [cmap(order[i % 20]) for i in range(n)]
-
-
 def _check_report(report: object) -> GrooveReport:
     if not isinstance(report, GrooveReport):
         raise ValueError(f"report: expected a machscan.GrooveReport (from inspect_grooves), got {type(report).__name__}")

@@ -1,7 +1,11 @@
-//! One frame, then all frames in parallel: window → valid readings → spike filter → line fit →
-//! bottom point → surface refit without the groove → levelling → LM template fit → back to the
-//! frame's own (unlevelled) coordinates (SPEC G steps 1–7).
-use super::template::{tanh_pair, TanhTemplate, VTemplate};
+//! The batch groove fit: options, the per-frame result, and the paper's tanh template pipeline
+//! (window → valid readings → spike filter → line fit → bottom point → surface refit without
+//! the groove → levelling → LM template fit → back to the frame's own coordinates, SPEC G steps
+//! 1–7). The default method, the section models, is `measure.rs`; `fit_frame` picks by
+//! `GrooveOptions::template`.
+use super::measure::{measure_frame, MeasureSettings, SECTION_CRITERIA};
+use super::section::SectionModel;
+use super::template::{gradient, tanh_pair, TanhTemplate};
 use crate::error::{Error, Result};
 use crate::optim::{levenberg_marquardt, LeastSquares, LmOptions, LmStop};
 use nalgebra::{SMatrix, SVector};
@@ -28,44 +32,140 @@ pub enum GrooveStatus {
     Failed = 6,
 }
 
-/// The cross-section model fitted to a frame.
+/// How a frame's groove is measured.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TemplateKind {
-    /// Paper 000 eq (11): a difference of two tanh steps (α = 20 mm⁻¹ in the paper). Fits
-    /// rounded, U-like sections; on a straight-sided V it is ~18 % off in width and depth.
+    /// The default: the four section models (trapezoid, V, round-bottomed V, U) fitted, the
+    /// best by AIC chosen per frame; width and depth are the section's geometry.
+    Auto,
+    /// One section model only.
+    Section(SectionModel),
+    /// Paper 000 eq (11): a difference of two tanh steps (α = 20 mm⁻¹ in the paper); width and
+    /// depth are the template's w and d. Fits rounded, U-like sections; on a straight-sided V
+    /// it is ~18 % off in width and depth.
     Tanh,
-    /// A V with straight flanks and corners rounded over ~1/α (see `VTemplate`).
-    V,
 }
 
 impl TemplateKind {
+    pub const NAMES: [&'static str; 6] = ["auto", "trapezoid", "v", "round", "u", "tanh"];
+
     pub fn parse(name: &str) -> Result<Self> {
-        match name {
-            "tanh" => Ok(TemplateKind::Tanh),
-            "v" => Ok(TemplateKind::V),
-            other => Err(Error::invalid("template", format!("expected \"tanh\" (paper 000) or \"v\", got {other:?}"))),
-        }
+        Ok(match name {
+            "auto" => TemplateKind::Auto,
+            "tanh" => TemplateKind::Tanh,
+            other => match SectionModel::ALL.iter().find(|m| m.name() == other) {
+                Some(m) => TemplateKind::Section(*m),
+                None => {
+                    return Err(Error::invalid(
+                        "template",
+                        format!("expected one of {}, got {other:?}", Self::NAMES.map(|n| format!("{n:?}")).join(", ")),
+                    ))
+                }
+            },
+        })
     }
 
     pub fn name(self) -> &'static str {
         match self {
+            TemplateKind::Auto => "auto",
             TemplateKind::Tanh => "tanh",
-            TemplateKind::V => "v",
+            TemplateKind::Section(m) => m.name(),
+        }
+    }
+}
+
+/// What was fitted to a frame. Codes are stable: they are what Python sees.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FitModel {
+    /// Nothing (the frame was not measured).
+    None,
+    Tanh,
+    Section(SectionModel),
+}
+
+impl FitModel {
+    pub fn code(self) -> u8 {
+        match self {
+            FitModel::None => 0,
+            FitModel::Tanh => 1,
+            FitModel::Section(SectionModel::Trapezoid) => 2,
+            FitModel::Section(SectionModel::V) => 3,
+            FitModel::Section(SectionModel::Round) => 4,
+            FitModel::Section(SectionModel::U) => 5,
+        }
+    }
+}
+
+/// When the Levenberg–Marquardt fit of a frame stops; `None` takes the method's own default
+/// (the paper's template: 100 iterations, step 1e-8 relative, gradient 1e-13, cost test off;
+/// the section models: `measure::SECTION_CRITERIA`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FitCriteria {
+    /// Iterations per fit (the section models: per model; the chosen one may get as many again).
+    pub max_iterations: Option<usize>,
+    /// The template: paper 000's `½ Σ f² / t < ε`; the section models: the relative cost
+    /// decrease of an accepted step below which the fit has converged.
+    pub cost_tolerance: Option<f64>,
+    /// The template: step relative to the parameters; the section models: the largest
+    /// parameter move.
+    pub step_tolerance: Option<f64>,
+    /// `‖Jᵀf‖∞` below which the fit has converged.
+    pub gradient_tolerance: Option<f64>,
+}
+
+/// The paper's template fit's defaults.
+pub const TANH_CRITERIA: LmOptions =
+    LmOptions { max_iterations: 100, cost_tolerance: 0.0, step_tolerance: 1e-8, gradient_tolerance: 1e-13, tau: 1e-6 };
+
+impl FitCriteria {
+    fn check(&self) -> Result<()> {
+        for (name, v) in [
+            ("step_tolerance", self.step_tolerance),
+            ("gradient_tolerance", self.gradient_tolerance),
+            ("cost_tolerance", self.cost_tolerance),
+        ] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(Error::invalid(name, format!("must be >= 0, got {v}")));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    pub fn tanh(&self) -> LmOptions {
+        let d = TANH_CRITERIA;
+        LmOptions {
+            max_iterations: self.max_iterations.unwrap_or(d.max_iterations),
+            cost_tolerance: self.cost_tolerance.unwrap_or(d.cost_tolerance),
+            step_tolerance: self.step_tolerance.unwrap_or(d.step_tolerance),
+            gradient_tolerance: self.gradient_tolerance.unwrap_or(d.gradient_tolerance),
+            tau: d.tau,
+        }
+    }
+
+    pub fn section(&self) -> crate::optim::BoundedLmOptions {
+        let d = SECTION_CRITERIA;
+        crate::optim::BoundedLmOptions {
+            max_iterations: self.max_iterations.unwrap_or(d.max_iterations),
+            cost_tolerance: self.cost_tolerance.unwrap_or(d.cost_tolerance),
+            step_tolerance: self.step_tolerance.unwrap_or(d.step_tolerance),
+            gradient_tolerance: self.gradient_tolerance.unwrap_or(d.gradient_tolerance),
         }
     }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GrooveOptions {
-    /// Which template.
+    /// How the groove is measured.
     pub template: TemplateKind,
-    /// Template shape coefficient, mm⁻¹: α of the tanh template (paper 000: 20, chosen by
-    /// eye), β (corner sharpness) of the V template.
+    /// The tanh template's shape coefficient α, mm⁻¹ (paper 000: 20, chosen by eye).
     pub alpha: f64,
-    /// Fit the shape coefficient as a fifth parameter, starting from `alpha`.
+    /// Fit α as a fifth parameter of the tanh template, starting from `alpha`.
     pub fit_alpha: bool,
-    /// Nominal groove width l, mm: the readings within l of the bottom are left out of the
-    /// surface refit.
+    /// Nominal groove width l, mm, of the tanh template pipeline: the readings within l of the
+    /// bottom are left out of its surface refit. The section models find the groove's extent
+    /// from the data and do not use it.
     pub nominal_width: f64,
     /// Number t of readings kept around `window_center`; `None` keeps them all.
     pub window: Option<usize>,
@@ -78,20 +178,14 @@ pub struct GrooveOptions {
     pub min_depth: f64,
     /// Fewest valid readings in the window.
     pub min_valid: usize,
-    pub max_iterations: usize,
-    /// Paper 000's stop test `½ Σ f² / t < ε` (ε = 1e-5 there); 0 disables it, which is the
-    /// default: noisy frames never meet it and quiet ones would stop before convergence.
-    pub cost_tolerance: f64,
-    /// Relative step size stop test.
-    pub step_tolerance: f64,
-    /// Gradient stop test, ‖Jᵀf‖∞.
-    pub gradient_tolerance: f64,
+    /// When each fit stops.
+    pub criteria: FitCriteria,
 }
 
 impl Default for GrooveOptions {
     fn default() -> Self {
         GrooveOptions {
-            template: TemplateKind::Tanh,
+            template: TemplateKind::Auto,
             alpha: 20.0,
             fit_alpha: false,
             nominal_width: 0.5,
@@ -100,10 +194,7 @@ impl Default for GrooveOptions {
             spike_threshold: Some(0.1),
             min_depth: 0.03,
             min_valid: 12,
-            max_iterations: 100,
-            cost_tolerance: 0.0,
-            step_tolerance: 1e-8,
-            gradient_tolerance: 1e-13,
+            criteria: FitCriteria::default(),
         }
     }
 }
@@ -128,16 +219,7 @@ impl GrooveOptions {
         if self.window == Some(0) {
             return Err(Error::invalid("window", "must hold at least one reading"));
         }
-        for (name, v) in [
-            ("step_tolerance", self.step_tolerance),
-            ("gradient_tolerance", self.gradient_tolerance),
-            ("cost_tolerance", self.cost_tolerance),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::invalid(name, format!("must be >= 0, got {v}")));
-            }
-        }
-        Ok(())
+        self.criteria.check()
     }
 }
 
@@ -148,26 +230,29 @@ pub struct GrooveFit {
     /// Groove center x0 and surface height z0 there, mm.
     pub x0: f64,
     pub z0: f64,
-    /// Template depth d and width w, mm.
+    /// Depth and width, mm: the section's deepest point below the surface line and the
+    /// distance between its flanks at the surface line; the tanh template's d and w.
     pub depth: f64,
     pub width: f64,
-    /// α used or fitted, mm⁻¹.
+    /// The tanh template's α used or fitted, mm⁻¹ (NaN for the section models).
     pub alpha: f64,
-    /// Residual RMS of the template fit, mm.
+    /// Residual RMS of the fit, mm.
     pub rms: f64,
-    /// Standard errors of d and w from `σ̂² (JᵀJ)⁻¹`, mm.
+    /// Standard errors of depth and width from `σ̂² (JᵀJ)⁻¹`, mm.
     pub se_depth: f64,
     pub se_width: f64,
-    /// Surface slope angle θ = atan k2 used for levelling, rad.
+    /// Surface slope angle θ used for levelling, rad.
     pub tilt: f64,
     pub iterations: u32,
-    /// Readings used in the template fit.
+    /// Readings used in the fit.
     pub n_used: u32,
     pub status: GrooveStatus,
+    /// What was fitted.
+    pub model: FitModel,
 }
 
 impl GrooveFit {
-    fn failed(status: GrooveStatus, n_used: usize) -> Self {
+    pub(super) fn failed(status: GrooveStatus, n_used: usize) -> Self {
         GrooveFit {
             x0: f64::NAN,
             z0: f64::NAN,
@@ -181,13 +266,14 @@ impl GrooveFit {
             iterations: 0,
             n_used: n_used as u32,
             status,
+            model: FitModel::None,
         }
     }
 }
 
 /// Least-squares line `z = k x + b` (None when x is constant).
 #[inline(always)]
-fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64)> {
+pub(super) fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64)> {
     let (mut n, mut sx, mut sz) = (0.0, 0.0, 0.0);
     for (xi, zi) in x.clone() {
         n += 1.0;
@@ -304,18 +390,11 @@ impl<'a> TemplateProblem<'a> {
         // ∂T/∂p of eq (15), and ∂T/∂α; the z0 column is all ones and is not stored.
         let [g0, _, g2, g3, g4] = &mut s.grad;
         let ab = s.a.iter().zip(&s.b);
-        for (((a, b), g0), (g2, g3)) in ab.clone().zip(g0.iter_mut()).zip(g2.iter_mut().zip(g3.iter_mut())) {
-            let (sa, sb) = (1.0 - a * a, 1.0 - b * b);
-            *g0 = hd * al * (sb - sa);
-            *g2 = 0.5 * (a - b);
-            *g3 = -0.25 * hd * al * (sa + sb);
-        }
-        if P > 4 {
-            for ((a, b), (x, g4)) in ab.zip(self.x.iter().zip(g4.iter_mut())) {
-                let (sa, sb) = (1.0 - a * a, 1.0 - b * b);
-                let u = x - t.x0;
-                *g4 = hd * (sa * (u - q) - sb * (u + q));
-            }
+        for ((((a, b), x), g0), ((g2, g3), g4)) in
+            ab.zip(self.x).zip(g0.iter_mut()).zip(g2.iter_mut().zip(g3.iter_mut()).zip(g4.iter_mut()))
+        {
+            let g = gradient(*a, *b, hd, al, x - t.x0, q);
+            (*g0, *g2, *g3, *g4) = (g[0], g[2], g[3], g[4]);
         }
         let n = self.x.len() as f64;
         let col = |k: usize| -> Option<&[f64]> {
@@ -344,61 +423,6 @@ impl<'a> TemplateProblem<'a> {
             }
         }
         (jtj, g, cost)
-    }
-}
-
-/// The V template problem: evaluated reading by reading (it is not the hot path the paper's
-/// template is, so it is kept plain).
-struct VProblem<'a> {
-    x: &'a [f64],
-    z: &'a [f64],
-    sharpness: f64,
-}
-
-impl VProblem<'_> {
-    fn template(&self, p: &[f64]) -> VTemplate {
-        VTemplate {
-            x0: p[0],
-            z0: p[1],
-            depth: p[2],
-            width: p[3],
-            sharpness: if p.len() > 4 { p[4] } else { self.sharpness },
-        }
-    }
-
-    fn eval<const P: usize>(&self, p: &[f64]) -> (SMatrix<f64, P, P>, SVector<f64, P>, f64) {
-        let t = self.template(p);
-        let (mut jtj, mut g, mut cost) = (SMatrix::<f64, P, P>::zeros(), SVector::<f64, P>::zeros(), 0.0);
-        for (&x, &z) in self.x.iter().zip(self.z) {
-            let (v, grad) = t.value_and_gradient(x);
-            let f = z - v;
-            cost += 0.5 * f * f;
-            for r in 0..P {
-                g[r] -= grad[r] * f;
-                for c in 0..P {
-                    jtj[(r, c)] += grad[r] * grad[c];
-                }
-            }
-        }
-        (jtj, g, cost)
-    }
-}
-
-impl LeastSquares<4> for VProblem<'_> {
-    fn len(&self) -> usize {
-        self.x.len()
-    }
-    fn normal_equations(&self, p: &SVector<f64, 4>) -> (SMatrix<f64, 4, 4>, SVector<f64, 4>, f64) {
-        self.eval::<4>(p.as_slice())
-    }
-}
-
-impl LeastSquares<5> for VProblem<'_> {
-    fn len(&self) -> usize {
-        self.x.len()
-    }
-    fn normal_equations(&self, p: &SVector<f64, 5>) -> (SMatrix<f64, 5, 5>, SVector<f64, 5>, f64) {
-        self.eval::<5>(p.as_slice())
     }
 }
 
@@ -483,14 +507,7 @@ pub fn level_frame(
 ) -> std::result::Result<LevelledFrame, (GrooveStatus, usize)> {
     let n = x.len().min(z.len());
     // 1. Window of t readings around the center, valid readings only.
-    let (lo, hi) = match o.window {
-        None => (0, n),
-        Some(t) => {
-            let c = o.window_center.unwrap_or(n / 2).min(n);
-            let lo = c.saturating_sub(t / 2);
-            (lo, (lo + t).min(n))
-        }
-    };
+    let (lo, hi) = window_range(n, o);
     let mut px = Vec::with_capacity(hi - lo);
     let mut pz = Vec::with_capacity(hi - lo);
     for i in lo..hi {
@@ -646,24 +663,55 @@ unsafe fn fit_frame_avx2_fma(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveF
 
 #[inline(always)]
 fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+    let all = SectionModel::ALL;
+    let models: &[SectionModel] = match &o.template {
+        TemplateKind::Tanh => return fit_tanh(x, z, o),
+        TemplateKind::Auto => &all,
+        TemplateKind::Section(m) => std::slice::from_ref(m),
+    };
+    let (lo, hi) = window_range(x.len().min(z.len()), o);
+    let settings = MeasureSettings {
+        models,
+        spike_threshold: o.spike_threshold,
+        min_depth: o.min_depth,
+        min_valid: o.min_valid,
+        criteria: o.criteria.section(),
+    };
+    measure_frame(&x[lo..hi], &z[lo..hi], &settings)
+}
+
+/// The readings `[lo, hi)` of the window of `o.window` readings around `o.window_center`.
+pub(super) fn window_range(n: usize, o: &GrooveOptions) -> (usize, usize) {
+    match o.window {
+        None => (0, n),
+        Some(t) => {
+            let c = o.window_center.unwrap_or(n / 2).min(n);
+            let lo = c.saturating_sub(t / 2);
+            (lo, (lo + t).min(n))
+        }
+    }
+}
+
+/// The paper's pipeline: SPEC G steps 1–7 with the tanh template.
+#[inline(always)]
+fn fit_tanh(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+    fit_tanh_detailed(x, z, o).0
+}
+
+/// [`fit_tanh`] with the levelled frame and the fitted template parameters (levelled, relative
+/// to the frame's origin) for drawing.
+#[inline(always)]
+fn fit_tanh_detailed(x: &[f64], z: &[f64], o: &GrooveOptions) -> (GrooveFit, Option<(LevelledFrame, Vec<f64>)>) {
     let frame = match level_frame(x, z, o) {
         Ok(f) => f,
-        Err((status, n)) => return GrooveFit::failed(status, n),
+        Err((status, n)) => return (GrooveFit::failed(status, n), None),
     };
     let (lx, lz, (ox, oz), start) = (&frame.x, &frame.z, frame.origin, frame.start);
     let (s, c) = frame.tilt.sin_cos();
     let theta = frame.tilt;
-    let lm = LmOptions {
-        max_iterations: o.max_iterations,
-        cost_tolerance: o.cost_tolerance,
-        step_tolerance: o.step_tolerance,
-        gradient_tolerance: o.gradient_tolerance,
-        tau: 1e-6,
-    };
-    let (p, cost, iterations, stop, cov_d, cov_w) = match o.template {
-        TemplateKind::Tanh => solve(&TemplateProblem::new(lx, lz, o.alpha), start, o.fit_alpha, &lm),
-        TemplateKind::V => solve(&VProblem { x: lx, z: lz, sharpness: o.alpha }, start, o.fit_alpha, &lm),
-    };
+    let lm = o.criteria.tanh();
+    let (p, cost, iterations, stop, cov_d, cov_w) =
+        solve(&TemplateProblem::new(lx, lz, o.alpha), start, o.fit_alpha, &lm);
     let m = lx.len();
     let n_par = if o.fit_alpha { 5 } else { 4 };
     let xmin = lx.iter().copied().fold(f64::INFINITY, f64::min);
@@ -679,12 +727,12 @@ fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
         _ => GrooveStatus::Converged,
     };
     if matches!(status, GrooveStatus::Failed | GrooveStatus::NoGroove) {
-        return GrooveFit::failed(status, m);
+        return (GrooveFit::failed(status, m), Some((frame, p)));
     }
     let sigma2 = 2.0 * cost / (m.saturating_sub(n_par).max(1)) as f64;
     // 7. Back to the frame's coordinates (inverse of eq 13).
     let (x0, z0) = (p[0] + ox, p[1] + oz);
-    GrooveFit {
+    let fit = GrooveFit {
         x0: c * x0 - s * z0,
         z0: s * x0 + c * z0,
         depth: p[2],
@@ -697,7 +745,93 @@ fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
         iterations: iterations as u32,
         n_used: m as u32,
         status,
+        model: FitModel::Tanh,
+    };
+    (fit, Some((frame, p)))
+}
+
+/// One frame as the fit sees it, for figures: the readings levelled
+/// (`x' = cos θ·x + sin θ·z`, `z' = −sin θ·x + cos θ·z`), the fitted shape in the same
+/// coordinates, and the fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameView {
+    pub x: Vec<f64>,
+    pub z: Vec<f64>,
+    /// The fitted section or template, densely sampled (empty when nothing was fitted).
+    pub shape_x: Vec<f64>,
+    pub shape_z: Vec<f64>,
+    pub tilt: f64,
+    pub fit: GrooveFit,
+}
+
+/// Points along a shape: `samples` values of `f(t)` for t over `[lo, hi]`.
+fn sample(lo: f64, hi: f64, samples: usize, f: impl Fn(f64) -> (f64, f64)) -> (Vec<f64>, Vec<f64>) {
+    (0..samples).map(|i| f(lo + (hi - lo) * i as f64 / (samples - 1) as f64)).unzip()
+}
+
+/// [`FrameView`] of one frame (`x`, `z` of one frame, as for [`fit_frame`]).
+pub fn view_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> Result<FrameView> {
+    o.validate()?;
+    if x.len() != z.len() {
+        return Err(Error::shape("z", format!("({},): one value per x", x.len()), format!("({},)", z.len())));
     }
+    const SAMPLES: usize = 400;
+    let empty = |fit: GrooveFit| FrameView {
+        x: Vec::new(),
+        z: Vec::new(),
+        shape_x: Vec::new(),
+        shape_z: Vec::new(),
+        tilt: f64::NAN,
+        fit,
+    };
+    if o.template == TemplateKind::Tanh {
+        let (fit, detail) = fit_tanh_detailed(x, z, o);
+        let Some((frame, p)) = detail else { return Ok(empty(fit)) };
+        let (ox, oz) = frame.origin;
+        let (lo, hi) = frame.x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        let t = TanhTemplate { x0: p[0], z0: p[1], depth: p[2], width: p[3], alpha: p[4] };
+        let (shape_x, shape_z) = if fit.model == FitModel::None {
+            (Vec::new(), Vec::new())
+        } else {
+            sample(lo, hi, SAMPLES, |u| (u + ox, t.value(u) + oz))
+        };
+        return Ok(FrameView {
+            x: frame.x.iter().map(|v| v + ox).collect(),
+            z: frame.z.iter().map(|v| v + oz).collect(),
+            shape_x,
+            shape_z,
+            tilt: frame.tilt,
+            fit,
+        });
+    }
+    let all = SectionModel::ALL;
+    let models: &[SectionModel] = match &o.template {
+        TemplateKind::Section(m) => std::slice::from_ref(m),
+        _ => &all,
+    };
+    let (lo, hi) = window_range(x.len(), o);
+    let settings = MeasureSettings {
+        models,
+        spike_threshold: o.spike_threshold,
+        min_depth: o.min_depth,
+        min_valid: o.min_valid,
+        criteria: o.criteria.section(),
+    };
+    let (fit, detail) = super::measure::measure_frame_detailed(&x[lo..hi], &z[lo..hi], &settings);
+    let Some(d) = detail else { return Ok(empty(fit)) };
+    // Levelled as `v = −s·x + c·z − b·c`: the absolute levelled height adds b·c back.
+    let lift = d.b * d.cos;
+    let (shape_x, shape_z) = match d.shape {
+        None => (Vec::new(), Vec::new()),
+        Some((pieces, gamma)) => {
+            let (ulo, uhi) = d.u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            sample(ulo, uhi, SAMPLES, |u| {
+                let v = pieces.value(u);
+                (u + gamma * v, v + lift)
+            })
+        }
+    };
+    Ok(FrameView { z: d.v.iter().map(|v| v + lift).collect(), x: d.u, shape_x, shape_z, tilt: d.tilt, fit })
 }
 
 /// All frames of `z (F, N)` row-major sharing the abscissae `x (N,)`, in parallel. Each frame
@@ -734,6 +868,11 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<G
 mod tests {
     use super::*;
 
+    /// The paper's template pipeline.
+    fn tanh() -> GrooveOptions {
+        GrooveOptions { template: TemplateKind::Tanh, ..GrooveOptions::default() }
+    }
+
     #[test]
     fn median5_network_equals_sorting() {
         let mut seed = 11u64;
@@ -769,7 +908,7 @@ mod tests {
         let truth = TanhTemplate { x0: 0.137, z0: 0.05, depth: 0.31, width: 0.48, alpha: 20.0 };
         let mut seed = 1;
         let (x, z) = frame(&truth, 0.0, 0.0, &mut seed);
-        let f = fit_frame(&x, &z, &GrooveOptions::default());
+        let f = fit_frame(&x, &z, &tanh());
         assert_eq!(f.status, GrooveStatus::Converged);
         assert!((f.x0 - truth.x0).abs() < 1e-9, "{f:?}");
         assert!((f.depth - truth.depth).abs() < 1e-9);
@@ -782,7 +921,7 @@ mod tests {
         let truth = TanhTemplate { x0: -0.2, z0: 0.0, depth: 0.3, width: 0.5, alpha: 12.0 };
         let mut seed = 2;
         let (x, z) = frame(&truth, 0.0, 0.0, &mut seed);
-        let o = GrooveOptions { fit_alpha: true, ..GrooveOptions::default() };
+        let o = GrooveOptions { fit_alpha: true, ..tanh() };
         let f = fit_frame(&x, &z, &o);
         assert_eq!(f.status, GrooveStatus::Converged);
         assert!((f.alpha - 12.0).abs() < 1e-4, "{f:?}");
@@ -793,9 +932,11 @@ mod tests {
         let mut seed = 3;
         let x: Vec<f64> = (0..200).map(|i| i as f64 * 0.025).collect();
         let z: Vec<f64> = x.iter().map(|_| 0.008 * gauss(&mut seed)).collect();
-        assert_eq!(fit_frame(&x, &z, &GrooveOptions::default()).status, GrooveStatus::NoGroove);
         let nan = vec![f64::NAN; 200];
-        assert_eq!(fit_frame(&x, &nan, &GrooveOptions::default()).status, GrooveStatus::TooFewValid);
+        for o in [GrooveOptions::default(), tanh()] {
+            assert_eq!(fit_frame(&x, &z, &o).status, GrooveStatus::NoGroove);
+            assert_eq!(fit_frame(&x, &nan, &o).status, GrooveStatus::TooFewValid);
+        }
     }
 
     #[test]
@@ -804,8 +945,10 @@ mod tests {
         let b = TanhTemplate { x0: 1.3, z0: 0.0, depth: 0.28, width: 0.48, alpha: 20.0 };
         let x: Vec<f64> = (0..200).map(|i| (i as f64 - 100.0) * 0.025).collect();
         let z: Vec<f64> = x.iter().map(|&x| a.value(x) + b.value(x)).collect();
-        let f = fit_frame(&x, &z, &GrooveOptions::default());
-        assert_eq!(f.status, GrooveStatus::TwoGrooves, "{f:?}");
+        for o in [GrooveOptions::default(), tanh()] {
+            let f = fit_frame(&x, &z, &o);
+            assert_eq!(f.status, GrooveStatus::TwoGrooves, "{f:?}");
+        }
     }
 
     #[test]
@@ -819,7 +962,7 @@ mod tests {
             x = fx;
             z.extend(fz);
         }
-        let o = GrooveOptions::default();
+        let o = tanh();
         let run = |threads| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)

@@ -78,115 +78,33 @@ impl TanhTemplate {
         self.z0 + 0.5 * self.depth * (a - b)
     }
 
-    /// Value and gradient with respect to `[x0, z0, d, w, α]` (paper 000 eq 15, extended by α).
-    #[inline(always)]
-    pub fn value_and_gradient(&self, x: f64) -> (f64, [f64; 5]) {
+    /// The gradient with respect to `[x0, z0, d, w, α]` at x.
+    pub fn gradient(&self, x: f64) -> [f64; 5] {
         let u = x - self.x0;
         let q = 0.25 * self.width;
-        let a = fast_tanh(self.alpha * (u - q));
-        let b = fast_tanh(self.alpha * (u + q));
-        let (sa, sb) = (1.0 - a * a, 1.0 - b * b);
-        let hd = 0.5 * self.depth;
-        let value = self.z0 + hd * (a - b);
-        let grad = [
-            hd * self.alpha * (sb - sa),
-            1.0,
-            0.5 * (a - b),
-            -0.25 * hd * self.alpha * (sa + sb),
-            hd * (sa * (u - q) - sb * (u + q)),
-        ];
-        (value, grad)
-    }
-
-    /// Depth of the dip at the center: `d·tanh(αw/4)`.
-    pub fn center_depth(&self) -> f64 {
-        self.depth * (0.25 * self.alpha * self.width).tanh()
+        let (a, b) = tanh_pair(self.alpha * (u - q), self.alpha * (u + q));
+        gradient(a, b, 0.5 * self.depth, self.alpha, u, q)
     }
 }
 
-/// A V groove with rounded corners: `z = z0 − d·h(x − x0)`,
-/// `h(u) = (2/w)·(s(u + w/2) − 2 s(u) + s(u − w/2))`, `s(t) = ln(1 + e^(βt))/β`.
-///
-/// For β → ∞, `h` is the tent of height 1 and half-width w/2: straight flanks meeting the
-/// surface at x0 ± w/2 and the tip d below it. A finite β rounds the tip and the edges over
-/// about 1/β mm, as a laser-cut groove is. `d` is the depth of the flanks' meeting point
-/// (the sharp V's tip); the dip at the center is `d·h(0)`, a little less.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct VTemplate {
-    pub x0: f64,
-    pub z0: f64,
-    pub depth: f64,
-    pub width: f64,
-    /// β, mm⁻¹.
-    pub sharpness: f64,
-}
-
-/// softplus_β(t) and its derivative σ(βt), stable for any t.
+/// The template's gradient with respect to `[x0, z0, d, w, α]` (paper 000 eq 15, extended by
+/// α), from `a = tanh(α(u − q))`, `b = tanh(α(u + q))`, `u = x − x0`, `q = w/4`, half the depth:
+/// the one home of the Jacobian, used reading by reading in the fit's vectorised loop.
 #[inline(always)]
-fn softplus(t: f64, beta: f64) -> (f64, f64) {
-    let e = exp_nonpositive(-beta * t.abs());
-    let s = t.max(0.0) + (1.0 + e).ln() / beta;
-    let sig = if t >= 0.0 { 1.0 / (1.0 + e) } else { e / (1.0 + e) };
-    (s, sig)
-}
-
-impl VTemplate {
-    /// Value and gradient with respect to `[x0, z0, d, w, β]`.
-    #[inline(always)]
-    pub fn value_and_gradient(&self, x: f64) -> (f64, [f64; 5]) {
-        let (u, hw, b) = (x - self.x0, 0.5 * self.width, self.sharpness);
-        let (sp, gp) = softplus(u + hw, b);
-        let (s0, g0) = softplus(u, b);
-        let (sm, gm) = softplus(u - hw, b);
-        let k = 2.0 / self.width;
-        let big_s = sp - 2.0 * s0 + sm;
-        let h = k * big_s;
-        let dh_du = k * (gp - 2.0 * g0 + gm);
-        let dh_dw = -h / self.width + (gp - gm) / self.width;
-        // ∂s/∂β = (t·σ(βt) − s(t))/β
-        let ds_db = |t: f64, s: f64, g: f64| (t * g - s) / b;
-        let dh_db = k * (ds_db(u + hw, sp, gp) - 2.0 * ds_db(u, s0, g0) + ds_db(u - hw, sm, gm));
-        let d = self.depth;
-        (self.z0 - d * h, [d * dh_du, 1.0, -h, -d * dh_dw, -d * dh_db])
-    }
-
-    pub fn value(&self, x: f64) -> f64 {
-        self.value_and_gradient(x).0
-    }
-
-    /// Depth of the dip at the center, `d·h(0)`.
-    pub fn center_depth(&self) -> f64 {
-        self.z0 - self.value(self.x0)
-    }
+pub(crate) fn gradient(a: f64, b: f64, half_depth: f64, alpha: f64, u: f64, q: f64) -> [f64; 5] {
+    let (sa, sb) = (1.0 - a * a, 1.0 - b * b);
+    [
+        half_depth * alpha * (sb - sa),
+        1.0,
+        0.5 * (a - b),
+        -0.25 * half_depth * alpha * (sa + sb),
+        half_depth * (sa * (u - q) - sb * (u + q)),
+    ]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn v_template_gradient_and_limits() {
-        let t = VTemplate { x0: 0.02, z0: 0.1, depth: 0.31, width: 0.48, sharpness: 60.0 };
-        let h = 1e-7;
-        for &x in &[-0.4, -0.25, -0.1, 0.0, 0.05, 0.2, 0.26, 0.5] {
-            let (_, g) = t.value_and_gradient(x);
-            let p = [t.x0, t.z0, t.depth, t.width, t.sharpness];
-            for k in 0..5 {
-                let (mut up, mut dn) = (p, p);
-                up[k] += h;
-                dn[k] -= h;
-                let f =
-                    |q: [f64; 5]| VTemplate { x0: q[0], z0: q[1], depth: q[2], width: q[3], sharpness: q[4] }.value(x);
-                let fd = (f(up) - f(dn)) / (2.0 * h);
-                assert!((fd - g[k]).abs() < 1e-5 * (1.0 + fd.abs()), "x={x} k={k}: {fd} vs {}", g[k]);
-            }
-        }
-        // Sharp limit: a tent of depth d and surface width w.
-        let sharp = VTemplate { x0: 0.0, z0: 0.0, depth: 0.3, width: 0.48, sharpness: 1e5 };
-        assert!((sharp.value(0.0) + 0.3).abs() < 1e-4);
-        assert!((sharp.value(0.12) + 0.15).abs() < 1e-4);
-        assert!(sharp.value(0.3).abs() < 1e-9);
-    }
 
     #[test]
     fn exp_matches_std() {
@@ -226,7 +144,7 @@ mod tests {
         let t = TanhTemplate { x0: 0.03, z0: 0.1, depth: 0.31, width: 0.48, alpha: 20.0 };
         let h = 1e-7;
         for &x in &[-0.4, -0.2, -0.1, 0.0, 0.05, 0.13, 0.3] {
-            let (_, g) = t.value_and_gradient(x);
+            let g = t.gradient(x);
             let p = [t.x0, t.z0, t.depth, t.width, t.alpha];
             for k in 0..5 {
                 let (mut up, mut dn) = (p, p);
@@ -245,6 +163,6 @@ mod tests {
         let t = TanhTemplate { x0: 0.0, z0: 0.0, depth: 1.0, width: 0.48, alpha: 200.0 };
         // With a sharp template the half-depth crossings sit at ±w/4.
         assert!((t.value(0.12) + 0.5).abs() < 1e-3);
-        assert!((t.center_depth() - 1.0).abs() < 1e-9);
+        assert!((t.value(0.0) + 1.0).abs() < 1e-9);
     }
 }

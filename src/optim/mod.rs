@@ -4,6 +4,9 @@
 //! Jacobian matrix is ever stored (a groove frame has ~200 residuals, a calibration thousands).
 use nalgebra::{SMatrix, SVector};
 
+mod bounded;
+pub use bounded::{bounded_levenberg_marquardt, BoundedLeastSquares, BoundedLmOptions, BoundedLmResult};
+
 /// A nonlinear least-squares problem `min ½ Σ f_i(x)²` with `P` parameters.
 pub trait LeastSquares<const P: usize> {
     /// Number of residuals.

@@ -1,0 +1,576 @@
+//! Groove cross-sections as exact geometry: one family of shapes covering the grooves plants
+//! cut — V, U (ball cutter or walls with a round bottom) and trapezoid (flat floor) — so that
+//! width and depth are read from the fitted shape as the issue defines them: width = distance
+//! between the flanks where they meet the surface line, depth = deepest point below it.
+//!
+//! Levelled coordinates (u along the surface, v up, the surface line is v = 0, the groove
+//! below). The general section `p = [xL, xR, tL, tR, D, s]`:
+//! - `xL, xR` — where the flank lines cross the surface; `tL, tR` — flank cotangents (run per
+//!   unit depth, 0 = vertical wall, negative = overhang);
+//! - `D` — depth of the deepest point;
+//! - `s ∈ [0, 1]` — bottom fillet radius as a fraction of `r1 = (w − T·D)/K`, the largest radius
+//!   that still reaches depth D (`w = xR − xL`, `T = tL + tR`, `a = √(1 + t²)`,
+//!   `K = aL + aR − T`). `s = 1`: the bottom is one arc tangent to both flanks; `s < 1`: a flat
+//!   floor at depth D with two fillets of radius `s·r1`.
+//!
+//! The models are special cases: trapezoid T (6 parameters) is `p` itself; round-bottomed V R
+//! (5) fixes `s = 1`; sharp V (4) fixes `D = w/T`; U (3) `q = [xc, R, D]` is a circle of radius
+//! R whose lowest point is D deep, continued up by vertical walls when its center lies below
+//! the surface and cut by the surface when above.
+//!
+//! Residuals are measured along the sensor beam (noise is along the sensor's z, which in
+//! levelled coordinates is the direction `(sin θ, cos θ)`): a reading on a steep wall of a
+//! tilted frame then has a well-posed residual, where a vertical one in the levelled frame
+//! traps the fit. Intersections and their derivatives are in closed form (implicit
+//! differentiation of each piece's equation).
+
+/// Flank cotangent bounds: slope at least 0.05; overhang up to atan(0.15) ≈ 8.5°, since a wall
+/// vertical in the sensor frame leans by the tilt once the frame is levelled.
+pub const T_MAX: f64 = 20.0;
+const T_OVERHANG: f64 = 0.15;
+/// A sharp V's flanks are at most this steep (cotangent): steeper is a U's wall.
+const T_MIN_V: f64 = 0.01;
+/// The trapezoid's fillets are at most this large (mm): round bottoms are R's and U's.
+const R_T_MAX: f64 = 0.05;
+/// Boundary tolerance of the piece tests, mm.
+const TOL: f64 = 1e-9;
+
+/// The section models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SectionModel {
+    /// Trapezoid: flat floor, straight flanks, small bottom fillets (6 parameters).
+    Trapezoid,
+    /// Sharp V (4).
+    V,
+    /// V whose bottom is one arc tangent to both flanks; covers rounded V's, circular-arc U's
+    /// and drafted walls with a round bottom (5).
+    Round,
+    /// Circle plus vertical walls (3).
+    U,
+}
+
+impl SectionModel {
+    pub const ALL: [SectionModel; 4] = [SectionModel::Trapezoid, SectionModel::V, SectionModel::Round, SectionModel::U];
+
+    pub fn n_params(self) -> usize {
+        match self {
+            SectionModel::Trapezoid => 6,
+            SectionModel::V => 4,
+            SectionModel::Round => 5,
+            SectionModel::U => 3,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SectionModel::Trapezoid => "trapezoid",
+            SectionModel::V => "v",
+            SectionModel::Round => "round",
+            SectionModel::U => "u",
+        }
+    }
+
+    /// The general section `p` of the model's parameters `q` (first `n_params` entries used).
+    pub fn to_p(self, q: &[f64]) -> [f64; 6] {
+        match self {
+            SectionModel::Trapezoid => [q[0], q[1], q[2], q[3], q[4], q[5]],
+            SectionModel::Round => [q[0], q[1], q[2], q[3], q[4], 1.0],
+            SectionModel::V => {
+                let t = q[2] + q[3];
+                [q[0], q[1], q[2], q[3], (q[1] - q[0]) / t, 1.0]
+            }
+            SectionModel::U => [q[0] - q[1], q[0] + q[1], 0.0, 0.0, q[2], 1.0],
+        }
+    }
+
+    /// Lower and upper bounds of each parameter at `q` (the coupled `T·D ≤ w` is kept by
+    /// [`SectionModel::project`] alone).
+    pub fn bounds(self, q: &[f64]) -> ([f64; 6], [f64; 6]) {
+        let inf = f64::INFINITY;
+        match self {
+            SectionModel::U => ([-inf, 0.005, 1e-3, 0.0, 0.0, 0.0], [inf; 6]),
+            SectionModel::V => ([-inf, -inf, T_MIN_V, T_MIN_V, 0.0, 0.0], [inf, inf, T_MAX, T_MAX, inf, inf]),
+            SectionModel::Round => {
+                ([-inf, -inf, -T_OVERHANG, -T_OVERHANG, 1e-4, 0.0], [inf, inf, T_MAX, T_MAX, inf, inf])
+            }
+            SectionModel::Trapezoid => {
+                ([-inf, -inf, -T_OVERHANG, -T_OVERHANG, 1e-4, 0.0], [inf, inf, T_MAX, T_MAX, inf, s_max_trapezoid(q)])
+            }
+        }
+    }
+
+    /// `q` moved into the admissible set (applied after every step of the fit).
+    pub fn project(self, q: &mut [f64]) {
+        if self == SectionModel::U {
+            q[1] = q[1].max(0.005);
+            q[2] = q[2].max(1e-3);
+            return;
+        }
+        let lo = if self == SectionModel::V { T_MIN_V } else { -T_OVERHANG };
+        q[2] = q[2].clamp(lo, T_MAX);
+        q[3] = q[3].clamp(lo, T_MAX);
+        if !(q[1] >= q[0] + 0.01) {
+            let m = 0.5 * (q[0] + q[1]);
+            q[0] = m - 0.005;
+            q[1] = m + 0.005;
+        }
+        if matches!(self, SectionModel::Trapezoid | SectionModel::Round) {
+            q[4] = q[4].max(1e-4);
+            let t = q[2] + q[3];
+            if t * q[4] > q[1] - q[0] {
+                q[4] = (q[1] - q[0]) / t;
+            }
+        }
+        if self == SectionModel::Trapezoid {
+            q[5] = q[5].clamp(0.0, s_max_trapezoid(q));
+        }
+    }
+
+    /// `∂p/∂q`, 6 × n_params row-major in a 6 × 6 array.
+    fn p_jacobian(self, q: &[f64]) -> [[f64; 6]; 6] {
+        let mut j = [[0.0; 6]; 6];
+        match self {
+            SectionModel::Trapezoid => (0..6).for_each(|k| j[k][k] = 1.0),
+            SectionModel::Round => (0..5).for_each(|k| j[k][k] = 1.0),
+            SectionModel::V => {
+                (0..4).for_each(|k| j[k][k] = 1.0);
+                let (w, t) = (q[1] - q[0], q[2] + q[3]);
+                j[4] = [-1.0 / t, 1.0 / t, -w / (t * t), -w / (t * t), 0.0, 0.0];
+            }
+            SectionModel::U => {
+                j[0][0] = 1.0;
+                j[0][1] = -1.0;
+                j[1][0] = 1.0;
+                j[1][1] = 1.0;
+                j[4][2] = 1.0;
+            }
+        }
+        j
+    }
+}
+
+/// `√(1 + t²)`: a flank's length per unit depth. The cotangents are bounded, so the plain
+/// formula is exact enough and much faster than `hypot`.
+#[inline(always)]
+pub(super) fn slant(t: f64) -> f64 {
+    (1.0 + t * t).sqrt()
+}
+
+/// Upper bound of the trapezoid's `s`: its fillet radius `s·r1` is at most `R_T_MAX`.
+fn s_max_trapezoid(q: &[f64]) -> f64 {
+    let t = q[2] + q[3];
+    let k = slant(q[2]) + slant(q[3]) - t;
+    let r1 = (q[1] - q[0] - t * q[4]).max(0.0) / k;
+    if r1 <= R_T_MAX {
+        1.0
+    } else {
+        R_T_MAX / r1
+    }
+}
+
+/// A section resolved into its pieces: `π = [xL, xR, tL, tR, D, hc, r, cL, cR]` with the
+/// fillet radius r, its center depth hc = D − r, and the fillet center abscissae.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pieces {
+    pub xl: f64,
+    pub xr: f64,
+    pub tl: f64,
+    pub tr: f64,
+    pub d: f64,
+    pub hc: f64,
+    pub r: f64,
+    pub cl: f64,
+    pub cr: f64,
+}
+
+/// Indices into π, for derivatives.
+const XL: usize = 0;
+const XR: usize = 1;
+const TL: usize = 2;
+const TR: usize = 3;
+const D: usize = 4;
+const HC: usize = 5;
+const R: usize = 6;
+const CL: usize = 7;
+const CR: usize = 8;
+
+impl Pieces {
+    pub fn new(p: [f64; 6]) -> Self {
+        let [xl, xr, tl, tr, d, s] = p;
+        let (w, t) = (xr - xl, tl + tr);
+        let (al, ar) = (slant(tl), slant(tr));
+        let k = al + ar - t;
+        let r = s * (w - t * d).max(0.0) / k;
+        let hc = d - r;
+        Pieces { xl, xr, tl, tr, d, hc, r, cl: xl + tl * hc + r * al, cr: xr - tr * hc - r * ar }
+    }
+
+    pub fn of(model: SectionModel, q: &[f64]) -> Self {
+        Pieces::new(model.to_p(q))
+    }
+
+    /// Depths where the left and right flank lines meet their fillet arcs (tangent points).
+    fn tangent_depths(&self) -> (f64, f64) {
+        let (al, ar) = (slant(self.tl), slant(self.tr));
+        (self.hc + self.r * self.tl / al, self.hc + self.r * self.tr / ar)
+    }
+
+    /// Where the section meets the surface line: the flank line's crossing, or the fillet
+    /// arc's where the arc reaches the surface before its tangent point (a circular U
+    /// shallower than its radius).
+    pub fn crossings(&self) -> (f64, f64) {
+        let (htl, htr) = self.tangent_depths();
+        let q = (self.r * self.r - self.hc * self.hc).max(0.0).sqrt();
+        (if htl >= 0.0 { self.xl } else { self.cl - q }, if htr >= 0.0 { self.xr } else { self.cr + q })
+    }
+
+    /// The section's height v at u (vertical evaluation, for drawing).
+    pub fn value(&self, u: f64) -> f64 {
+        let (al, ar) = (slant(self.tl), slant(self.tr));
+        let (utl, utr) = (self.cl - self.r / al, self.cr + self.r / ar);
+        let arc = |c: f64| -self.hc - (self.r * self.r - (u - c) * (u - c)).max(0.0).sqrt();
+        let v = if u < utl {
+            -(u - self.xl) / self.tl.max(1e-12)
+        } else if u < self.cl {
+            arc(self.cl)
+        } else if u <= self.cr {
+            -self.d
+        } else if u <= utr {
+            arc(self.cr)
+        } else {
+            -(self.xr - u) / self.tr.max(1e-12)
+        };
+        v.min(0.0)
+    }
+
+    /// `∂π/∂p` (9 × 6), closed form.
+    fn p_jacobian(p: &[f64; 6]) -> [[f64; 6]; 9] {
+        let [xl, xr, tl, tr, d, s] = *p;
+        let (w, t) = (xr - xl, tl + tr);
+        let (al, ar) = (slant(tl), slant(tr));
+        let k = al + ar - t;
+        let r1p = w - t * d;
+        let r1 = r1p.max(0.0) / k;
+        let r = s * r1;
+        let hc = d - r;
+        let mut j = [[0.0; 6]; 9];
+        for (i, row) in j.iter_mut().take(5).enumerate() {
+            row[i] = 1.0;
+        }
+        let mut dr = [0.0; 6];
+        if r1p > 0.0 {
+            dr = [
+                -s / k,
+                s / k,
+                -s * (d + r1 * (tl / al - 1.0)) / k,
+                -s * (d + r1 * (tr / ar - 1.0)) / k,
+                -s * t / k,
+                r1,
+            ];
+        }
+        let mut dhc = dr.map(|v| -v);
+        dhc[4] += 1.0;
+        j[R] = dr;
+        j[HC] = dhc;
+        for c in 0..6 {
+            j[CL][c] = tl * dhc[c] + al * dr[c];
+            j[CR][c] = -tr * dhc[c] - ar * dr[c];
+        }
+        j[CL][0] += 1.0;
+        j[CL][2] += hc + r * tl / al;
+        j[CR][1] += 1.0;
+        j[CR][3] -= hc + r * tr / ar;
+        j
+    }
+}
+
+/// `∂π/∂q` of a model at q: 9 × n_params (in a 9 × 6 array), closed form. The chain through
+/// `∂p/∂q` is written out per model (it is mostly identity): this runs every LM iteration.
+#[inline(always)]
+pub fn pieces_jacobian(model: SectionModel, q: &[f64]) -> [[f64; 6]; 9] {
+    let jp = Pieces::p_jacobian(&model.to_p(q));
+    match model {
+        SectionModel::Trapezoid => jp,
+        SectionModel::Round => jp.map(|row| [row[0], row[1], row[2], row[3], row[4], 0.0]),
+        SectionModel::V => {
+            let jq = model.p_jacobian(q);
+            let dd = jq[4];
+            jp.map(|row| {
+                let mut out = [0.0; 6];
+                for (c, o) in out.iter_mut().take(4).enumerate() {
+                    *o = row[c] + row[4] * dd[c];
+                }
+                out
+            })
+        }
+        SectionModel::U => jp.map(|row| [row[0] + row[1], row[1] - row[0], row[4], 0.0, 0.0, 0.0]),
+    }
+}
+
+/// The beam from a reading and its hit on the section: `λ`, the distance along the beam
+/// direction `(sn, cs)` from the reading to the section point the sensor sees (reading minus
+/// model is `−λ`), and `∂λ/∂π` as up to three (index, value) pairs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    pub lambda: f64,
+    pub grad: [(usize, f64); 3],
+}
+
+impl Hit {
+    const NONE: [(usize, f64); 3] = [(0, 0.0); 3];
+}
+
+/// Precomputed quantities of one section, for evaluating many beams.
+#[derive(Debug, Clone, Copy)]
+pub struct Beams {
+    pub pieces: Pieces,
+    /// Beam direction (not unit when a lean is applied) and its squared length.
+    sn: f64,
+    cs: f64,
+    dd: f64,
+    /// Lean γ: points at depth h are shifted sideways by −γh; readings are un-leaned.
+    gamma: f64,
+    htl: f64,
+    htr: f64,
+    utl: f64,
+    utr: f64,
+    uls: f64,
+    urs: f64,
+    /// The u-ranges of the flank lines (between the surface crossing and the tangent point).
+    left_flank: (f64, f64),
+    right_flank: (f64, f64),
+    /// Reciprocals used for every beam: 1/cos, 1/|d|², and of each flank's φ·d (0 when the
+    /// beam runs along the flank).
+    inv_cs: f64,
+    inv_dd: f64,
+    inv_left: f64,
+    inv_right: f64,
+}
+
+impl Beams {
+    /// Beams of direction `(sin θ, cos θ)` on `pieces` leaning by `gamma`.
+    #[inline(always)]
+    pub fn new(pieces: Pieces, sin: f64, cos: f64, gamma: f64) -> Self {
+        let (sn, cs) = (sin - gamma * cos, cos);
+        let (htl, htr) = pieces.tangent_depths();
+        let (al, ar) = (slant(pieces.tl), slant(pieces.tr));
+        let (uls, urs) = pieces.crossings();
+        let (utl, utr) = (pieces.cl - pieces.r / al, pieces.cr + pieces.r / ar);
+        let span = |a: f64, b: f64| if a <= b { (a, b) } else { (b, a) };
+        let inverse = |den: f64| if den.abs() > 1e-12 { 1.0 / den } else { 0.0 };
+        Beams {
+            inv_cs: 1.0 / cs,
+            inv_dd: 1.0 / (sn * sn + cs * cs),
+            inv_left: inverse(sn + pieces.tl * cs),
+            inv_right: inverse(sn - pieces.tr * cs),
+            pieces,
+            sn,
+            cs,
+            dd: sn * sn + cs * cs,
+            gamma,
+            htl,
+            htr,
+            utl,
+            utr,
+            uls,
+            urs,
+            left_flank: span(pieces.xl, utl),
+            right_flank: span(utr, pieces.xr),
+        }
+    }
+
+    /// The topmost intersection of the beam through reading (u, v) with the section.
+    #[inline(always)]
+    pub fn hit(&self, u: f64, v: f64) -> Hit {
+        let u = u - self.gamma * v;
+        // Every piece lies in −D ≤ v ≤ 0, so the hit is at most (D + |v|)/cos along the beam
+        // and at most |sin| times that sideways: pieces farther than that cannot be hit, and
+        // are not tried. (Exact pruning; should rounding still miss, every piece is tried.)
+        let reach = self.sn.abs() * (self.pieces.d + v.abs()) / self.cs + 1e-9;
+        let hit = self.hit_pieces(u, v, reach);
+        if hit.lambda > f64::NEG_INFINITY {
+            return hit;
+        }
+        let hit = self.hit_pieces(u, v, f64::INFINITY);
+        if hit.lambda > f64::NEG_INFINITY {
+            return hit;
+        }
+        // A connected section is always hit; should rounding miss every piece, fall back to the
+        // vertical distance (no gradient).
+        Hit { lambda: (self.pieces.value(u) - v) / self.cs, grad: Hit::NONE }
+    }
+
+    /// The topmost hit among the pieces whose u-range lies within `reach` of u.
+    #[inline(always)]
+    fn hit_pieces(&self, u: f64, v: f64, reach: f64) -> Hit {
+        let p = &self.pieces;
+        let (sn, cs) = (self.sn, self.cs);
+        let near = |(a, b): (f64, f64)| u >= a - reach && u <= b + reach;
+        let mut best = Hit { lambda: f64::NEG_INFINITY, grad: Hit::NONE };
+        let mut take = |lambda: f64, grad: [(usize, f64); 3]| {
+            if lambda > best.lambda {
+                best = Hit { lambda, grad };
+            }
+        };
+        // Surface halves v = 0.
+        if u - reach <= self.uls || u + reach >= self.urs {
+            let lam = -v * self.inv_cs;
+            let qu = u + sn * lam;
+            if qu <= self.uls + TOL || qu >= self.urs - TOL {
+                take(lam, Hit::NONE);
+            }
+        }
+        // Floor v = −D between the fillet centers.
+        if near((p.cl, p.cr)) {
+            let lam = (-p.d - v) * self.inv_cs;
+            let qu = u + sn * lam;
+            if qu >= p.cl - TOL && qu <= p.cr + TOL {
+                take(lam, [(D, -self.inv_cs), (0, 0.0), (0, 0.0)]);
+            }
+        }
+        // Flanks: φ = Qu ± t·Qv − x.
+        let inv = self.inv_left;
+        if self.htl > 0.0 && inv != 0.0 && near(self.left_flank) {
+            let lam = -(u + p.tl * v - p.xl) * inv;
+            let qv = v + cs * lam;
+            if qv <= TOL && qv >= -self.htl - TOL {
+                take(lam, [(XL, inv), (TL, -qv * inv), (0, 0.0)]);
+            }
+        }
+        let inv = self.inv_right;
+        if self.htr > 0.0 && inv != 0.0 && near(self.right_flank) {
+            let lam = -(u - p.tr * v - p.xr) * inv;
+            let qv = v + cs * lam;
+            if qv <= TOL && qv >= -self.htr - TOL {
+                take(lam, [(XR, inv), (TR, qv * inv), (0, 0.0)]);
+            }
+        }
+        // Fillet arcs: φ = |Q − C| − r, C = (c, −hc); the lower intersection.
+        if p.r > 0.0 {
+            for (c, lo, hi, ci) in [(p.cl, self.utl, p.cl, CL), (p.cr, p.cr, self.utr, CR)] {
+                if !near((lo, hi)) {
+                    continue;
+                }
+                let (pu, pv) = (u - c, v + p.hc);
+                let b = sn * pu + cs * pv;
+                let disc = b * b - self.dd * (pu * pu + pv * pv - p.r * p.r);
+                if disc < 0.0 {
+                    continue;
+                }
+                let root = disc.sqrt();
+                let lam = (-b - root) * self.inv_dd;
+                let (qu, qv) = (u + sn * lam, v + cs * lam);
+                // ∇φ·d = ((Q − C)·d)/r, and (Q − C)·d = b + λ|d|² = −√disc.
+                if root > 1e-12 * p.r && qu >= lo - TOL && qu <= hi + TOL && qv <= TOL && qv <= -p.hc + TOL {
+                    let e = -1.0 / root;
+                    take(lam, [(ci, (qu - c) * e), (HC, -(qv + p.hc) * e), (R, p.r * e)]);
+                }
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn q_of(model: SectionModel) -> Vec<f64> {
+        match model {
+            SectionModel::Trapezoid => vec![-0.31, 0.27, 0.4, 0.55, 0.2, 0.3],
+            SectionModel::V => vec![-0.26, 0.24, 0.45, 0.38],
+            SectionModel::Round => vec![-0.26, 0.24, 0.45, 0.38, 0.5],
+            SectionModel::U => vec![0.02, 0.21, 0.15],
+        }
+    }
+
+    #[test]
+    fn pieces_jacobian_equals_finite_differences() {
+        for model in SectionModel::ALL {
+            let q = q_of(model);
+            let j = pieces_jacobian(model, &q);
+            let pi = |q: &[f64]| {
+                let p = Pieces::of(model, q);
+                [p.xl, p.xr, p.tl, p.tr, p.d, p.hc, p.r, p.cl, p.cr]
+            };
+            for c in 0..model.n_params() {
+                let h = 1e-7;
+                let (mut a, mut b) = (q.clone(), q.clone());
+                a[c] += h;
+                b[c] -= h;
+                let (pa, pb) = (pi(&a), pi(&b));
+                for k in 0..9 {
+                    let fd = (pa[k] - pb[k]) / (2.0 * h);
+                    assert!((fd - j[k][c]).abs() < 1e-7, "{model:?} π{k}/q{c}: {fd} vs {}", j[k][c]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn beam_derivatives_equal_finite_differences_on_every_piece() {
+        let (sin, cos) = (0.07f64.sin(), 0.07f64.cos());
+        for model in SectionModel::ALL {
+            let q = q_of(model);
+            for gamma in [0.0, 0.05] {
+                let beams = Beams::new(Pieces::of(model, &q), sin, cos, gamma);
+                let jq = pieces_jacobian(model, &q);
+                for k in 0..60 {
+                    let u = -0.5 + k as f64 / 59.0;
+                    let v = beams.pieces.value(u) + 0.004 * ((k as f64 * 1.7).sin());
+                    let hit = beams.hit(u, v);
+                    for c in 0..model.n_params() {
+                        let analytic: f64 = hit.grad.iter().map(|&(i, g)| g * jq[i][c]).sum();
+                        let h = 1e-7;
+                        let (mut a, mut b) = (q.clone(), q.clone());
+                        a[c] += h;
+                        b[c] -= h;
+                        let la = Beams::new(Pieces::of(model, &a), sin, cos, gamma).hit(u, v).lambda;
+                        let lb = Beams::new(Pieces::of(model, &b), sin, cos, gamma).hit(u, v).lambda;
+                        let fd = (la - lb) / (2.0 * h);
+                        // Kinks (piece boundaries) have no derivative; they are measure zero.
+                        if (la - hit.lambda).abs() < 1e-6 && (lb - hit.lambda).abs() < 1e-6 {
+                            assert!((fd - analytic).abs() < 1e-5, "{model:?} γ {gamma} u {u} q{c}: {fd} vs {analytic}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn geometry_of_the_special_cases() {
+        // A sharp V: depth w/T, crossings at the flank lines.
+        let v = Pieces::of(SectionModel::V, &[-0.25, 0.25, 0.5, 0.5]);
+        assert!((v.d - 0.5).abs() < 1e-15 && v.r.abs() < 1e-12);
+        assert_eq!(v.crossings(), (-0.25, 0.25));
+        assert!((v.value(0.0) + 0.5).abs() < 1e-12 && (v.value(0.125) + 0.25).abs() < 1e-12);
+        // A circular U shallower than its radius meets the surface where the circle does.
+        let u = Pieces::of(SectionModel::U, &[0.0, 0.5, 0.2]);
+        let (l, r) = u.crossings();
+        let half = (0.5f64 * 0.5 - 0.3 * 0.3).sqrt();
+        assert!((l + half).abs() < 1e-12 && (r - half).abs() < 1e-12);
+        assert!((u.value(0.0) + 0.2).abs() < 1e-12);
+        // A U deeper than its radius: vertical walls at ±R.
+        let w = Pieces::of(SectionModel::U, &[0.1, 0.2, 0.5]);
+        assert_eq!(w.crossings(), (-0.1, 0.30000000000000004));
+        // A trapezoid: flat floor at D between the fillets.
+        let t = Pieces::of(SectionModel::Trapezoid, &[-0.5, 0.5, 0.5, 0.5, 0.3, 0.0]);
+        assert!((t.value(0.0) + 0.3).abs() < 1e-15 && (t.value(-0.4) + 0.2).abs() < 1e-12);
+        // The beam hits what it should: vertically, the reading's height difference.
+        let b = Beams::new(t, 0.0, 1.0, 0.0);
+        assert!((b.hit(0.1, -0.31).lambda - 0.01).abs() < 1e-12);
+        assert!((b.hit(0.9, 0.02).lambda + 0.02).abs() < 1e-12);
+    }
+
+    #[test]
+    fn projection_keeps_every_model_admissible() {
+        let mut q = [0.3, 0.1, -3.0, 40.0, 5.0, 2.0];
+        SectionModel::Trapezoid.project(&mut q);
+        assert!(q[1] >= q[0] + 0.01 - 1e-12 && q[2] >= -T_OVERHANG && q[3] <= T_MAX);
+        assert!((q[2] + q[3]) * q[4] <= q[1] - q[0] + 1e-12 && (0.0..=1.0).contains(&q[5]));
+        let mut u = [0.0, -1.0, -1.0];
+        SectionModel::U.project(&mut u);
+        assert_eq!(u, [0.0, 0.005, 1e-3]);
+    }
+}
