@@ -53,6 +53,21 @@ def test_grooves_command_equals_the_library(small):
     np.testing.assert_allclose(rows["error_mean"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
 
 
+def test_grooves_command_fits_the_template_asked_for(small):
+    d, scan, truth = small
+    out = d / "out_tanh"
+    assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--template", "tanh", "--alpha", "25",
+                 "--max-se-ratio", "5", "--out", str(out)]) == 0
+    ref = inspect_grooves(scan, truth.nominal_polylines, template="tanh", alpha=25.0, max_se_ratio=5.0)
+    rows = np.genfromtxt(out / "frames.csv", delimiter=",", names=True)
+    np.testing.assert_array_equal(rows["model"], ref.fits.model)
+    assert set(rows["model"][ref.fits.ok]) == {machscan.GrooveModel.TANH}
+    np.testing.assert_array_equal(rows["suspect"], ref.suspect)
+    np.testing.assert_allclose(rows["width"], ref.fits.width, rtol=1e-9)
+    with pytest.raises(SystemExit):
+        main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--template", "gaussian"])
+
+
 def test_grooves_command_on_a_csv_scan_and_apt_contours(small):
     d, scan, truth = small
     machscan.write_scan_csv(scan, d / "frames.csv", d / "poses.csv")
@@ -141,7 +156,7 @@ def test_cad_in_the_wrong_unit_says_how_far_and_exits_non_zero(small, capsys):
 
 
 def test_an_unknown_no_reading_code_is_warned_about(small, tmp_path, capsys):
-    d, scan, truth = small
+    _d, scan, _truth = small
     frames = scan.frames.copy()
     frames[~scan.valid_mask()] = -9999.0  # another vendor's code, not the default sentinel
     other = machscan.Scan(frames, scan.poses, scan.frame_times,
@@ -156,7 +171,7 @@ def test_an_unknown_no_reading_code_is_warned_about(small, tmp_path, capsys):
 
 
 def test_points_drop_the_vendor_sentinel_by_default(small, tmp_path, capsys):
-    d, scan, _ = small
+    _d, scan, _ = small
     bare = machscan.Scan(scan.frames, scan.poses, scan.frame_times,
                          machscan.Profiler(readings=scan.n_readings, pitch=scan.profiler.pitch),
                          scan.c2_offset, scan.mount)

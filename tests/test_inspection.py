@@ -19,9 +19,11 @@ def test_width_and_depth_per_frame_against_truth(run):
     ok = r.fits.ok
     assert ok.mean() > 0.99
     w_err = np.abs(r.fits.width[ok] - truth.width[ok])
-    d_rel = np.abs(r.fits.depth[ok] - truth.depth[ok]) / truth.depth[ok]
+    d_rel = (r.fits.depth[ok] - truth.depth[ok]) / truth.depth[ok]
     assert np.median(w_err) <= 0.010
-    assert np.median(d_rel) <= 0.015
+    # The demo's V has its bottom rounded to 0.01 mm, barely visible at 8 µm noise: a sharp V
+    # fitted to it reads 0.01·(sec θ − 1) ≈ 6 µm (2 %) deep; the V/R average halves that.
+    assert np.median(np.abs(d_rel)) <= 0.02 and 0 < np.median(d_rel) < 0.02
 
 
 def test_groove_centers_in_the_wcs(run):
@@ -121,18 +123,16 @@ def test_scan_without_grooves_gives_an_empty_report():
     assert "0 contours matched" in r.summary()
 
 
-def test_suspect_fits_are_left_out(run):
+def test_suspect_fits_are_left_out_when_asked(run):
     scan, truth, r = run
-    # Seed 0 frame 3449 lost its flank readings: it converges to a width the data do not fix.
-    assert r.suspect[3449] and not r.used[3449]
-    assert r.fits.ok[3449] and abs(r.fits.width[3449] - truth.width[3449]) > 0.2
-    assert r.suspect.sum() < 0.01 * len(r.suspect)
-    # Without the screen that frame dominates contour 10's maximum error.
-    loose = inspect_grooves(scan, truth.nominal_polylines, max_se_ratio=1e9)
-    assert not loose.suspect.any()
-    c10 = next(c for c in r.contours if c.cad_index == 10)
-    c10_loose = next(c for c in loose.contours if c.cad_index == 10)
-    assert c10_loose.error.max > c10.error.max + 0.02
+    assert not r.suspect.any()
+    screened = inspect_grooves(scan, truth.nominal_polylines, max_se_ratio=5.0)
+    f = screened.fits
+    ratio = np.maximum(f.se_width / np.median(f.se_width[f.ok]), f.se_depth / np.median(f.se_depth[f.ok]))
+    np.testing.assert_array_equal(screened.suspect, f.ok & (ratio > 5.0))
+    assert 0 < screened.suspect.sum() < 0.02 * len(f)
+    assert not screened.used[screened.suspect].any() and np.isnan(screened.center_wcs[screened.suspect]).all()
+    assert "suspect" in screened.summary()
 
 
 def test_cad_as_one_point_set_is_clustered_into_contours(run):

@@ -147,41 +147,69 @@ def test_error_along_one_contour(run):
     assert off.get_ydata()[0] == pytest.approx(c.offset_error)
 
 
-def test_levelled_frame_template_matches_the_fit(run):
+def _assert_section_drawn(line, lf, fits, frame):
+    """The drawn section is the fitted one, placed where the fit put it in the levelled frame."""
+    sx, sz = line.get_xdata(), line.get_ydata()
+    assert np.all(np.diff(sx) >= 0)
+    x0, z0 = lf.to_levelled(fits.x0[frame], fits.z0[frame])
+    w, d, a = fits.width[frame], fits.depth[frame], fits.alpha[frame]
+    # The flanks cross the surface line at the measured width around the measured center:
+    # each crossing lies between the two drawn samples on either side of it. The tanh template
+    # z0 + ½d(tanh(α(x−x0−w/4)) − tanh(α(x−x0+w/4))) never meets its surface line; at
+    # x0 ± w/2 it stands at the level below.
+    level = z0 if fits.template != "tanh" else z0 + d / 2 * (np.tanh(a * w / 4) - np.tanh(3 * a * w / 4))
+    below = np.nonzero(sz < level - 1e-9)[0]
+    left, right = below[0], below[-1]
+    assert sx[left - 1] - 1e-9 <= x0 - w / 2 <= sx[left] + 1e-9
+    assert sx[right] - 1e-9 <= x0 + w / 2 <= sx[right + 1] + 1e-9
+    # Inside the groove the section leaves residuals of the size the fit reported. The fit's
+    # RMS is along the beam over the readings it kept, so it agrees to the noise, not exactly;
+    # a section misplaced by a wrong tilt mapping leaves tens of µm.
+    inside = np.abs(lf.x - x0) < w / 2
+    rms = np.sqrt(np.mean((lf.z[inside] - np.interp(lf.x[inside], sx, sz)) ** 2))
+    assert 0.5 * fits.rms[frame] < rms < 2 * fits.rms[frame] + 0.002
+
+
+def test_levelled_frame_draws_the_fitted_section(run):
     report, x, z = run
     fits = report.fits
     for frame in np.nonzero(fits.ok)[0][[0, 50, 400]]:
         fig = plot.levelled_frame(x, z, frame, report)
         (ax,) = fig.axes
         (readings,) = _data_lines(ax, "levelled readings")
-        (template,) = _data_lines(ax, "fitted template")
+        (section,) = _data_lines(ax, "fitted section")
+        model = machscan.GrooveModel(fits.model[frame]).name.lower()
+        assert section.get_label() == f"fitted section ({model})"
         lf = machscan.level_groove_frame(x, z[frame], window=200)
         np.testing.assert_array_equal(readings.get_xdata(), lf.x)
-        # The drawn template at the readings leaves the fit's own residual RMS: the center was
-        # mapped into the levelled frame correctly.
-        model = np.interp(lf.x, template.get_xdata(), template.get_ydata())
-        rms = np.sqrt(np.mean((lf.z - model) ** 2))
-        assert rms == pytest.approx(fits.rms[frame], rel=0.02, abs=2e-4)
+        _assert_section_drawn(section, lf, fits, frame)
         assert "mm" in ax.get_xlabel() and "mm" in ax.get_ylabel()
         plt.close(fig)
-    # One row instead of all frames, and no fits: the fit's initial guess.
+    # One row instead of all frames, and no fits: the frame is fitted for the figure.
     fig = plot.levelled_frame(x, z[7], 7)
-    assert len(_data_lines(fig.axes[0], "initial guess")) == 1
+    assert len(_data_lines(fig.axes[0], "fitted section")) == 1
+
+
+def test_levelled_frame_refuses_fits_of_other_settings(run):
+    report, x, z = run
+    frame = int(np.nonzero(report.fits.ok)[0][0])
+    with pytest.raises(ValueError, match="fits: the frame's fit differs"):
+        plot.levelled_frame(x, z, frame, report, window=120)
 
 
 def test_levelled_frame_maps_the_center_with_the_tilt():
-    # A steeply tilted frame (80 mrad) high above the reference: drawing the template at the
-    # unrotated (x0, z0), or rotating the wrong way, misses the readings by 20-50 µm RMS.
+    # A steeply tilted frame (80 mrad) high above the reference: drawing the section at the
+    # unrotated (x0, z0), or rotating the wrong way, shifts it by z0·sin θ = 40 µm along the
+    # line, three drawn samples and 50 µm RMS on the flanks.
     x = (np.arange(400) - 200) * 0.025
     z = 0.5 + np.tan(0.08) * x - 0.3 * np.clip(1 - np.abs(x - 0.3) / 0.24, 0, 1)
     z = z + np.random.default_rng(1).normal(0, 0.002, x.size)
     fits = machscan.fit_grooves(x, z[None], window=200, window_center=212)
     assert fits.ok[0] and fits.tilt[0] == pytest.approx(0.08, abs=0.002)
     fig = plot.levelled_frame(x, z, 0, fits, window_center=212)
-    (template,) = _data_lines(fig.axes[0], "fitted template")
+    (section,) = _data_lines(fig.axes[0], "fitted section")
     lf = machscan.level_groove_frame(x, z, window=200, window_center=212)
-    model = np.interp(lf.x, template.get_xdata(), template.get_ydata())
-    assert np.sqrt(np.mean((lf.z - model) ** 2)) == pytest.approx(fits.rms[0], rel=0.01)
+    _assert_section_drawn(section, lf, fits, 0)
 
 
 def test_drawing_into_given_axes(run):
@@ -226,18 +254,17 @@ def test_missing_matplotlib_says_how_to_install(run, monkeypatch):
         plot.contour_error_map(report)
 
 
-def test_levelled_frame_draws_the_v_template_for_v_fits():
-    import matplotlib
-
-    matplotlib.use("Agg")
+@pytest.mark.parametrize("template", ["v", "trapezoid", "tanh"])
+def test_levelled_frame_draws_the_template_of_the_fits(template):
     x = (np.arange(200) - 100) * 0.025
     u = np.abs(x - 0.07)
     z = np.where(u < 0.24, -0.31 * (1 - u / 0.24), 0.0) + np.random.default_rng(0).normal(0, 0.008, 200)
-    fits = machscan.fit_grooves(x, z[None, :], template="v", alpha=80.0)
-    assert fits.template == "v" and fits.select([0]).template == "v"
+    fits = machscan.fit_grooves(x, z[None, :], template=template)
+    assert fits.ok[0] and fits.template == template and fits.select([0]).template == template
     fig = machscan.plot.levelled_frame(x, z, 0, fits)
-    line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "fitted template")
-    lf = machscan.level_groove_frame(x, z)
-    # The drawn curve passes through the readings as closely as the fit's own rms.
-    resid = lf.z - np.interp(lf.x, line.get_xdata(), line.get_ydata())
-    assert abs(np.sqrt(np.mean(resid**2)) - fits.rms[0]) < 0.002
+    (section,) = _data_lines(fig.axes[0], "fitted section")
+    assert section.get_label() == f"fitted section ({machscan.GrooveModel(fits.model[0]).name.lower()})"
+    if template != "tanh":
+        assert section.get_label() == f"fitted section ({template})"
+    lf = machscan.level_groove_frame(x, z, template=template)
+    _assert_section_drawn(section, lf, fits, 0)

@@ -95,16 +95,16 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
     declared = _typed_dicts()
     x = (np.arange(64) - 32) * 0.025
     z = np.where(np.abs(x) < 0.25, -0.3, 0.0)[None, :]
-    d = machscan.grooves.DEFAULTS
-    fit_kw = {k: v for k, v in d.items() if k in inspect.signature(_core.fit_grooves).parameters}
-    level_kw = {k: v for k, v in d.items() if k in inspect.signature(_core.level_groove_frame).parameters}
+    options = dict(machscan.grooves.DEFAULTS)
     path = tmp_path / "t.apt"
     path.write_text("GOTO/1,2,3\n")
     scs = np.array([[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 0, 1.0]])
     results = {
-        "_GrooveFitArrays": _core.fit_grooves(x, z, **fit_kw),
-        "_LevelledFrameArrays": _core.level_groove_frame(x, z[0], **level_kw),
-        "_GrooveDefaults": _core.groove_defaults(),
+        "_GrooveFitArrays": _core.fit_grooves(x, z, options),
+        "_FrameViewArrays": _core.view_groove_frame(x, z[0], options),
+        "_GrooveOptions": _core.groove_defaults(),
+        "_CriteriaDefaults": _core.fit_criteria_defaults(),
+        "_Criteria": _core.fit_criteria_defaults()["tanh"],
         "_ContourErrorArrays": _core.contour_error(P[:10], P[:12]),
         "_CloudArrays": _core.read_cloud(Path(__file__).parents[2] / "shared/data/pcl-bunny-icp/bun0.pcd"),
         "_ToolpathArrays": _core.read_toolpath(path),

@@ -41,7 +41,15 @@ from machscan.cloud import (
     voxel_downsample,
 )
 from machscan.contours import ContourErrorResult, contour_error, match_contours, resample_polyline
-from machscan.grooves import FitCriteria, GrooveFits, GrooveStatus, LevelledFrame, fit_grooves, level_groove_frame
+from machscan.grooves import (
+    FitCriteria,
+    GrooveFits,
+    GrooveModel,
+    GrooveStatus,
+    LevelledFrame,
+    fit_grooves,
+    level_groove_frame,
+)
 from machscan.inspection import ContourResult, Decomposition, GrooveReport, inspect_grooves
 from machscan.io import CloudFile, FileFormatError, TriangleMesh, read_mesh, read_points, write_mesh, write_points
 from machscan.kinematics import (
@@ -67,6 +75,7 @@ __all__ = [
     "FileFormatError",
     "FitCriteria",
     "GrooveFits",
+    "GrooveModel",
     "GrooveReport",
     "GrooveStatus",
     "KinematicChain",

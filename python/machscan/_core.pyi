@@ -24,11 +24,11 @@ __all__ = [
     "crop_box",
     "estimate_normals",
     "euclidean_clusters",
+    "fit_criteria_defaults",
     "fit_grooves",
     "groove_defaults",
     "interpolate_poses",
     "knn_graph",
-    "level_groove_frame",
     "match_contours",
     "nearest_neighbors",
     "octree_simplify",
@@ -45,6 +45,7 @@ __all__ = [
     "scan_to_wcs",
     "surface_variation",
     "uniform_downsample",
+    "view_groove_frame",
     "voxel_downsample",
     "writable_formats",
     "write_cloud",
@@ -97,28 +98,42 @@ class _GrooveFitArrays(TypedDict):
     iterations: NDArray[np.int32]
     n_used: NDArray[np.int32]
     status: NDArray[np.uint8]
+    model: NDArray[np.uint8]
 
-class _LevelledFrameArrays(TypedDict):
+class _FrameViewArrays(TypedDict):
     x: _F64
     z: _F64
+    shape_x: _F64
+    shape_z: _F64
     tilt: float
-    start: _F64
-    status: int
+    fit: _GrooveFitArrays
 
-class _GrooveDefaults(TypedDict):
-    template: Literal["tanh", "v"]
+_Template = Literal["auto", "trapezoid", "v", "round", "u", "tanh"]
+
+class _GrooveOptions(TypedDict):
+    template: _Template
     alpha: float
-    fit_alpha: bool
     nominal_width: float
     window: int | None
     window_center: int | None
+    fit_alpha: bool
     spike_threshold: float | None
     min_depth: float
     min_valid: int
+    max_iterations: int | None
+    cost_tolerance: float | None
+    step_tolerance: float | None
+    gradient_tolerance: float | None
+
+class _Criteria(TypedDict):
     max_iterations: int
     cost_tolerance: float
     step_tolerance: float
     gradient_tolerance: float
+
+class _CriteriaDefaults(TypedDict):
+    tanh: _Criteria
+    section: _Criteria
 
 class _ContourErrorArrays(TypedDict):
     offset: _F64
@@ -429,45 +444,24 @@ def write_toolpath(
 
 # ---- grooves ----------------------------------------------------------------------------------
 
-def groove_defaults() -> _GrooveDefaults:
-    """The defaults of the groove fit options (``GrooveOptions::default()`` in the core), by name."""
-def fit_grooves(
-    x: ArrayLike,
-    z: ArrayLike,
-    *,
-    template: Literal["tanh", "v"],
-    alpha: float,
-    nominal_width: float,
-    window: int | None,
-    window_center: int | None,
-    fit_alpha: bool,
-    spike_threshold: float | None,
-    min_depth: float,
-    min_valid: int,
-    max_iterations: int,
-    cost_tolerance: float,
-    step_tolerance: float,
-    gradient_tolerance: float,
-) -> _GrooveFitArrays:
-    """Fit the groove template to every frame (SPEC G); ``machscan.fit_grooves`` documents it and
-    wraps the ``GrooveFitArrays`` this returns.
+def groove_defaults() -> _GrooveOptions:
+    """The defaults of the groove options (``GrooveOptions::default()`` in the core), by name; the
+    fit criteria are None (each method's own), whose values ``fit_criteria_defaults`` gives.
     """
-def level_groove_frame(
-    x: ArrayLike,
-    z: ArrayLike,
-    *,
-    alpha: float,
-    nominal_width: float,
-    window: int | None,
-    window_center: int | None,
-    spike_threshold: float | None,
-    min_depth: float,
-    min_valid: int,
-) -> _LevelledFrameArrays:
-    """One frame levelled as the fit sees it (SPEC G steps 1–4); ``machscan.level_groove_frame``
-    wraps the ``LevelledFrameArrays`` this returns: the levelled ``x``, ``z`` (absolute levelled
-    coordinates), ``tilt``, the initial guess ``start`` (x0, z0, d, w, α) and ``status`` (0 when
-    ready).
+def fit_criteria_defaults() -> _CriteriaDefaults:
+    """The fit criteria each method uses when they are left at None: ``{"tanh": {...},
+    "section": {...}}`` with ``max_iterations``, ``cost_tolerance``, ``step_tolerance``,
+    ``gradient_tolerance``.
+    """
+def fit_grooves(x: ArrayLike, z: ArrayLike, options: _GrooveOptions) -> _GrooveFitArrays:
+    """Measure the groove of every frame (SPEC G); ``machscan.fit_grooves`` documents it and wraps
+    the ``_GrooveFitArrays`` this returns.
+    """
+def view_groove_frame(x: ArrayLike, z: ArrayLike, options: _GrooveOptions) -> _FrameViewArrays:
+    """One frame as the fit sees it: the levelled readings ``x``, ``z``, the fitted shape
+    ``shape_x``, ``shape_z`` (evaluated here, so figures draw exactly what was fitted), the
+    ``tilt`` and the fit of that frame (``_GrooveFitArrays`` of length 1);
+    ``machscan.level_groove_frame`` wraps the ``_FrameViewArrays`` this returns.
     """
 
 # ---- spatial and contours ---------------------------------------------------------------------

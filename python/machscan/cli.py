@@ -12,6 +12,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import get_args
 
 import numpy as np
 
@@ -134,14 +135,15 @@ def _grooves(args: argparse.Namespace) -> int:
     scan = _load_scan(args)
     _check_readings(scan)
     cad = read_contours(args.cad)
-    report = inspect_grooves(scan, cad, window=args.window, alpha=args.alpha, nominal_width=args.nominal_width,
-                             cluster_radius=args.cluster_radius, max_match_distance=args.max_match_distance)
+    report = inspect_grooves(scan, cad, window=args.window, template=args.template, alpha=args.alpha,
+                             nominal_width=args.nominal_width, cluster_radius=args.cluster_radius,
+                             max_match_distance=args.max_match_distance, max_se_ratio=args.max_se_ratio)
     print(report.summary())
     paths = report.to_csv(args.out)
     print(f"\nwritten   : {', '.join(str(p) for p in paths)}")
     fitted = int(report.fits.ok.sum())
     if fitted < 0.5 * len(report.fits):
-        _warn(f"only {fitted} of {len(report.fits)} frames have a fitted groove: check --window, --nominal-width "
+        _warn(f"only {fitted} of {len(report.fits)} frames have a fitted groove: check --window, --template "
               f"and the invalid readings (--sentinel, --valid-range)")
     problem = report.matching_problem()
     if problem:
@@ -185,6 +187,7 @@ def _scan_arguments(p: argparse.ArgumentParser) -> None:
 def build_parser() -> argparse.ArgumentParser:
     from machscan import __version__
     from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
+    from machscan.grooves import Template
 
     parser = argparse.ArgumentParser(
         prog="machscan",
@@ -207,10 +210,16 @@ def build_parser() -> argparse.ArgumentParser:
     gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
     gr.add_argument("--window", type=int, default=200,
                     help="readings around the line center fitted per frame (default: %(default)s)")
+    gr.add_argument("--template", choices=get_args(Template), default=GROOVE_DEFAULTS["template"],
+                    help="groove shape fitted: the best of the four section models (auto), one of them, or the "
+                         "paper's tanh template (default: %(default)s)")
     gr.add_argument("--alpha", type=float, default=GROOVE_DEFAULTS["alpha"],
-                    help="template shape coefficient, 1/mm (default: %(default)s)")
+                    help="tanh template only: shape coefficient, 1/mm (default: %(default)s)")
     gr.add_argument("--nominal-width", type=float, default=GROOVE_DEFAULTS["nominal_width"],
-                    help="nominal groove width, mm (default: %(default)s)")
+                    help="tanh template only: starting groove width, mm (default: %(default)s)")
+    gr.add_argument("--max-se-ratio", type=float, default=None,
+                    help="leave out frames whose width or depth standard error exceeds this many times the "
+                         "median (default: keep all; 5 suits the tanh template)")
     gr.add_argument("--cluster-radius", type=float, default=5.0, help="contour segmentation distance, mm (default: %(default)s)")
     gr.add_argument("--max-match-distance", type=float, default=10.0,
                     help="largest distance between a scanned contour and its CAD contour, mm (default: %(default)s)")

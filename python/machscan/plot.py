@@ -31,7 +31,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
-from machscan.grooves import GrooveFits, GrooveStatus, level_groove_frame
+from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
+from machscan.grooves import GrooveFits, Template, level_groove_frame
 from machscan.inspection import ContourResult, GrooveReport
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -470,21 +471,6 @@ def error_along(
 
 # ---- one frame ------------------------------------------------------------------------------
 
-def _tanh_template(x: NDArray[np.float64], x0: float, z0: float, d: float, w: float, a: float) -> NDArray[np.float64]:
-    return z0 + 0.5 * d * (np.tanh(a * (x - x0 - w / 4)) - np.tanh(a * (x - x0 + w / 4)))
-
-
-def _v_template(x, x0, z0, d, w, beta):
-    """The V template of ``fit_grooves(template="v")``: z0 − d·(2/w)(s(u + w/2) − 2s(u) + s(u − w/2)),
-    s(t) = ln(1 + e^(βt))/β."""
-    u = np.asarray(x, dtype=np.float64) - x0
-
-    def s(t):
-        return np.logaddexp(0.0, beta * t) / beta
-
-    return z0 - d * (2.0 / w) * (s(u + w / 2) - 2.0 * s(u) + s(u - w / 2))
-
-
 def levelled_frame(
     x: ArrayLike,
     z: ArrayLike,
@@ -492,39 +478,39 @@ def levelled_frame(
     fits: GrooveFits | GrooveReport | None = None,
     *,
     window: int | None = 200,
-    alpha: float = 20.0,
-    nominal_width: float = 0.5,
-    window_center: int | None = None,
-    spike_threshold: float | None = 0.1,
-    min_depth: float = 0.03,
-    min_valid: int = 12,
+    template: Template | None = None,
+    alpha: float = GROOVE_DEFAULTS["alpha"],
+    nominal_width: float = GROOVE_DEFAULTS["nominal_width"],
+    window_center: int | None = GROOVE_DEFAULTS["window_center"],
+    spike_threshold: float | None = GROOVE_DEFAULTS["spike_threshold"],
+    min_depth: float = GROOVE_DEFAULTS["min_depth"],
+    min_valid: int = GROOVE_DEFAULTS["min_valid"],
     ax: Axes | None = None,
 ) -> Figure:
-    """One profiler frame levelled as the groove fit sees it, with the fitted template
-    (paper 000 fig. 4 and 10).
+    """One profiler frame levelled as the groove fit sees it, with the fitted section or
+    template (paper 000 fig. 4 and 10).
 
     The readings of the window, after the spike filter, are rotated by the surface tilt θ
-    (:func:`machscan.level_groove_frame`). The fit's groove center (x0, z0) is reported in the
-    frame's own coordinates, so it is rotated the same way, ``x' = cos θ·x0 + sin θ·z0``,
-    ``z' = −sin θ·x0 + cos θ·z0``, and the template
-    ``z' = z0' + ½d(tanh(α(x' − x0' − w/4)) − tanh(α(x' − x0' + w/4)))`` is drawn over the
-    readings with the fitted d, w and α. The surface width w and the depth d are marked.
+    (``x' = cos θ·x + sin θ·z``, ``z' = −sin θ·x + cos θ·z``) and the shape fitted to the frame
+    is drawn over them — evaluated by the core (:func:`machscan.level_groove_frame`), so the
+    figure shows exactly what was fitted. The width (between the flanks at the surface line)
+    and the depth (deepest point below it) are marked.
 
-    The levelling settings must be those of the fit (:func:`machscan.inspect_grooves` uses
-    ``window=200``, which is the default here).
+    The settings must be those of the fit (:func:`machscan.inspect_grooves` uses
+    ``window=200``, which is the default here; the template is taken from ``fits``).
 
     Parameters
     ----------
     x : array_like, shape (N,)
-        Abscissa of each reading along the laser line, mm
-        (``(np.arange(N) - profiler.i0) * profiler.pitch``).
+        Abscissa of each reading along the laser line, mm (``scan.profiler.x``).
     z : array_like, shape (F, N) or (N,)
         All frames (NaN marks an invalid reading), or just the one frame, mm.
     frame : int
         Index of the frame (its row of ``z`` and its entry in ``fits``).
     fits : GrooveFits or GrooveReport, optional
-        The fits to draw; without them the initial guess of the fit is drawn instead.
-    window, alpha, nominal_width, window_center, spike_threshold, min_depth, min_valid
+        The fits the figure is of: their template is used, and the frame's values are checked
+        against the drawing.
+    window, template, alpha, nominal_width, window_center, spike_threshold, min_depth, min_valid
         As in :func:`machscan.fit_grooves`; lengths in mm, α in mm⁻¹.
     ax : matplotlib Axes, optional
         Where to draw; default a new figure.
@@ -532,13 +518,12 @@ def levelled_frame(
     Returns
     -------
     matplotlib.figure.Figure
-        Levelled readings and template: levelled x' and z', mm.
+        Levelled readings and the fitted shape: levelled x' and z', mm.
 
     Examples
     --------
-    >>> x = (np.arange(scan.n_readings) - scan.profiler.i0) * scan.profiler.pitch
     >>> z = np.where(scan.valid_mask(), scan.frames, np.nan)
-    >>> fig = machscan.plot.levelled_frame(x, z, 120, report)
+    >>> fig = machscan.plot.levelled_frame(scan.profiler.x, z, 120, report)
     """
     plt = _pyplot()
     z_arr = np.asarray(z, dtype=np.float64)
@@ -554,34 +539,24 @@ def levelled_frame(
         fits = fits.fits
     if fits is not None and not -len(fits) <= frame < len(fits):
         raise ValueError(f"frame: {frame} is out of range for fits of {len(fits)} frames")
-    lf = level_groove_frame(x, row, alpha, nominal_width, window, window_center=window_center,
+    if template is None:
+        template = fits.template if fits is not None else GROOVE_DEFAULTS["template"]
+    lf = level_groove_frame(x, row, alpha, nominal_width, window, template=template, window_center=window_center,
                             spike_threshold=spike_threshold, min_depth=min_depth, min_valid=min_valid)
+    if fits is not None and not np.array_equal(lf.fit.width, fits.width[frame:frame + 1], equal_nan=True):
+        raise ValueError("fits: the frame's fit differs from this figure's: pass the settings the fits were made with")
     if ax is None:
         fig, ax = plt.subplots(figsize=(8.0, 4.0), layout="constrained")
     else:
         fig = ax.figure
     ax.plot(lf.x, lf.z, ls="none", marker=".", ms=4, color="tab:blue", label=f"levelled readings ({len(lf.x)})")
-
-    if fits is not None:
-        x0, z0 = float(fits.x0[frame]), float(fits.z0[frame])
-        d, w, a = float(fits.depth[frame]), float(fits.width[frame]), float(fits.alpha[frame])
-        status = GrooveStatus(int(fits.status[frame]))
-        c, s = np.cos(lf.tilt), np.sin(lf.tilt)
-        x0l, z0l = c * x0 + s * z0, -s * x0 + c * z0
-        label = "fitted template"
-        title = (f"Frame {frame}: w = {w:.4f} mm, d = {d:.4f} mm, rms {1000 * float(fits.rms[frame]):.1f} µm, "
-                 f"tilt {1000 * lf.tilt:.2f} mrad ({status.name.lower()})")
-    else:
-        x0l, z0l, d, w, a = (float(v) for v in lf.start)
-        label = "initial guess of the fit"
-        ready = "ready for the fit" if lf.status == GrooveStatus.CONVERGED else lf.status.name.lower()
-        title = f"Frame {frame}: levelled readings, tilt {1000 * lf.tilt:.2f} mrad ({ready})"
-    params = np.array([x0l, z0l, d, w, a])
-    if len(lf.x) and np.isfinite(params).all():
-        xs = np.linspace(float(lf.x.min()), float(lf.x.max()), 1000)
-        shape = _v_template if (fits is not None and getattr(fits, "template", "tanh") == "v") else _tanh_template
-        ax.plot(xs, shape(xs, x0l, z0l, d, w, a), color="tab:red", lw=1.5, label=label)
-        # Surface width at z0' and depth below it at x0'.
+    status = lf.status
+    model = lf.model.name.lower()
+    if len(lf.shape_x):
+        ax.plot(lf.shape_x, lf.shape_z, color="tab:red", lw=1.5, label=f"fitted section ({model})")
+    w, d = float(lf.fit.width[0]), float(lf.fit.depth[0])
+    if np.isfinite(w) and np.isfinite(d):
+        x0l, z0l = lf.to_levelled(float(lf.fit.x0[0]), float(lf.fit.z0[0]))
         ax.annotate("", xy=(x0l - w / 2, z0l), xytext=(x0l + w / 2, z0l),
                     arrowprops=dict(arrowstyle="<->", color="0.25", lw=0.9, shrinkA=0, shrinkB=0))
         box = dict(boxstyle="round,pad=0.2", fc="white", ec="none", alpha=0.85)
@@ -591,6 +566,10 @@ def levelled_frame(
                     arrowprops=dict(arrowstyle="<->", color="0.25", lw=0.9, shrinkA=0, shrinkB=0))
         ax.annotate(f"d = {d:.3f} mm", xy=(x0l + w / 2, z0l - d / 2), xytext=(8, 0), textcoords="offset points",
                     ha="left", va="center", fontsize="small", color="0.2", bbox=box)
+        title = (f"Frame {frame}: w = {w:.4f} mm, d = {d:.4f} mm, rms {1000 * float(lf.fit.rms[0]):.1f} µm, "
+                 f"tilt {1000 * lf.tilt:.2f} mrad ({model}, {status.name.lower()})")
+    else:
+        title = f"Frame {frame}: levelled readings, tilt {1000 * lf.tilt:.2f} mrad ({status.name.lower()})"
     ax.margins(y=0.15)
     ax.set_xlabel("x' along the laser line, levelled (mm)")
     ax.set_ylabel("z' height, levelled (mm)")

@@ -19,10 +19,11 @@ Model summary (numbers from paper 000 unless marked as assumptions):
 * Bending: a smooth low-order polynomial deflection ``w(x, y)`` whose peak ``|w|`` over the
   plate is ``bend`` (default 0.3 mm); largest at the x ends, as the paper's fig. 11 and 12
   describe. The engraved grooves sit on the bent surface.
-* Grooves: smooth V sections (quintic smoothstep flanks, rounded bottom and edges), width at
-  the surface ~0.48 mm and depth ~0.31 mm (paper:
-  0.4806 +- 0.0163 and 0.3124 +- 0.0148 mm), varying smoothly along the arc length, with small
-  laser-sintered lips (0.01-0.03 mm high) just outside both edges (paper fig. 10).
+* Grooves: V sections with straight flanks, the bottom rounded by the laser spot (radius
+  0.01 mm) and the top edges by 0.01 mm (assumptions), width between the flanks at the surface
+  ~0.48 mm and depth (deepest point) ~0.31 mm (paper: 0.4806 +- 0.0163 and 0.3124 +- 0.0148
+  mm), varying smoothly along the arc length, with small laser-sintered lips (0.01-0.03 mm
+  high) just outside both edges (paper fig. 10).
 * Engraving errors per contour: a rigid offset of a few tens of um (paper: offset error
   0.0255 +- 0.0148 mm) and a smooth normal wiggle of ~15 um RMS along the arc length
   (paper: local error 0.0123 +- 0.0062 mm).
@@ -51,11 +52,13 @@ __all__ = [
     "PLATE",
     "ContourShape",
     "Deflection",
+    "GrooveFrames",
     "GrooveTruth",
     "PeriodicProfile",
     "SurfaceError",
     "default_contours",
     "flat_plate_scan",
+    "groove_frames",
     "groove_scan",
     "pocket_plate",
     "surface_error",
@@ -449,32 +452,46 @@ def _random_deflection(rng: np.random.Generator, bend: float) -> Deflection:
 
 _LIP_OFFSET = 0.045    # lip crest outside the groove edge, mm
 _LIP_HALF_WIDTH = 0.05  # half width of the lip bead, mm
+_TIP_RADIUS = 0.01      # the groove bottom rounded by the laser spot, mm (assumption)
+_EDGE_RADIUS = 0.01     # the top edges rounded, mm (assumption)
 
 
 def _groove_section(s, width, depth, lip_in, lip_out):
     """Height of a groove cross-section relative to the surface (mm) and a steep-flank mask.
 
-    ``s`` is the signed distance to the groove centerline (positive outside the contour).
-    The section is a smooth V: ``-depth * (1 - S(|s| / (width / 2)))`` with the quintic
-    smoothstep ``S(t) = 10 t^3 - 15 t^4 + 6 t^5`` (``S = 1`` for ``t >= 1``). So the groove is
-    exactly ``width`` wide at the surface, exactly ``width / 2`` wide at half depth (the
-    template's definition of w, SPEC G), its bottom is exactly ``depth`` deep, and bottom and
-    edges are rounded (flanks up to 2.4 mm/mm steep for the nominal groove). Fitted with the
-    paper's tanh template at alpha = 20 mm^-1 and 0.008 mm noise, this section leaves a
-    residual RMS of ~0.0082 mm (paper 000: fit precision 0.0081 mm) and a depth bias of about
-    -2 % (paper: depth fit error 2.59 %), while a straight-flanked V would leave 0.011 mm and
-    bias the width by +19 %. Plus a lip bead ``h (1 - tau^2)^2`` of height ``lip_out`` /
-    ``lip_in`` on the outer / inner side, crest ``_LIP_OFFSET`` outside the edge.
+    ``s`` is the signed distance to the groove centerline (positive outside the contour). The
+    section is a V with straight flanks whose extensions meet the surface exactly ``width``
+    apart (the groove's width as machscan defines it), its bottom rounded by a circle of radius
+    ``_TIP_RADIUS`` tangent to both flanks, its top edges by ``_EDGE_RADIUS``; ``depth`` is the
+    deepest point (the rounded bottom), exactly. Plus a lip bead ``h (1 - tau^2)^2`` of height
+    ``lip_out`` / ``lip_in`` on the outer / inner side, crest ``_LIP_OFFSET`` outside the edge.
     """
-    a = np.abs(s)
-    t = np.minimum(a / (0.5 * width), 1.0)
-    v = 1.0 - t * t * t * (10.0 + t * (-15.0 + 6.0 * t))
-    tau = (a - 0.5 * width - _LIP_OFFSET) / _LIP_HALF_WIDTH
+    x = np.abs(s)
+    a = 0.5 * np.asarray(width, dtype=np.float64)
+    depth = np.asarray(depth, dtype=np.float64)
+    rt, re = _TIP_RADIUS, _EDGE_RADIUS
+    # Depth of the sharp V whose rounded bottom is `depth` deep: d = depth + rt (sec θ - 1),
+    # tan θ = d / a (a few fixed-point steps; the correction is a few % of the depth).
+    d = depth.copy()
+    for _ in range(30):
+        d = depth + rt * (np.sqrt(1.0 + (d / a) ** 2) - 1.0)
+    m = d / a                                   # flank slope
+    cos_t = 1.0 / np.sqrt(1.0 + m * m)
+    sin_t = m * cos_t
+    x_tip = rt * sin_t                          # tip arc meets the flank
+    c_tip = -d + rt / cos_t                     # tip arc center height
+    x_c = a + re * (1.0 / cos_t - 1.0) / m      # edge arc center (on the surface's level - re)
+    x_edge = x_c - re * sin_t                   # edge arc meets the flank
+    tip = c_tip - np.sqrt(np.maximum(rt * rt - x * x, 0.0))
+    flank_line = -d + m * x
+    edge = -re + np.sqrt(np.maximum(re * re - (x - x_c) ** 2, 0.0))
+    g = np.where(x < x_tip, tip, np.where(x <= x_edge, flank_line, np.where(x < x_c, edge, 0.0)))
+    tau = (x - a - _LIP_OFFSET) / _LIP_HALF_WIDTH
     bump = np.where(np.abs(tau) < 1.0, (1.0 - tau * tau) ** 2, 0.0)
     lip = np.where(s >= 0.0, lip_out, lip_in)
-    g = -depth * v + lip * bump
+    t = x / a
     flank = (t > 0.2) & (t < 0.85)
-    return g, flank
+    return g + lip * bump, flank
 
 
 # --------------------------------------------------------------------------------------------
@@ -1283,6 +1300,230 @@ def surface_error(points, frame_index, truth: GrooveTruth, *, clearance: float =
         n_outliers=int(np.count_nonzero(np.abs(e) > outlier_threshold)),
         outlier_threshold=float(outlier_threshold),
     )
+
+
+# --------------------------------------------------------------------------------------------
+# Single groove frames of every shape
+# --------------------------------------------------------------------------------------------
+
+#: The groove shapes :func:`groove_frames` makes.
+GROOVE_SHAPES = ("v", "u", "u_walls", "trapezoid")
+
+
+def _fillet_polyline(pts, radii, arc_step=0.002):
+    """The polyline through ``pts`` (K, 2) with interior vertex k rounded by a circular arc of
+    radius ``radii[k]`` (0: sharp; reduced where the arc would not fit its segments)."""
+    pts = np.asarray(pts, dtype=np.float64)
+    out = [pts[0]]
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    for k in range(1, len(pts) - 1):
+        r, p = radii[k], pts[k]
+        a = (p - pts[k - 1]) / seg[k - 1]
+        b = (pts[k + 1] - p) / seg[k]
+        turn = math.acos(float(np.clip(a @ b, -1.0, 1.0)))
+        if r <= 0 or turn < 1e-9:
+            out.append(p)
+            continue
+        t = min(r * math.tan(turn / 2), 0.5 * min(seg[k - 1], seg[k]))
+        r = t / math.tan(turn / 2)
+        t1, t2 = p - a * t, p + b * t
+        left = a[0] * b[1] - a[1] * b[0] > 0
+        n = np.array([-a[1], a[0]]) if left else np.array([a[1], -a[0]])
+        c = t1 + n * r
+        a1 = math.atan2(t1[1] - c[1], t1[0] - c[0])
+        a2 = math.atan2(t2[1] - c[1], t2[0] - c[0])
+        da = (a2 - a1 + math.pi) % (2 * math.pi) - math.pi
+        ang = a1 + da * np.linspace(0, 1, max(2, int(abs(da) * r / arc_step) + 1))
+        out.extend(np.c_[c[0] + r * np.cos(ang), c[1] + r * np.sin(ang)])
+    out.append(pts[-1])
+    poly = np.array(out)
+    # Densified so that the readings interpolate the section to well under a micrometre.
+    steps = np.maximum(np.ceil(np.linalg.norm(np.diff(poly, axis=0), axis=1) / 0.002).astype(int), 1)
+    dense = [poly[:1]]
+    for q0, q1, m in zip(poly[:-1], poly[1:], steps):
+        dense.append(q0 + (q1 - q0) * (np.arange(1, m + 1) / m)[:, None])
+    return np.vstack(dense)
+
+
+def _groove_polyline(shape: str, rng: np.random.Generator) -> tuple[np.ndarray, float]:
+    """A groove section over |u| ≤ 4 mm (surface v = 0) and its width between the flanks at
+    the surface (for a circular U, where the arc meets it)."""
+    far = 4.0
+    if shape == "v":
+        while True:
+            w, d = rng.uniform(0.2, 1.2), rng.uniform(0.05, 0.5)
+            if 15 <= math.degrees(math.atan2(d, w / 2)) <= 70:
+                break
+        r_tip = 0.0 if rng.random() < 0.4 else rng.uniform(0.0, 0.05)
+        r_top = 0.0 if rng.random() < 0.4 else rng.uniform(0.0, 0.03)
+        pts = [(-far, 0), (-w / 2, 0), (0, -d), (w / 2, 0), (far, 0)]
+        return _fillet_polyline(pts, [0, r_top, r_tip, r_top, 0]), w
+    if shape == "trapezoid":
+        while True:
+            w, d, phi = rng.uniform(0.2, 1.2), rng.uniform(0.05, 0.5), rng.uniform(30, 80)
+            run = d / math.tan(math.radians(phi))
+            if w - 2 * run >= max(0.25 * w, 0.05):
+                break
+        r_bot = 0.0 if rng.random() < 0.4 else rng.uniform(0.0, 0.03)
+        r_top = 0.0 if rng.random() < 0.4 else rng.uniform(0.0, 0.03)
+        pts = [(-far, 0), (-w / 2, 0), (-w / 2 + run, -d), (w / 2 - run, -d), (w / 2, 0), (far, 0)]
+        return _fillet_polyline(pts, [0, r_top, r_bot, r_bot, r_top, 0]), w
+    if shape == "u":
+        # A ball-end cutter: a circular arc of radius R, d ≤ R deep.
+        while True:
+            w = rng.uniform(0.2, 1.2)
+            d = rng.uniform(0.05, min(0.5, w / 2))
+            if d / w >= 0.1:
+                break
+        radius = (w * w / 4 + d * d) / (2 * d)
+        a0 = math.asin(min(1.0, (w / 2) / radius))
+        ang = np.linspace(-math.pi / 2 - a0, -math.pi / 2 + a0, 2000)
+        arc = np.c_[radius * np.cos(ang), radius - d + radius * np.sin(ang)]
+        arc[0], arc[-1] = (-w / 2, 0.0), (w / 2, 0.0)
+        return np.vstack([[(-far, 0)], arc, [(far, 0)]]), w
+    if shape == "u_walls":
+        # Walls (vertical, or drafted up to 5°) tangent to a round bottom.
+        while True:
+            w = rng.uniform(0.2, 1.0)
+            draft = math.radians(rng.uniform(0.0, 5.0)) if rng.random() < 0.7 else 0.0
+            d_min = (w / 2) * math.cos(draft) / (1 + math.sin(draft))
+            if d_min <= 0.48:
+                d = rng.uniform(max(0.05, d_min), 0.5)
+                break
+        rho = (w / 2 - d * math.tan(draft)) * math.cos(draft) / (1 - math.sin(draft))
+        ang = np.linspace(math.pi + draft, 2 * math.pi - draft, 2000)
+        arc = np.c_[rho * np.cos(ang), -d + rho + rho * np.sin(ang)]
+        r_top = 0.0 if rng.random() < 0.5 else rng.uniform(0.0, 0.03)
+        left = _fillet_polyline(np.array([(-far, 0), (-w / 2, 0), tuple(arc[0]), tuple(arc[1])]), [0, r_top, 0, 0])[:-1]
+        right = _fillet_polyline(np.array([tuple(arc[-2]), tuple(arc[-1]), (w / 2, 0), (far, 0)]), [0, 0, r_top, 0])[1:]
+        return np.vstack([left, arc[1:-1], right]), w
+    raise ValueError(f"shape: expected one of {', '.join(GROOVE_SHAPES)}, got {shape!r}")
+
+
+def _topmost(px: np.ndarray, pz: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The highest point of the polyline on each vertical line x (NaN where there is none): an
+    overhanging wall hides what lies below it, as it does from the sensor."""
+    if np.all(np.diff(px) > 0):
+        return np.interp(x, px, pz, left=np.nan, right=np.nan)
+    xa, xb, za, zb = px[:-1], px[1:], pz[:-1], pz[1:]
+    keep = xa != xb
+    xa, xb, za, zb = xa[keep], xb[keep], za[keep], zb[keep]
+    lo, hi = np.minimum(xa, xb), np.maximum(xa, xb)
+    out = np.full(len(x), np.nan)
+    for j, xj in enumerate(x):
+        m = (lo <= xj) & (xj <= hi)
+        if m.any():
+            out[j] = np.max(za[m] + (xj - xa[m]) / (xb[m] - xa[m]) * (zb[m] - za[m]))
+    return out
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class GrooveFrames:
+    """Profiler frames across single grooves, with their exact truth (:func:`groove_frames`).
+
+    Attributes
+    ----------
+    x : ndarray (N,)
+        Reading abscissae, mm.
+    z : ndarray (F, N)
+        Readings, mm; NaN where a reading was lost.
+    width : ndarray (F,)
+        Distance between the flanks where they meet the surface line (straight flanks extended
+        through any rounded top corner; a circular U where the arc meets the surface), mm.
+    depth : ndarray (F,)
+        Deepest point of the groove below the surface line, mm.
+    center : ndarray (F, 2)
+        (x, z) of the midpoint of the two crossings, in the frame, mm.
+    tilt : ndarray (F,)
+        Surface tilt, rad.
+    shape : str
+    """
+
+    x: np.ndarray
+    z: np.ndarray
+    width: np.ndarray
+    depth: np.ndarray
+    center: np.ndarray
+    tilt: np.ndarray
+    shape: str
+
+    def __repr__(self) -> str:
+        return f"GrooveFrames({self.shape}: {len(self.z)} frames x {len(self.x)} readings)"
+
+
+def groove_frames(
+    shape: str,
+    n: int,
+    seed: int = 0,
+    *,
+    noise: float = 0.008,
+    readings: int = 200,
+    pitch: float = 0.025,
+    max_tilt: float = 0.1,
+    tilt_mode: str = "rotate",
+    lips: float = 0.05,
+    dropout: float = 0.03,
+    flank_dropout: float = 0.15,
+    spike_rate: float = 5e-4,
+) -> GrooveFrames:
+    """Frames across single grooves of one shape, with exact truth: the plants' groove shapes
+    for testing a groove measurement (widths 0.2–1.2 mm, depths 0.05–0.5 mm).
+
+    Shapes: ``"v"`` (flanks 15–70°, sharp or rounded tip up to 0.05 mm, top corners up to
+    0.03 mm), ``"u"`` (a ball cutter's circular arc, depth ≤ radius), ``"u_walls"`` (vertical or
+    drafted walls on a round bottom), ``"trapezoid"`` (flanks 30–80°, flat floor at least a
+    quarter of the width, fillets up to 0.03 mm). Each frame: recast lips up to ``lips`` mm
+    high just outside the edges (0 with probability 1/4, independent per side), the groove
+    center within ±1 mm of the window center, a tilt up to ``max_tilt`` rad as a rotation
+    (``tilt_mode="rotate"``) or as ``z += tan(tilt)·x`` (``"shear"``), a height offset up to
+    ±0.5 mm; each reading the topmost point of the section on its vertical line, then Gaussian
+    noise, dropouts (and more on flanks steeper than 0.5) and spikes of 0.2–1 mm.
+
+    Examples
+    --------
+    >>> g = machscan.synth.groove_frames("v", 200, seed=1)
+    >>> fits = machscan.fit_grooves(g.x, g.z)
+    >>> np.median(np.abs(fits.width - g.width))
+    """
+    if tilt_mode not in ("rotate", "shear"):
+        raise ValueError(f"tilt_mode: expected 'rotate' or 'shear', got {tilt_mode!r}")
+    rng = np.random.default_rng(seed)
+    x = (np.arange(readings) - readings // 2) * pitch
+    z = np.empty((n, readings))
+    width, depth, tilt, center = np.empty(n), np.empty(n), np.empty(n), np.empty((n, 2))
+    for k in range(n):
+        poly, w = _groove_polyline(shape, rng)
+        depth[k] = -poly[:, 1].min()
+        width[k] = w
+        u, v = poly[:, 0], poly[:, 1].copy()
+        if lips > 0:
+            for side in (-1, 1):
+                h = 0.0 if rng.random() < 0.25 else rng.uniform(0.0, lips)
+                half = 0.5 * rng.uniform(0.05, 0.15)
+                crest = side * (w / 2 + rng.uniform(-0.005, 0.02) + half)
+                tau = (u - crest) / half
+                v += h * np.where(np.abs(tau) < 1, (1 - tau * tau) ** 2, 0.0)
+        theta = rng.uniform(-max_tilt, max_tilt)
+        xc, z_off = rng.uniform(-1.0, 1.0), rng.uniform(-0.5, 0.5)
+        if tilt_mode == "rotate":
+            c, s = math.cos(theta), math.sin(theta)
+            px, pz = xc + u * c - v * s, z_off + u * s + v * c
+        else:
+            px, pz = xc + u, z_off + v + math.tan(theta) * u
+        zk = _topmost(px, pz, x)
+        inside = np.abs(x - xc) < (w / 2) * math.cos(theta)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            slope = np.abs(np.interp(x, px, np.gradient(pz, px))) if np.all(np.diff(px) > 0) else np.ones(readings)
+        lost = rng.random(readings) < dropout
+        lost |= inside & (slope > 0.5) & (rng.random(readings) < flank_dropout)
+        zk = zk + noise * rng.standard_normal(readings)
+        spikes = rng.random(readings) < spike_rate
+        zk[spikes] += rng.choice([-1.0, 1.0], spikes.sum()) * rng.uniform(0.2, 1.0, spikes.sum())
+        zk[lost] = np.nan
+        z[k] = zk
+        tilt[k] = theta
+        center[k] = (xc, z_off)
+    return GrooveFrames(x=x, z=z, width=width, depth=depth, center=center, tilt=tilt, shape=shape)
 
 
 def flat_plate_scan(seed: int = 0, *, readings: int = 400, keep_every: int = 400,

@@ -545,7 +545,8 @@ fn edge_rule(p: &Pieces, fitted: &[f64], e: f64, side: f64, gap: (f64, f64)) -> 
     0.5 * (a + b)
 }
 
-/// Standard errors of width and depth from `σ̂² (JᵀJ)⁻¹` of the chosen fit, by the delta method.
+/// Standard errors of width and depth from `σ̂² (JᵀJ)⁺` of a fit, by the delta method (they do
+/// not include the uncertainty of the model choice).
 fn standard_errors(fit: &ModelFit, m: usize) -> (f64, f64) {
     let np = fit.model.n_params();
     let mut a = nalgebra::DMatrix::<f64>::zeros(np, np);
@@ -554,7 +555,10 @@ fn standard_errors(fit: &ModelFit, m: usize) -> (f64, f64) {
             a[(i, j)] = fit.jtj[i][j];
         }
     }
-    let Some(inv) = a.try_inverse() else { return (f64::INFINITY, f64::INFINITY) };
+    // The pseudo-inverse: a parameter the data do not fix (a fillet of zero radius, a rounding at
+    // its bound) has no variance to give, rather than an infinite one.
+    let scale = (0..np).map(|i| a[(i, i)]).fold(0.0, f64::max);
+    let Ok(inv) = a.pseudo_inverse(1e-10 * scale.max(1e-300)) else { return (f64::INFINITY, f64::INFINITY) };
     let sigma2 = 2.0 * fit.cost / (m.saturating_sub(np).max(1)) as f64;
     let outputs = |q: &[f64]| {
         let p = Pieces::of(fit.model, q);
@@ -772,14 +776,21 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
     let p = chosen.pieces();
     let (mut xl, mut xr) = p.crossings();
     let mut depth = p.d;
+    let (se_width, mut se_depth) = standard_errors(&chosen, us.len());
     let v_fit = fits.iter().find(|f| f.model == SectionModel::V);
     let r_fit = fits.iter().find(|f| f.model == SectionModel::Round);
     if let (true, Some(fv), Some(fr)) = (matches!(chosen.model, SectionModel::V | SectionModel::Round), v_fit, r_fit) {
-        // Akaike weights of the sharp and the round-bottomed V.
+        // Akaike weights of the sharp and the round-bottomed V; the standard error of the
+        // averaged depth includes the spread between the two (Burnham & Anderson 2002, §4.3).
         let (lv_, lr_) = (-0.5 * fv.criterion(sigma), -0.5 * fr.criterion(sigma));
         let top = lv_.max(lr_);
         let (wv, wr) = ((lv_ - top).exp(), (lr_ - top).exp());
-        depth = (wv * fv.pieces().d + wr * fr.pieces().d) / (wv + wr);
+        let (dv, dr) = (fv.pieces().d, fr.pieces().d);
+        depth = (wv * dv + wr * dr) / (wv + wr);
+        let (sv, sr) = (standard_errors(fv, us.len()).1, standard_errors(fr, us.len()).1);
+        // A round V whose rounding sits at zero has a singular JᵀJ: its depth is the sharp V's.
+        let (sv, sr) = (if sv.is_finite() { sv } else { sr }, if sr.is_finite() { sr } else { sv });
+        se_depth = ((wv * (sv * sv + (dv - depth).powi(2)) + wr * (sr * sr + (dr - depth).powi(2))) / (wv + wr)).sqrt();
     }
     if matches!(chosen.model, SectionModel::Trapezoid | SectionModel::Round) {
         xl = edge_rule(&p, &us, xl, -1.0, (lv.u[il], lv.u[(il + 1).min(n - 1)]));
@@ -797,7 +808,6 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
         return (GrooveFit::failed(GrooveStatus::NoGroove, us.len()), Detail::of(lv, Some((p, chosen.gamma))));
     }
     let (uc, vc) = (0.5 * (xl + xr), lv.b * lv.cos);
-    let (se_width, se_depth) = standard_errors(&chosen, us.len());
     let fit = GrooveFit {
         x0: lv.cos * uc - lv.sin * vc,
         z0: lv.sin * uc + lv.cos * vc,
