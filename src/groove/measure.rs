@@ -100,24 +100,33 @@ fn percentile(values: &mut [f64], q: f64) -> f64 {
     a + t * (b - a)
 }
 
+/// The running median of 3, with Tukey's end-point rule at the two ends (the median of the end
+/// reading, its smoothed neighbor and the line through the next two smoothed values carried to
+/// the end): one noisy end reading is not taken for a groove bottom.
 fn median3(v: &[f64]) -> Vec<f64> {
+    let n = v.len();
     let mut out = v.to_vec();
-    for i in 1..v.len().saturating_sub(1) {
-        let (a, b, c) = (v[i - 1], v[i], v[i + 1]);
-        out[i] = a.min(b).max(a.max(b).min(c));
+    let med = |a: f64, b: f64, c: f64| a.min(b).max(a.max(b).min(c));
+    for i in 1..n.saturating_sub(1) {
+        out[i] = med(v[i - 1], v[i], v[i + 1]);
+    }
+    if n >= 4 {
+        out[0] = med(v[0], out[1], 3.0 * out[1] - 2.0 * out[2]);
+        out[n - 1] = med(v[n - 1], out[n - 2], 3.0 * out[n - 2] - 2.0 * out[n - 3]);
     }
     out
 }
 
-/// The 5-reading moving mean; the first and last two entries are the readings themselves.
+/// The 5-reading moving mean; near the ends, the mean of the readings within ±2 there are (one
+/// noisy end reading alone is not a groove bottom).
 fn mean5(v: &[f64]) -> Vec<f64> {
-    let mut out = v.to_vec();
-    if v.len() >= 5 {
-        for i in 2..v.len() - 2 {
-            out[i] = (v[i - 2] + v[i - 1] + v[i] + v[i + 1] + v[i + 2]) / 5.0;
-        }
-    }
-    out
+    let n = v.len();
+    (0..n)
+        .map(|i| {
+            let near = &v[i.saturating_sub(2)..(i + 3).min(n)];
+            near.iter().sum::<f64>() / near.len() as f64
+        })
+        .collect()
 }
 
 /// Readings kept by the spike test: a reading is a spike when the linear extrapolations from
@@ -944,5 +953,20 @@ mod tests {
         let (x, z) = frame(&p, 0.0, 0.008, 0.0, &mut seed);
         let f = fit_frame(&x, &z, &GrooveOptions::default());
         assert_eq!(f.status, GrooveStatus::Clipped, "{f:?}");
+    }
+
+    #[test]
+    fn one_deep_reading_at_an_end_is_not_a_groove_bottom() {
+        // The smoothers' ends: a single reading 60 µm low (7σ) at either end of a flat frame.
+        let x: Vec<f64> = (0..200).map(|i| (i as f64 - 100.0) * 0.025).collect();
+        let mut seed = 3u64;
+        for end in [0, 199] {
+            let mut z: Vec<f64> = x.iter().map(|_| 0.008 * gauss(&mut seed)).collect();
+            z[end] -= 0.06;
+            assert!(median3(&z)[end] > -0.03, "{}", median3(&z)[end]);
+            assert!(mean5(&z)[end] > -0.03, "{}", mean5(&z)[end]);
+            let f = fit_frame(&x, &z, &GrooveOptions::default());
+            assert_eq!(f.status, GrooveStatus::NoGroove, "{f:?}");
+        }
     }
 }
