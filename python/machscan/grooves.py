@@ -55,8 +55,10 @@ class FitCriteria:
     ============================  ================================  =================================
     field                         section models (the default)      ``template="tanh"`` (paper)
     ============================  ================================  =================================
-    ``max_iterations``            15 per model (the chosen one      100
-                                  may get as many again)
+    ``max_iterations``            15 per model (8 for the           100
+                                  trapezoid that screens a frame
+                                  first; a chosen model not yet
+                                  converged gets 3× as many more)
     ``cost_tolerance``            1e-5: an accepted step lowering   0 (off): paper 000's
                                   the cost less, relatively, ends   ``½ Σ f²/t < ε``
     ``step_tolerance``            1e-6: no parameter moves more     1e-8, relative to the

@@ -101,7 +101,9 @@ impl FitModel {
 /// the section models: `measure::SECTION_CRITERIA`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FitCriteria {
-    /// Iterations per fit (the section models: per model; the chosen one may get as many again).
+    /// Iterations per fit (the section models: per model, half of it for the trapezoid that
+    /// screens the frame first; a chosen model that has not converged gets three times as many
+    /// more).
     pub max_iterations: Option<usize>,
     /// The template: paper 000's `½ Σ f² / t < ε`; the section models: the relative cost
     /// decrease of an accepted step below which the fit has converged.
