@@ -17,10 +17,13 @@
    both, the same model from the same start (``lm``, analytic Jacobian). scipy runs on a
    subset (--scipy-frames) because it is slow; all rates are frames/s. Targets: >= 50x scipy
    and >= 40,000 frames/s.
+   Then the default call and the tanh template on the frames issue #3 set the target on
+   (tanh-shaped grooves; --only issue3).
 3. ``euclidean_clusters`` on >= 500,000 groove-center-like points against Open3D
    ``cluster_dbscan(eps, min_points=1)``, same points, same partition checked. Target: >= 2x.
 
-    python benchmarks/bench_grooves.py [--frames 20000] [--scipy-frames 1000] [--points 500000]
+    python benchmarks/bench_grooves.py [--only accuracy|speed|issue3|clusters] [--frames 20000]
+        [--scipy-frames 1000] [--points 500000]
 """
 
 from __future__ import annotations
@@ -207,6 +210,23 @@ def bench_speed(n_frames: int, n_scipy: int) -> None:
               f" {agree:.1f} µm (machscan: {ours:.1f} µm)")
 
 
+def bench_issue3_frames(n_frames: int) -> None:
+    """The frames issue #3 set the speed target on: tanh-shaped grooves (paper 000's template,
+    depth 0.31, width 0.48 mm), 1 % invalid readings, a shear tilt up to 0.05, 8 µm noise."""
+    rng = np.random.default_rng(0)
+    x = (np.arange(200) - 100) * 0.025
+    x0 = rng.uniform(-0.4, 0.4, (n_frames, 1))
+    d = rng.normal(0.3124, 0.0148, (n_frames, 1))
+    w = rng.normal(0.4806, 0.0163, (n_frames, 1))
+    z = tanh_template((x0, 0.0, d, w), x) + rng.uniform(-0.05, 0.05, (n_frames, 1)) * x
+    z += rng.normal(0, 0.008, z.shape)
+    z[rng.random(z.shape) < 0.01] = np.nan
+    print(f"\nissue #3 frames (tanh grooves), {n_frames} frames, {os.cpu_count()} cores")
+    for template in ("auto", "tanh"):
+        t, fits = _best_of(lambda template=template: machscan.fit_grooves(x, z, template=template), 5)
+        print(f"  fit_grooves(template={template!r}): {n_frames / t:10,.0f} frames/s  ({int(fits.ok.sum())} converged)")
+
+
 # ---- clustering -----------------------------------------------------------------------------
 
 
@@ -241,12 +261,14 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=20000)
     ap.add_argument("--scipy-frames", type=int, default=1000)
     ap.add_argument("--points", type=int, default=500000)
-    ap.add_argument("--only", choices=["accuracy", "speed", "clusters"], help="run one part")
+    ap.add_argument("--only", choices=["accuracy", "speed", "issue3", "clusters"], help="run one part")
     args = ap.parse_args()
     if args.only in (None, "accuracy"):
         bench_accuracy(args.accuracy_frames)
     if args.only in (None, "speed"):
         bench_speed(args.frames, args.scipy_frames)
+    if args.only in (None, "issue3"):
+        bench_issue3_frames(args.frames)
     if args.only in (None, "clusters"):
         bench_clusters(args.points)
 
