@@ -298,6 +298,20 @@ pub(super) fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f
     Some((k, mz - k * mx))
 }
 
+/// Keeps the pairs `(a[i], b[i])` where `keep[i]`, in place.
+pub(super) fn retain_pairs(a: &mut Vec<f64>, b: &mut Vec<f64>, keep: &[bool]) {
+    let mut j = 0;
+    for i in 0..a.len() {
+        if keep[i] {
+            a[j] = a[i];
+            b[j] = b[i];
+            j += 1;
+        }
+    }
+    a.truncate(j);
+    b.truncate(j);
+}
+
 /// Levelled points and the template problem on them; `P` = 4 (α fixed) or 5 (α fitted).
 ///
 /// Evaluation is split into element-wise passes over the frame (tanh terms, residuals, template
@@ -532,16 +546,7 @@ pub fn level_frame(
                 (pz[i] - median5(w[0], w[1], w[2], w[3], w[4])).abs() <= th
             })
             .collect();
-        let mut j = 0;
-        for i in 0..px.len() {
-            if keep[i] {
-                px[j] = px[i];
-                pz[j] = pz[i];
-                j += 1;
-            }
-        }
-        px.truncate(j);
-        pz.truncate(j);
+        retain_pairs(&mut px, &mut pz, &keep);
         if px.len() < o.min_valid.max(6) {
             return Err((GrooveStatus::TooFewValid, px.len()));
         }

@@ -17,7 +17,7 @@
 //! 5. width = the chosen section's flank crossings with the surface line, depth = its deepest
 //!    point (for V's an Akaike-weighted mean of the sharp and the round-bottomed V, since a tip
 //!    rounded by about a reading spacing is barely visible), center = the crossings' midpoint.
-use super::fit::{fit_line, GrooveFit, GrooveStatus};
+use super::fit::{fit_line, retain_pairs, GrooveFit, GrooveStatus};
 use super::section::{pieces_jacobian, Beams, Pieces, SectionModel};
 use crate::optim::{bounded_levenberg_marquardt, BoundedLeastSquares, BoundedLmOptions, LeastSquares};
 use nalgebra::{SMatrix, SVector};
@@ -649,16 +649,7 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
     // 1. Spikes.
     if let Some(th) = o.spike_threshold {
         let keep = spike_free(&px, &pz, th);
-        let mut j = 0;
-        for i in 0..px.len() {
-            if keep[i] {
-                px[j] = px[i];
-                pz[j] = pz[i];
-                j += 1;
-            }
-        }
-        px.truncate(j);
-        pz.truncate(j);
+        retain_pairs(&mut px, &mut pz, &keep);
         if px.len() < min_valid {
             return failed(GrooveStatus::TooFewValid, px.len());
         }
