@@ -14,6 +14,7 @@ pub mod io;
 pub mod kinematics;
 pub mod optim;
 pub mod python;
+pub mod registration;
 pub mod spatial;
 
 pub use error::{Error, Result};

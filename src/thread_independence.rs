@@ -204,3 +204,24 @@ fn readers(#[case] threads: usize) {
     }
     assert_eq!(a, b);
 }
+
+#[apply(threads)]
+fn icp_point_to_point_and_point_to_plane(#[case] threads: usize) {
+    use crate::registration::{icp, IcpMethod, IcpOptions};
+    let target = surface(8_000);
+    let (normals, _, _) = cloud::estimate_normals(&target, Neighborhood::Knn(12)).unwrap();
+    let mut shift = nalgebra::Matrix4::identity();
+    shift[(0, 3)] = 0.3;
+    shift[(1, 3)] = -0.2;
+    let source: Vec<[f64; 3]> = target.iter().map(|&p| crate::geom::transform_point(&shift, p)).collect();
+    for method in [IcpMethod::PointToPoint, IcpMethod::PointToPlane] {
+        let o = IcpOptions { method, max_iterations: 10, ..IcpOptions::new(1.0) };
+        let run = || icp(&source, &target, Some(&normals), &nalgebra::Matrix4::identity(), &o).unwrap();
+        let (a, b) = on_threads_and_one(threads, run);
+        assert_eq!(a.transformation.map(f64::to_bits), b.transformation.map(f64::to_bits), "{method:?}");
+        assert_eq!(
+            (a.fitness.to_bits(), a.rmse.to_bits(), a.iterations),
+            (b.fitness.to_bits(), b.rmse.to_bits(), b.iterations)
+        );
+    }
+}

@@ -40,6 +40,12 @@ impl PointIndex {
         (r.item as usize, r.distance.sqrt())
     }
 
+    /// Nearest point: (index, squared distance).
+    pub fn nearest_squared(&self, q: &[f64; 3]) -> (usize, f64) {
+        let r = self.tree.query(q).nearest_one::<SquaredEuclidean<f64>>().execute();
+        (r.item as usize, r.distance)
+    }
+
     /// The `k` nearest points, nearest first: (index, squared distance).
     pub fn knn(&self, q: &[f64; 3], k: usize) -> Vec<(usize, f64)> {
         let Some(k) = NonZeroUsize::new(k) else { return Vec::new() };
