@@ -109,6 +109,11 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
         "_CloudArrays": _core.read_cloud(Path(__file__).parents[2] / "shared/data/pcl-bunny-icp/bun0.pcd"),
         "_ToolpathArrays": _core.read_toolpath(path),
         "_MountCalibrationArrays": _core.calibrate_mount(scs, scs + 1.0),
+        "_IcpArrays": _core.icp(
+            P[:50], P[:60], 1.0, init=None, target_normals=None, method="point_to_point", max_iterations=3,
+            relative_fitness=0.0, relative_rmse=0.0, robust=None, robust_scale=None, trim=0.0, mse_threshold=None,
+        ),
+        "_IcpDefaults": _core.icp_defaults(),
     }
     assert set(results) == set(declared), "every TypedDict of the stub is checked here"
     for name, value in results.items():
@@ -117,7 +122,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
 
 def _public_callables():
     modules = [machscan, machscan.io, machscan.cloud, machscan.kinematics, machscan.grooves, machscan.contours,
-               machscan.inspection, machscan.scan]
+               machscan.inspection, machscan.scan, machscan.registration]
     seen = {}
     for m in modules:
         for name in getattr(m, "__all__", []):

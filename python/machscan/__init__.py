@@ -14,6 +14,7 @@ The API is organised by domain, and the everyday names are also here at the top 
 - :mod:`machscan.grooves` — the per-frame groove fit;
 - :mod:`machscan.contours` — CAD polylines, contour matching and the contour error;
 - :mod:`machscan.inspection` — the groove inspection workflow of paper 000;
+- :mod:`machscan.registration` — ICP: where a measured part sits against its model;
 - :mod:`machscan.cad` — CAD contours from CSV and APT files;
 - :mod:`machscan.synth` — synthetic scans and parts with exact ground truth;
 - :mod:`machscan.plot` — figures (needs matplotlib).
@@ -22,7 +23,7 @@ The API is organised by domain, and the everyday names are also here at the top 
 import importlib as _importlib
 import warnings as _warnings
 
-from machscan import cloud, contours, grooves, inspection, io, kinematics, scan
+from machscan import cloud, contours, grooves, inspection, io, kinematics, registration, scan
 from machscan._core import __version__
 from machscan.cloud import (
     crop_box,
@@ -64,6 +65,7 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
+from machscan.registration import IcpResult, icp
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
@@ -78,6 +80,7 @@ __all__ = [
     "GrooveModel",
     "GrooveReport",
     "GrooveStatus",
+    "IcpResult",
     "KinematicChain",
     "LevelledFrame",
     "MountCalibration",
@@ -98,6 +101,7 @@ __all__ = [
     "euclidean_clusters",
     "fit_grooves",
     "grooves",
+    "icp",
     "inspect_grooves",
     "inspection",
     "interpolate_poses",
@@ -115,6 +119,7 @@ __all__ = [
     "read_mesh",
     "read_points",
     "read_scan_csv",
+    "registration",
     "remove_duplicates",
     "remove_radius_outliers",
     "remove_statistical_outliers",

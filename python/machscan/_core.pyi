@@ -27,6 +27,8 @@ __all__ = [
     "fit_criteria_defaults",
     "fit_grooves",
     "groove_defaults",
+    "icp",
+    "icp_defaults",
     "interpolate_poses",
     "knn_graph",
     "match_contours",
@@ -63,6 +65,26 @@ class FileFormatError(ValueError):
     """A file's content does not follow its format (truncated data, a header that promises more than there is, a number that is not one, ...). A ``ValueError``; ``filename`` names the file."""
 
 # ---- results ----------------------------------------------------------------------------------
+
+class _IcpArrays(TypedDict):
+    transformation: _F64
+    fitness: float
+    rmse: float
+    correspondences: int
+    iterations: int
+    converged: bool
+    history_fitness: _F64
+    history_rmse: _F64
+
+class _IcpDefaults(TypedDict):
+    method: Literal["point_to_point", "point_to_plane"]
+    max_iterations: int
+    relative_fitness: float
+    relative_rmse: float
+    mse_threshold: float | None
+    robust: Literal["huber", "tukey"] | None
+    trim: float
+    normal_neighbors: int
 
 class _MountCalibrationArrays(TypedDict):
     params: _F64
@@ -335,6 +357,29 @@ def interpolate_poses(
     >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
     array([[0.5]])
     """
+def icp_defaults() -> _IcpDefaults:
+    """The defaults of the ICP options (``IcpOptions::new`` in the core), by name."""
+
+def icp(
+    source: ArrayLike,
+    target: ArrayLike,
+    max_distance: float,
+    *,
+    init: ArrayLike | None,
+    target_normals: ArrayLike | None,
+    method: Literal["point_to_point", "point_to_plane"],
+    max_iterations: int,
+    relative_fitness: float,
+    relative_rmse: float,
+    robust: Literal["huber", "tukey"] | None,
+    robust_scale: float | None,
+    trim: float,
+    mse_threshold: float | None,
+) -> _IcpArrays:
+    """Iterative closest point (SPEC R2) with Open3D's definitions; ``machscan.icp`` documents it
+    and wraps the ``_IcpArrays`` this returns.
+    """
+
 def calibrate_mount(
     scs_points: ArrayLike, wcs_points: ArrayLike, *, axes: ArrayLike | None = None, c2_offset: ArrayLike | None = None
 ) -> _MountCalibrationArrays:

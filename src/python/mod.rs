@@ -8,6 +8,7 @@ mod error;
 mod groove;
 mod io;
 mod kinematics;
+mod registration;
 mod spatial;
 
 use pyo3::prelude::*;
@@ -21,5 +22,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     spatial::register(m)?;
     contour::register(m)?;
     cloud::register(m)?;
+    registration::register(m)?;
     Ok(())
 }

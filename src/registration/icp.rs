@@ -32,6 +32,25 @@ pub enum IcpMethod {
     PointToPlane,
 }
 
+impl IcpMethod {
+    pub const NAMES: [&'static str; 2] = ["point_to_point", "point_to_plane"];
+
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "point_to_point" => Ok(IcpMethod::PointToPoint),
+            "point_to_plane" => Ok(IcpMethod::PointToPlane),
+            other => Err(Error::invalid(
+                "method",
+                format!("expected \"point_to_point\" or \"point_to_plane\", got {other:?}"),
+            )),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
 /// The robust loss of the residuals.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RobustKernel {
@@ -42,6 +61,21 @@ pub enum RobustKernel {
 }
 
 impl RobustKernel {
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "huber" => Ok(RobustKernel::Huber),
+            "tukey" => Ok(RobustKernel::Tukey),
+            other => Err(Error::invalid("robust", format!("expected \"huber\", \"tukey\" or None, got {other:?}"))),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RobustKernel::Huber => "huber",
+            RobustKernel::Tukey => "tukey",
+        }
+    }
+
     /// The threshold in units of the residuals' σ that gives 95 % efficiency on Gaussian noise.
     fn tuning(self) -> f64 {
         match self {

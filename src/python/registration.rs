@@ -1,0 +1,106 @@
+//! Bindings of `crate::registration`. Every option is a required keyword here: the Python
+//! signatures default them from `icp_defaults()`, which reads `IcpOptions::new` in the core, so
+//! each default is written once.
+use super::convert::{count, enter, to_numpy, Dim, F64Array};
+use crate::cloud::{estimate_normals, Neighborhood};
+use crate::registration::{icp as run_icp, IcpMethod, IcpOptions, Robust, RobustKernel};
+use nalgebra::Matrix4;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// Neighbors of the normals estimated for point-to-plane when none are given (Open3D's usual).
+const NORMAL_NEIGHBORS: usize = 20;
+
+/// The defaults of the ICP options (``IcpOptions::new`` in the core), by name.
+#[pyfunction]
+fn icp_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let o = IcpOptions::new(f64::NAN);
+    let d = PyDict::new(py);
+    d.set_item("method", o.method.name())?;
+    d.set_item("max_iterations", o.max_iterations)?;
+    d.set_item("relative_fitness", o.relative_fitness)?;
+    d.set_item("relative_rmse", o.relative_rmse)?;
+    d.set_item("mse_threshold", o.mse_threshold)?;
+    d.set_item("robust", o.robust.map(|r| r.kernel.name()))?;
+    d.set_item("trim", o.trim)?;
+    d.set_item("normal_neighbors", NORMAL_NEIGHBORS)?;
+    Ok(d)
+}
+
+/// Iterative closest point (SPEC R2) with Open3D's definitions; ``machscan.icp`` documents it
+/// and wraps the ``_IcpArrays`` this returns.
+#[pyfunction]
+#[pyo3(signature = (source, target, max_distance, *, init, target_normals, method, max_iterations,
+    relative_fitness, relative_rmse, robust, robust_scale, trim, mse_threshold))]
+#[allow(clippy::too_many_arguments)]
+fn icp<'py>(
+    py: Python<'py>,
+    source: &Bound<'py, PyAny>,
+    target: &Bound<'py, PyAny>,
+    max_distance: f64,
+    init: Option<&Bound<'py, PyAny>>,
+    target_normals: Option<&Bound<'py, PyAny>>,
+    method: &str,
+    max_iterations: i64,
+    relative_fitness: f64,
+    relative_rmse: f64,
+    robust: Option<&str>,
+    robust_scale: Option<f64>,
+    trim: f64,
+    mse_threshold: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let src = F64Array::points(source, "source")?;
+    let tgt = F64Array::points(target, "target")?;
+    let m = tgt.shape()[0];
+    let normals = F64Array::extract_opt(
+        target_normals,
+        "target_normals",
+        &[Dim::Is(m), Dim::Is(3)],
+        "(one normal per target point)",
+    )?;
+    let init = F64Array::extract_opt(init, "init", &[Dim::Is(4), Dim::Is(4)], "(a 4×4 rigid transform)")?;
+    let init = match &init {
+        Some(a) => Matrix4::from_row_slice(a.values()?),
+        None => Matrix4::identity(),
+    };
+    let options = IcpOptions {
+        max_distance,
+        method: IcpMethod::parse(method)?,
+        max_iterations: count("max_iterations", max_iterations)?,
+        relative_fitness,
+        relative_rmse,
+        mse_threshold,
+        robust: robust.map(RobustKernel::parse).transpose()?.map(|kernel| Robust { kernel, scale: robust_scale }),
+        trim,
+    };
+    let (s, t) = (src.rows::<3>()?, tgt.rows::<3>()?);
+    let n = normals.as_ref().map(|a| a.rows::<3>()).transpose()?;
+    let r = enter(py, || {
+        let estimated;
+        let n = match (options.method, n) {
+            (IcpMethod::PointToPlane, None) if !t.is_empty() => {
+                estimated = estimate_normals(t, Neighborhood::Knn(NORMAL_NEIGHBORS.min(t.len())))?.0;
+                Some(&estimated[..])
+            }
+            (_, n) => n,
+        };
+        run_icp(s, t, n, &init, &options)
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("transformation", to_numpy(py, r.transformation.transpose().as_slice().to_vec(), &[4, 4])?)?;
+    d.set_item("fitness", r.fitness)?;
+    d.set_item("rmse", r.rmse)?;
+    d.set_item("correspondences", r.correspondences)?;
+    d.set_item("iterations", r.iterations)?;
+    d.set_item("converged", r.converged)?;
+    let k = r.history.len();
+    d.set_item("history_fitness", to_numpy(py, r.history.iter().map(|h| h.fitness).collect(), &[k])?)?;
+    d.set_item("history_rmse", to_numpy(py, r.history.iter().map(|h| h.rmse).collect(), &[k])?)?;
+    Ok(d)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(icp_defaults, m)?)?;
+    m.add_function(wrap_pyfunction!(icp, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,172 @@
+"""ICP against Open3D's registration_icp on the same input, against PCL's bunny test, and
+against exact ground truth (issue #9 §1 and §6)."""
+
+import numpy as np
+import open3d
+import pytest
+
+import machscan
+
+reg = open3d.pipelines.registration
+
+
+def o3d_cloud(p, normals=None):
+    c = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(np.asarray(p, dtype=np.float64)))
+    if normals is not None:
+        c.normals = open3d.utility.Vector3dVector(np.asarray(normals, dtype=np.float64))
+    return c
+
+
+def rigid(angles, t):
+    a, b, c = angles
+    rx = np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+    ry = np.array([[np.cos(b), 0, np.sin(b)], [0, 1, 0], [-np.sin(b), 0, np.cos(b)]])
+    rz = np.array([[np.cos(c), -np.sin(c), 0], [np.sin(c), np.cos(c), 0], [0, 0, 1]])
+    m = np.eye(4)
+    m[:3, :3] = rz @ ry @ rx
+    m[:3, 3] = t
+    return m
+
+
+def moved(p, m):
+    return p @ m[:3, :3].T + m[:3, 3]
+
+
+@pytest.fixture(scope="module")
+def bunny(shared_data):
+    d = shared_data / "pcl-bunny-icp"
+    return machscan.read_points(d / "bun0.pcd"), machscan.read_points(d / "bun4.pcd")
+
+
+@pytest.fixture(scope="module")
+def part():
+    """A smooth, asymmetric free-form patch (mm) with exact normals, and a misplaced copy."""
+    rng = np.random.default_rng(4)
+    x, y = rng.uniform(-20, 20, 20000), rng.uniform(-15, 15, 20000)
+    f = 3 * np.exp(-((x - 4) ** 2) / 30 - (y + 2) ** 2 / 50) + 0.02 * x * y + 0.05 * x
+    fx = 3 * np.exp(-((x - 4) ** 2) / 30 - (y + 2) ** 2 / 50) * (-2 * (x - 4) / 30) + 0.02 * y + 0.05
+    fy = 3 * np.exp(-((x - 4) ** 2) / 30 - (y + 2) ** 2 / 50) * (-2 * (y + 2) / 50) + 0.02 * x
+    n = np.column_stack([-fx, -fy, np.ones_like(x)])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    target = np.column_stack([x, y, f])
+    truth = rigid((0.01, -0.008, 0.015), (0.3, -0.2, 0.1))
+    source = moved(target, np.linalg.inv(truth))
+    return source, target, n, truth
+
+
+def test_pcl_bunny_icp_reproduces_pcls_matrix(bunny):
+    src, tgt = bunny
+    r = machscan.icp(src, tgt, 0.05, max_iterations=50, relative_fitness=0, relative_rmse=0)
+    expected = np.array(
+        [
+            [0.8806, 0.03648, -0.4724, 0.03453],
+            [-0.02354, 0.9992, 0.03326, -0.001519],
+            [0.4732, -0.01817, 0.8808, 0.04116],
+            [0, 0, 0, 1],
+        ]
+    )
+    assert np.abs(r.transformation - expected).max() < 1e-3
+
+
+def test_point_to_point_with_30_fixed_iterations_equals_open3d(bunny):
+    src, tgt = bunny
+    r = machscan.icp(src, tgt, 0.05, max_iterations=30, relative_fitness=0, relative_rmse=0)
+    o3 = reg.registration_icp(
+        o3d_cloud(src), o3d_cloud(tgt), 0.05, np.eye(4), reg.TransformationEstimationPointToPoint(),
+        reg.ICPConvergenceCriteria(relative_fitness=0, relative_rmse=0, max_iteration=30),
+    )
+    assert r.iterations == 30 and len(r.history) == 30
+    assert np.abs(r.transformation - o3.transformation).max() < 1e-6
+    assert r.fitness == pytest.approx(o3.fitness, abs=1e-12)
+    assert r.rmse == pytest.approx(o3.inlier_rmse, rel=1e-6)
+
+
+@pytest.mark.parametrize("method", ["point_to_point", "point_to_plane"])
+def test_default_thresholds_give_open3ds_result(part, method):
+    source, target, normals, _ = part
+    init = rigid((0.002, 0.001, -0.002), (0.05, 0.02, 0.0))
+    r = machscan.icp(source, target, 1.0, init, method=method, target_normals=normals)
+    estimation = (
+        reg.TransformationEstimationPointToPlane() if method == "point_to_plane"
+        else reg.TransformationEstimationPointToPoint()
+    )
+    o3 = reg.registration_icp(o3d_cloud(source), o3d_cloud(target, normals), 1.0, init, estimation)
+    assert np.abs(r.transformation - o3.transformation).max() < 1e-6
+    assert r.fitness == pytest.approx(o3.fitness, abs=1e-12)
+
+
+def test_point_to_plane_to_convergence_equals_open3d_and_recovers_the_truth(part):
+    source, target, normals, truth = part
+    crit = {"relative_fitness": 1e-12, "relative_rmse": 1e-12, "max_iterations": 100}
+    r = machscan.icp(source, target, 2.0, method="point_to_plane", target_normals=normals, **crit)
+    o3 = reg.registration_icp(
+        o3d_cloud(source), o3d_cloud(target, normals), 2.0, np.eye(4), reg.TransformationEstimationPointToPlane(),
+        reg.ICPConvergenceCriteria(relative_fitness=1e-12, relative_rmse=1e-12, max_iteration=100),
+    )
+    assert r.converged
+    assert np.abs(r.transformation - o3.transformation).max() < 1e-6
+    # Noiseless and the same points: the known transform to rounding.
+    assert np.abs(r.transformation - truth).max() < 1e-9
+
+
+def test_fitness_and_rmse_are_open3ds_evaluation_at_the_returned_transform(bunny):
+    src, tgt = bunny
+    for iterations in (1, 3, 10):
+        r = machscan.icp(src, tgt, 0.05, max_iterations=iterations)
+        ev = reg.evaluate_registration(o3d_cloud(src), o3d_cloud(tgt), 0.05, r.transformation)
+        assert r.fitness == pytest.approx(ev.fitness, abs=1e-12)
+        assert r.rmse == pytest.approx(ev.inlier_rmse, rel=1e-9)
+        assert (r.history.fitness[-1], r.history.rmse[-1]) == (r.fitness, r.rmse)
+
+
+def test_normals_are_estimated_for_point_to_plane_when_omitted(part):
+    source, target, _, truth = part
+    r = machscan.icp(source, target, 2.0, method="point_to_plane")
+    assert r.converged and np.abs(r.transformation - truth).max() < 1e-6
+
+
+def test_tukey_weights_hold_the_pose_through_20_percent_outliers(part):
+    source, target, normals, truth = part
+    rng = np.random.default_rng(8)
+    # 20 % of the source points 0.5–2 mm off the surface, along its normal.
+    out = rng.random(len(target)) < 0.2
+    lifted = target + (out * rng.uniform(0.5, 2.0, len(target)))[:, None] * normals
+    src = moved(lifted, np.linalg.inv(truth))
+    kw = {"method": "point_to_plane", "target_normals": normals, "max_iterations": 100}
+    plain = machscan.icp(src, target, 3.0, **kw)
+    tukey = machscan.icp(src, target, 3.0, robust="tukey", **kw)
+
+    def along_normals(t):
+        # The pose error the cutter feels: displacement along the surface normals, RMS.
+        d = moved(source, t) - moved(source, truth)
+        return np.sqrt(np.mean(np.sum(d * normals, axis=1) ** 2))
+
+    assert along_normals(tukey.transformation) < 0.005 < along_normals(plain.transformation)
+
+
+def test_a_perfect_start_converges_and_nothing_in_reach_is_not_a_nan(part):
+    _, target, _, _ = part
+    r = machscan.icp(target, target, 1.0)
+    assert r.converged and r.iterations == 1 and r.fitness == 1.0
+    far = rigid((0, 0, 0), (1000, 0, 0))
+    r = machscan.icp(target, target, 1.0, far)
+    assert not r.converged and r.fitness == 0.0 and r.rmse == 0.0
+    np.testing.assert_array_equal(r.transformation, far)
+
+
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"max_distance": 0.0}, "max_distance"),
+        ({"max_distance": 1.0, "method": "point_to_line"}, "method"),
+        ({"max_distance": 1.0, "robust": "cauchy"}, "robust"),
+        ({"max_distance": 1.0, "trim": 1.5}, "trim"),
+        ({"max_distance": 1.0, "init": np.eye(3)}, "init"),
+        ({"max_distance": 1.0, "target_normals": np.zeros((3, 3))}, "target_normals"),
+        ({"max_distance": 1.0, "max_iterations": -1}, "max_iterations"),
+    ],
+)
+def test_bad_arguments_raise_naming_them(part, kwargs, name):
+    source, target, _, _ = part
+    with pytest.raises(ValueError, match=name):
+        machscan.icp(source[:100], target[:100], **kwargs)
