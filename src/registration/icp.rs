@@ -220,6 +220,48 @@ fn correspondences(index: &PointIndex, moved: &[[f64; 3]], max_d2: f64) -> Vec<P
         .collect()
 }
 
+/// The indices of `points` sorted along the Morton curve of their bounding box (21 bits per
+/// axis; ties by index, so the order is fixed).
+fn morton_order(points: &[[f64; 3]]) -> Vec<u32> {
+    let (lo, hi) = crate::geom::bounds(points);
+    let scale: [f64; 3] = std::array::from_fn(|k| if hi[k] > lo[k] { 2_097_151.0 / (hi[k] - lo[k]) } else { 0.0 });
+    // Spreads the 21 low bits of v to every third bit.
+    let spread = |v: u64| {
+        let mut x = v & 0x1f_ffff;
+        x = (x | x << 32) & 0x001f_0000_0000_ffff;
+        x = (x | x << 16) & 0x001f_0000_ff00_00ff;
+        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+        (x | x << 2) & 0x1249_2492_4924_9249
+    };
+    let mut keyed: Vec<(u64, u32)> = points
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let q: [u64; 3] = std::array::from_fn(|k| ((p[k] - lo[k]) * scale[k]) as u64);
+            (spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2, i as u32)
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// Σ f(pair, weight) over the pairs of positive weight, in fixed chunks summed in order:
+/// parallel, and the same result whatever the thread count.
+fn chunked_sum<T, F>(pairs: &[Pair], w: &[f64], zero: T, f: F) -> T
+where
+    T: Copy + Send + Sync + std::ops::Add<Output = T>,
+    F: Fn(&Pair, f64) -> T + Sync,
+{
+    const CHUNK: usize = 4096;
+    let parts: Vec<T> = pairs
+        .par_chunks(CHUNK)
+        .zip(w.par_chunks(CHUNK))
+        .map(|(p, w)| p.iter().zip(w).filter(|(_, &wi)| wi > 0.0).fold(zero, |acc, (pi, &wi)| acc + f(pi, wi)))
+        .collect();
+    parts.into_iter().fold(zero, |a, b| a + b)
+}
+
 /// (fitness, rmse) of the correspondences of `n` source points.
 fn metrics(pairs: &[Pair], n: usize) -> (f64, f64) {
     if pairs.is_empty() {
@@ -270,7 +312,11 @@ pub fn icp(
     let index = PointIndex::new(target)?;
     let max_d2 = o.max_distance * o.max_distance;
     let mut transformation = *init;
-    let mut moved: Vec<[f64; 3]> = source.par_iter().map(|&p| transform_point(init, p)).collect();
+    // The source in Morton (Z-curve) order: consecutive queries then walk the same branches of
+    // the tree and stay in cache whatever order the cloud came in; pairs refer to positions in
+    // this order, and every sum runs in it.
+    let order = morton_order(source);
+    let mut moved: Vec<[f64; 3]> = order.par_iter().map(|&i| transform_point(init, source[i as usize])).collect();
     let mut pairs = correspondences(&index, &moved, max_d2);
     let (mut fitness, mut rmse) = metrics(&pairs, source.len());
     let below_mse = |rmse: f64, pairs: &[Pair]| !pairs.is_empty() && o.mse_threshold.is_some_and(|t| rmse * rmse < t);
@@ -366,27 +412,18 @@ fn weights(
 /// (Umeyama 1991 without scale; the reflection guard flips the axis of the smallest singular
 /// value). None with fewer than three weighted pairs or collinear ones.
 fn point_to_point(moved: &[[f64; 3]], target: &[[f64; 3]], pairs: &[Pair], w: &[f64]) -> Option<Matrix4<f64>> {
-    let (mut sw, mut ms, mut mt, mut used) = (0.0, Vector3::zeros(), Vector3::zeros(), 0usize);
-    for (p, &wi) in pairs.iter().zip(w) {
-        if wi > 0.0 {
-            sw += wi;
-            ms += wi * Vector3::from(moved[p.source as usize]);
-            mt += wi * Vector3::from(target[p.target as usize]);
-            used += 1;
-        }
-    }
+    let used = w.iter().filter(|&&wi| wi > 0.0).count();
+    let Sums((sw, ms, mt)) = chunked_sum(pairs, w, Sums((0.0, Vector3::zeros(), Vector3::zeros())), |p, wi| {
+        Sums((wi, wi * Vector3::from(moved[p.source as usize]), wi * Vector3::from(target[p.target as usize])))
+    });
     if used < 3 || !(sw > 0.0) {
         return None;
     }
     let (ms, mt) = (ms / sw, mt / sw);
-    let mut h = Matrix3::zeros();
-    for (p, &wi) in pairs.iter().zip(w) {
-        if wi > 0.0 {
-            h += wi
-                * (Vector3::from(moved[p.source as usize]) - ms)
-                * (Vector3::from(target[p.target as usize]) - mt).transpose();
-        }
-    }
+    let h = chunked_sum(pairs, w, Matrix3::zeros(), |p, wi| {
+        wi * (Vector3::from(moved[p.source as usize]) - ms)
+            * (Vector3::from(target[p.target as usize]) - mt).transpose()
+    });
     let svd = h.svd(true, true);
     let (u, v_t) = (svd.u?, svd.v_t?);
     let sv = svd.singular_values;
@@ -414,31 +451,50 @@ fn point_to_plane(
     pairs: &[Pair],
     w: &[f64],
 ) -> Option<Matrix4<f64>> {
-    let (mut jtj, mut jtr, mut used) = (Matrix6::<f64>::zeros(), Vector6::<f64>::zeros(), 0usize);
-    for (p, &wi) in pairs.iter().zip(w) {
-        if wi > 0.0 {
-            let (s, q, n) = (
-                Vector3::from(moved[p.source as usize]),
-                Vector3::from(target[p.target as usize]),
-                Vector3::from(normals[p.target as usize]),
-            );
-            let c = s.cross(&n);
-            let j = Vector6::new(c[0], c[1], c[2], n[0], n[1], n[2]);
-            let r = (s - q).dot(&n);
-            jtj += wi * j * j.transpose();
-            jtr += wi * r * j;
-            used += 1;
-        }
-    }
+    let used = w.iter().filter(|&&wi| wi > 0.0).count();
     if used < 6 {
         return None;
     }
+    let Sums((jtj, jtr)) = chunked_sum(pairs, w, Sums((Matrix6::<f64>::zeros(), Vector6::<f64>::zeros())), |p, wi| {
+        let (s, q, n) = (
+            Vector3::from(moved[p.source as usize]),
+            Vector3::from(target[p.target as usize]),
+            Vector3::from(normals[p.target as usize]),
+        );
+        let c = s.cross(&n);
+        let j = Vector6::new(c[0], c[1], c[2], n[0], n[1], n[2]);
+        let r = (s - q).dot(&n);
+        Sums((wi * j * j.transpose(), wi * r * j))
+    });
     let x = jtj.cholesky()?.solve(&-jtr);
     if x.iter().any(|v| !v.is_finite()) {
         return None;
     }
     let rotation = rot_z(x[2]) * rot_y(x[1]) * rot_x(x[0]);
     Some(rigid(rotation, Vector3::new(x[3], x[4], x[5])))
+}
+
+/// A tuple of sums, added element-wise (for [`chunked_sum`]).
+#[derive(Clone, Copy)]
+struct Sums<T>(T);
+
+impl<A: std::ops::Add<Output = A>, B: std::ops::Add<Output = B>> std::ops::Add for Sums<(A, B)> {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Sums((self.0 .0 + o.0 .0, self.0 .1 + o.0 .1))
+    }
+}
+
+impl<A, B, C> std::ops::Add for Sums<(A, B, C)>
+where
+    A: std::ops::Add<Output = A>,
+    B: std::ops::Add<Output = B>,
+    C: std::ops::Add<Output = C>,
+{
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Sums((self.0 .0 + o.0 .0, self.0 .1 + o.0 .1, self.0 .2 + o.0 .2))
+    }
 }
 
 fn rigid(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Matrix4<f64> {
