@@ -170,3 +170,13 @@ def test_bad_arguments_raise_naming_them(part, kwargs, name):
     source, target, _, _ = part
     with pytest.raises(ValueError, match=name):
         machscan.icp(source[:100], target[:100], **kwargs)
+
+
+@pytest.mark.parametrize("angles", [(0.0, 0.0, 2.5), (3.0, 0.5, -1.0), (-2.0, 1.2, 0.7), (1.5, -2.8, 3.0)])
+def test_coarse_alignment_lets_icp_converge_from_any_orientation(bunny, angles):
+    _, tgt = bunny
+    misplace = rigid(angles, (0.4, -0.2, 0.3))
+    src = moved(tgt, misplace)
+    init = machscan.coarse_align(src, tgt)
+    r = machscan.icp(src, tgt, 0.02, init, max_iterations=100)
+    assert r.converged and np.abs(r.transformation - np.linalg.inv(misplace)).max() < 1e-6

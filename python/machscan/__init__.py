@@ -65,7 +65,7 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
-from machscan.registration import IcpResult, icp
+from machscan.registration import IcpResult, coarse_align, icp
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
@@ -94,6 +94,7 @@ __all__ = [
     "cad",
     "calibrate_mount",
     "cloud",
+    "coarse_align",
     "contour_error",
     "contours",
     "crop_box",

@@ -20,6 +20,7 @@ __all__ = [
     "ac_head_transforms",
     "ac_table_rotate",
     "calibrate_mount",
+    "coarse_align",
     "contour_error",
     "crop_box",
     "estimate_normals",
@@ -357,6 +358,28 @@ def interpolate_poses(
     >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
     array([[0.5]])
     """
+def coarse_align(source: ArrayLike, target: ArrayLike) -> _F64:
+    """Coarse alignment (SPEC R3, paper 004): the rigid transform (4×4, applied to the source) that
+    puts the source's principal frame (centroid and covariance axes) on the target's, trying the
+    four proper sign choices of the axes and keeping the one whose moved source lies closest to
+    the target. A start for :func:`machscan.icp` from any orientation, on a part without
+    symmetry.
+
+    Parameters
+    ----------
+    source, target : array_like, shape (N, 3), (M, 3)
+        mm; at least 4 points each.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+
+    Examples
+    --------
+    >>> init = machscan.coarse_align(measured, model)
+    >>> r = machscan.icp(measured, model, 1.0, init)
+    """
+
 def icp_defaults() -> _IcpDefaults:
     """The defaults of the ICP options (``IcpOptions::new`` in the core), by name."""
 

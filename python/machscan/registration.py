@@ -14,8 +14,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
+from machscan._core import coarse_align
 
-__all__ = ["ICP_DEFAULTS", "IcpHistory", "IcpMethod", "IcpResult", "RobustKernel", "icp"]
+__all__ = ["ICP_DEFAULTS", "IcpHistory", "IcpMethod", "IcpResult", "RobustKernel", "coarse_align", "icp"]
 
 #: Defaults of :func:`icp`'s options, from ``IcpOptions::new`` in the core.
 ICP_DEFAULTS = _core.icp_defaults()

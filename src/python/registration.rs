@@ -3,7 +3,9 @@
 //! each default is written once.
 use super::convert::{count, enter, to_numpy, Dim, F64Array};
 use crate::cloud::{estimate_normals, Neighborhood};
-use crate::registration::{icp as run_icp, IcpMethod, IcpOptions, Robust, RobustKernel};
+use crate::registration::{
+    coarse_align as run_coarse_align, icp as run_icp, IcpMethod, IcpOptions, Robust, RobustKernel,
+};
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -99,7 +101,40 @@ fn icp<'py>(
     Ok(d)
 }
 
+/// Coarse alignment (SPEC R3, paper 004): the rigid transform (4×4, applied to the source) that
+/// puts the source's principal frame (centroid and covariance axes) on the target's, trying the
+/// four proper sign choices of the axes and keeping the one whose moved source lies closest to
+/// the target. A start for :func:`machscan.icp` from any orientation, on a part without
+/// symmetry.
+///
+/// Parameters
+/// ----------
+/// source, target : array_like, shape (N, 3), (M, 3)
+///     mm; at least 4 points each.
+///
+/// Returns
+/// -------
+/// ndarray, shape (4, 4)
+///
+/// Examples
+/// --------
+/// >>> init = machscan.coarse_align(measured, model)
+/// >>> r = machscan.icp(measured, model, 1.0, init)
+#[pyfunction]
+fn coarse_align<'py>(
+    py: Python<'py>,
+    source: &Bound<'py, PyAny>,
+    target: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let src = F64Array::points(source, "source")?;
+    let tgt = F64Array::points(target, "target")?;
+    let (s, t) = (src.rows::<3>()?, tgt.rows::<3>()?);
+    let m = enter(py, || run_coarse_align(s, t))?;
+    to_numpy(py, m.transpose().as_slice().to_vec(), &[4, 4])
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(coarse_align, m)?)?;
     m.add_function(wrap_pyfunction!(icp_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(icp, m)?)?;
     Ok(())
