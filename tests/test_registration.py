@@ -180,3 +180,29 @@ def test_coarse_alignment_lets_icp_converge_from_any_orientation(bunny, angles):
     init = machscan.coarse_align(src, tgt)
     r = machscan.icp(src, tgt, 0.02, init, max_iterations=100)
     assert r.converged and np.abs(r.transformation - np.linalg.inv(misplace)).max() < 1e-6
+
+
+def test_locating_points_come_from_the_flat_regions_reproducibly():
+    rng = np.random.default_rng(2)
+    x, y = rng.uniform(0, 100, 20000), rng.uniform(0, 100, 20000)
+    # Flat where x < 50, a wavy free form beyond.
+    z = np.where(x < 50, 0.0, 2.0 * np.sin((x - 50) / 4) * np.cos(y / 5))
+    pts = np.column_stack([x, y, z])
+    idx = machscan.locating_points(pts, 160, seed=1)
+    assert len(idx) == 160 and np.all(np.diff(idx) > 0)
+    assert np.all(pts[idx, 0] < 52)
+    np.testing.assert_array_equal(idx, machscan.locating_points(pts, 160, seed=1))
+    assert not np.array_equal(idx, machscan.locating_points(pts, 160, seed=2))
+    with pytest.raises(ValueError, match="m"):
+        machscan.locating_points(pts[:100], 160)
+
+
+def test_locating_points_on_a_grid_use_the_u_line_curvature():
+    # A gridded scan: a flat run (u < 0) then a cylinder of radius 20 mm.
+    u = np.linspace(-30, 30, 121)
+    v = np.linspace(0, 40, 41)
+    xs = np.where(u < 0, u, 20 * np.sin(u / 20))
+    zs = np.where(u < 0, 0.0, 20 * (1 - np.cos(u / 20)))
+    grid = np.stack(np.broadcast_arrays(xs[:, None], v[None, :], zs[:, None]), axis=-1)
+    idx = machscan.locating_points(grid, 160, keep=0.4, seed=3)
+    assert np.all(grid.reshape(-1, 3)[idx, 0] <= 0.25)

@@ -65,7 +65,7 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
-from machscan.registration import IcpResult, coarse_align, icp
+from machscan.registration import IcpResult, coarse_align, icp, locating_points
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
@@ -110,6 +110,7 @@ __all__ = [
     "kinematics",
     "knn_graph",
     "level_groove_frame",
+    "locating_points",
     "match_contours",
     "nearest_neighbors",
     "octree_simplify",

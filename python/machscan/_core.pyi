@@ -31,6 +31,8 @@ __all__ = [
     "icp",
     "icp_defaults",
     "interpolate_poses",
+    "locating_points_cloud",
+    "locating_points_grid",
     "knn_graph",
     "match_contours",
     "nearest_neighbors",
@@ -378,6 +380,16 @@ def coarse_align(source: ArrayLike, target: ArrayLike) -> _F64:
     --------
     >>> init = machscan.coarse_align(measured, model)
     >>> r = machscan.icp(measured, model, 1.0, init)
+    """
+
+def locating_points_cloud(points: ArrayLike, *, m: int, keep: float, k: int, seed: int) -> _I64:
+    """Probe points on the flattest share of a cloud (SPEC R4): surface variation over the k
+    nearest points; ``machscan.locating_points`` documents it.
+    """
+
+def locating_points_grid(points: ArrayLike, *, m: int, keep: float, seed: int) -> _I64:
+    """Probe points on the flattest share of a gridded scan ``(nu, nv, 3)`` (SPEC R4): U-direction
+    line curvature; ``machscan.locating_points`` documents it.
     """
 
 def icp_defaults() -> _IcpDefaults:

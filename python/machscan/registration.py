@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 from machscan import _core
 from machscan._core import coarse_align
 
-__all__ = ["ICP_DEFAULTS", "IcpHistory", "IcpMethod", "IcpResult", "RobustKernel", "coarse_align", "icp"]
+__all__ = ["ICP_DEFAULTS", "IcpHistory", "IcpMethod", "IcpResult", "RobustKernel", "coarse_align", "icp", "locating_points"]
 
 #: Defaults of :func:`icp`'s options, from ``IcpOptions::new`` in the core.
 ICP_DEFAULTS = _core.icp_defaults()
@@ -162,3 +162,44 @@ def icp(
         converged=out["converged"],
         history=history,
     )
+
+
+def locating_points(
+    points: ArrayLike, m: int = 160, *, keep: float = 0.25, k: int = 20, seed: int = 0
+) -> NDArray[np.int64]:
+    """Probe points for locating a part (SPEC R4, paper 003 §2.2): ``m`` points drawn at
+    random, reproducibly from ``seed``, from the flattest ``keep`` share of the surface, where
+    locating is most accurate (the paper: 160 of 20 000 points).
+
+    The curvature is the U-direction line curvature for a gridded scan ``(nu, nv, 3)`` (the
+    circle through each point and its two neighbors along the first axis: exactly 1/R on a
+    radius R), and the surface variation λ0 / (λ0 + λ1 + λ2) over the ``k`` nearest points for
+    a cloud ``(N, 3)``.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3) or (nu, nv, 3)
+        mm.
+    m : int
+        Points to draw.
+    keep : float
+        Share of the points, the flattest, drawn from (0 < keep ≤ 1).
+    k : int
+        Neighbors of the surface variation (clouds only).
+    seed : int
+        The same seed draws the same points on every platform.
+
+    Returns
+    -------
+    ndarray of int64, shape (m,)
+        Indices into the points (into ``points.reshape(-1, 3)`` for a grid), ascending.
+
+    Examples
+    --------
+    >>> idx = machscan.locating_points(model_points, 160, seed=1)
+    >>> probe = model_points[idx]
+    """
+    a = np.asarray(points, dtype=np.float64)
+    if a.ndim == 3:
+        return _core.locating_points_grid(a, m=m, keep=keep, seed=seed)
+    return _core.locating_points_cloud(a, m=m, keep=keep, k=k, seed=seed)

@@ -1,10 +1,11 @@
 //! Bindings of `crate::registration`. Every option is a required keyword here: the Python
-//! signatures default them from `icp_defaults()`, which reads `IcpOptions::new` in the core, so
-//! each default is written once.
-use super::convert::{count, enter, to_numpy, Dim, F64Array};
+//! signatures give the defaults (ICP's read from `icp_defaults()`, which reads `IcpOptions::new`
+//! in the core), so each default is written once.
+use super::convert::{count, enter, indices_to_numpy, to_numpy, Dim, F64Array};
 use crate::cloud::{estimate_normals, Neighborhood};
 use crate::registration::{
-    coarse_align as run_coarse_align, icp as run_icp, IcpMethod, IcpOptions, Robust, RobustKernel,
+    coarse_align as run_coarse_align, icp as run_icp, line_curvature, locating_points, IcpMethod, IcpOptions, Robust,
+    RobustKernel,
 };
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
@@ -133,7 +134,50 @@ fn coarse_align<'py>(
     to_numpy(py, m.transpose().as_slice().to_vec(), &[4, 4])
 }
 
+/// Probe points on the flattest share of a cloud (SPEC R4): surface variation over the k
+/// nearest points; ``machscan.locating_points`` documents it.
+#[pyfunction]
+#[pyo3(signature = (points, *, m, keep, k, seed))]
+fn locating_points_cloud<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    m: i64,
+    keep: f64,
+    k: i64,
+    seed: u64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (m, k) = (count("m", m)?, count("k", k)?);
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    let chosen = enter(py, || {
+        let (_, variation, _) = estimate_normals(pts, Neighborhood::Knn(k))?;
+        locating_points(&variation, m, keep, seed)
+    })?;
+    indices_to_numpy(py, chosen)
+}
+
+/// Probe points on the flattest share of a gridded scan ``(nu, nv, 3)`` (SPEC R4): U-direction
+/// line curvature; ``machscan.locating_points`` documents it.
+#[pyfunction]
+#[pyo3(signature = (points, *, m, keep, seed))]
+fn locating_points_grid<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    m: i64,
+    keep: f64,
+    seed: u64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let m = count("m", m)?;
+    let arr = F64Array::extract(points, "points", &[Dim::Any("nu"), Dim::Any("nv"), Dim::Is(3)], "(a gridded scan)")?;
+    let (nu, nv) = (arr.shape()[0], arr.shape()[1]);
+    let pts = arr.rows::<3>()?;
+    let chosen = enter(py, || locating_points(&line_curvature(pts, nu, nv)?, m, keep, seed))?;
+    indices_to_numpy(py, chosen)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(locating_points_cloud, m)?)?;
+    m.add_function(wrap_pyfunction!(locating_points_grid, m)?)?;
     m.add_function(wrap_pyfunction!(coarse_align, m)?)?;
     m.add_function(wrap_pyfunction!(icp_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(icp, m)?)?;

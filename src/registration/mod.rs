@@ -2,6 +2,8 @@
 //! model. `icp` is the kernel the positioning and allowance workflows stand on.
 pub mod coarse;
 pub mod icp;
+pub mod locating;
 
 pub use coarse::coarse_align;
 pub use icp::{icp, IcpMethod, IcpOptions, IcpResult, IcpStep, Robust, RobustKernel};
+pub use locating::{line_curvature, locating_points};
