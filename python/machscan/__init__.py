@@ -14,7 +14,7 @@ The API is organised by domain, and the everyday names are also here at the top 
 - :mod:`machscan.grooves` — the per-frame groove fit;
 - :mod:`machscan.contours` — CAD polylines, contour matching and the contour error;
 - :mod:`machscan.inspection` — the groove inspection workflow of paper 000;
-- :mod:`machscan.registration` — ICP: where a measured part sits against its model;
+- :mod:`machscan.registration` — ICP, coarse alignment, locating points, allowance;
 - :mod:`machscan.cad` — CAD contours from CSV and APT files;
 - :mod:`machscan.synth` — synthetic scans and parts with exact ground truth;
 - :mod:`machscan.plot` — figures (needs matplotlib).
@@ -65,7 +65,7 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
-from machscan.registration import IcpResult, coarse_align, icp, locating_points
+from machscan.registration import IcpResult, allowance, coarse_align, icp, locating_points
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
@@ -91,6 +91,7 @@ __all__ = [
     "ab_mirror_support_points",
     "ac_head_transforms",
     "ac_table_rotate",
+    "allowance",
     "cad",
     "calibrate_mount",
     "cloud",

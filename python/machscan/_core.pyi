@@ -19,6 +19,7 @@ __all__ = [
     "ab_mirror_support_points",
     "ac_head_transforms",
     "ac_table_rotate",
+    "allowance",
     "calibrate_mount",
     "coarse_align",
     "contour_error",
@@ -360,6 +361,34 @@ def interpolate_poses(
     >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
     array([[0.5]])
     """
+def allowance(model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int = 8) -> _F64:
+    """Machining allowance (SPEC R7; paper 004 §1.2): the stock the blank leaves over each model
+    point, measured along the point's outward normal to the least-squares plane of the ``k``
+    nearest blank points (``t = n·(q0 − p) / (n·v)``, eq 10 as SPEC R7 corrects it).
+
+    Parameters
+    ----------
+    model_points : array_like, shape (N, 3)
+        The finished part (CAD points), mm.
+    model_normals : array_like, shape (N, 3)
+        Their outward normals (normalised here; none may be zero).
+    blank_points : array_like, shape (M, 3)
+        The measured blank, in the model's frame (e.g. after :func:`machscan.icp`), mm.
+    k : int
+        Blank points of each local plane, 3 ≤ k ≤ M.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Signed allowance, mm: negative where the blank does not envelop the model; NaN where
+        the blank's local plane grazes the normal (|cos| < 0.05), so the line does not meet it.
+
+    Examples
+    --------
+    >>> a = machscan.allowance(model, normals, blank)
+    >>> short = a < 0  # where the part would come out short
+    """
+
 def coarse_align(source: ArrayLike, target: ArrayLike) -> _F64:
     """Coarse alignment (SPEC R3, paper 004): the rigid transform (4×4, applied to the source) that
     puts the source's principal frame (centroid and covariance axes) on the target's, trying the

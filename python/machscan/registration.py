@@ -14,9 +14,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
-from machscan._core import coarse_align
+from machscan._core import allowance, coarse_align
 
-__all__ = ["ICP_DEFAULTS", "IcpHistory", "IcpMethod", "IcpResult", "RobustKernel", "coarse_align", "icp", "locating_points"]
+__all__ = [
+    "ICP_DEFAULTS",
+    "IcpHistory",
+    "IcpMethod",
+    "IcpResult",
+    "RobustKernel",
+    "allowance",
+    "coarse_align",
+    "icp",
+    "locating_points",
+]
 
 #: Defaults of :func:`icp`'s options, from ``IcpOptions::new`` in the core.
 ICP_DEFAULTS = _core.icp_defaults()

@@ -4,8 +4,8 @@
 use super::convert::{count, enter, indices_to_numpy, to_numpy, Dim, F64Array};
 use crate::cloud::{estimate_normals, Neighborhood};
 use crate::registration::{
-    coarse_align as run_coarse_align, icp as run_icp, line_curvature, locating_points, IcpMethod, IcpOptions, Robust,
-    RobustKernel,
+    allowance as run_allowance, coarse_align as run_coarse_align, icp as run_icp, line_curvature, locating_points,
+    IcpMethod, IcpOptions, Robust, RobustKernel,
 };
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
@@ -175,7 +175,53 @@ fn locating_points_grid<'py>(
     indices_to_numpy(py, chosen)
 }
 
+/// Machining allowance (SPEC R7; paper 004 §1.2): the stock the blank leaves over each model
+/// point, measured along the point's outward normal to the least-squares plane of the ``k``
+/// nearest blank points (``t = n·(q0 − p) / (n·v)``, eq 10 as SPEC R7 corrects it).
+///
+/// Parameters
+/// ----------
+/// model_points : array_like, shape (N, 3)
+///     The finished part (CAD points), mm.
+/// model_normals : array_like, shape (N, 3)
+///     Their outward normals (normalised here; none may be zero).
+/// blank_points : array_like, shape (M, 3)
+///     The measured blank, in the model's frame (e.g. after :func:`machscan.icp`), mm.
+/// k : int
+///     Blank points of each local plane, 3 ≤ k ≤ M.
+///
+/// Returns
+/// -------
+/// ndarray, shape (N,)
+///     Signed allowance, mm: negative where the blank does not envelop the model; NaN where
+///     the blank's local plane grazes the normal (|cos| < 0.05), so the line does not meet it.
+///
+/// Examples
+/// --------
+/// >>> a = machscan.allowance(model, normals, blank)
+/// >>> short = a < 0  # where the part would come out short
+#[pyfunction]
+#[pyo3(signature = (model_points, model_normals, blank_points, k=8))]
+fn allowance<'py>(
+    py: Python<'py>,
+    model_points: &Bound<'py, PyAny>,
+    model_normals: &Bound<'py, PyAny>,
+    blank_points: &Bound<'py, PyAny>,
+    k: i64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let k = count("k", k)?;
+    let model = F64Array::points(model_points, "model_points")?;
+    let n = model.shape()[0];
+    let normals =
+        F64Array::extract(model_normals, "model_normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per model point)")?;
+    let blank = F64Array::points(blank_points, "blank_points")?;
+    let (m, v, b) = (model.rows::<3>()?, normals.rows::<3>()?, blank.rows::<3>()?);
+    let a = enter(py, || run_allowance(m, v, b, k))?;
+    to_numpy(py, a, &[n])
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(allowance, m)?)?;
     m.add_function(wrap_pyfunction!(locating_points_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(locating_points_grid, m)?)?;
     m.add_function(wrap_pyfunction!(coarse_align, m)?)?;
