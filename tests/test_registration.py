@@ -235,3 +235,23 @@ def test_allowance_recovers_a_known_offset_field():
     # A blank below the model: negative allowance where the part would come out short.
     short = machscan.allowance(model, normals, dense - 0.05 * dense_n)
     assert np.abs(short + 0.05).max() < 0.003
+
+
+def test_positioning_errors_against_points_and_against_the_surface(part):
+    _, target, normals, _ = part
+    rng = np.random.default_rng(9)
+    # Points 5 µm off the surface along its normal, at model points moved 0.05 mm along it.
+    idx = rng.choice(len(target), 200, replace=False)
+    tangent = np.cross(normals[idx], [0.0, 0.0, 1.0])
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    probed = target[idx] + 0.005 * normals[idx] + 0.02 * tangent
+    surface = machscan.positioning_errors(probed, target, normals)
+    # The tangent-plane reference: the 5 µm along the normal, up to the surface's curvature
+    # over the model's point spacing (a few tenths of a mm).
+    assert np.abs(surface.e_total - 0.005).max() < 0.002
+    points = machscan.positioning_errors(probed, target)
+    from scipy.spatial import cKDTree
+
+    _, j = cKDTree(target).query(probed)
+    np.testing.assert_allclose(np.column_stack([points.e_x, points.e_y, points.e_z]), probed - target[j], atol=1e-12)
+    assert "e_total" in points.summary()

@@ -65,7 +65,15 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
-from machscan.registration import IcpResult, allowance, coarse_align, icp, locating_points
+from machscan.registration import (
+    IcpResult,
+    PositioningErrors,
+    allowance,
+    coarse_align,
+    icp,
+    locating_points,
+    positioning_errors,
+)
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
 
 __all__ = [
@@ -84,6 +92,7 @@ __all__ = [
     "KinematicChain",
     "LevelledFrame",
     "MountCalibration",
+    "PositioningErrors",
     "Profiler",
     "Scan",
     "TriangleMesh",
@@ -116,6 +125,7 @@ __all__ = [
     "nearest_neighbors",
     "octree_simplify",
     "plot",
+    "positioning_errors",
     "principal_curvatures",
     "profile_to_points",
     "random_downsample",

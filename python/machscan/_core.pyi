@@ -34,6 +34,7 @@ __all__ = [
     "interpolate_poses",
     "locating_points_cloud",
     "locating_points_grid",
+    "positioning_errors",
     "knn_graph",
     "match_contours",
     "nearest_neighbors",
@@ -419,6 +420,11 @@ def locating_points_cloud(points: ArrayLike, *, m: int, keep: float, k: int, see
 def locating_points_grid(points: ArrayLike, *, m: int, keep: float, seed: int) -> _I64:
     """Probe points on the flattest share of a gridded scan ``(nu, nv, 3)`` (SPEC R4): U-direction
     line curvature; ``machscan.locating_points`` documents it.
+    """
+
+def positioning_errors(measured: ArrayLike, model_points: ArrayLike, *, model_normals: ArrayLike | None) -> _F64:
+    """Positioning errors (SPEC R5); ``machscan.positioning_errors`` documents it and wraps the
+    ``(N, 3)`` per-axis errors this returns.
     """
 
 def icp_defaults() -> _IcpDefaults:

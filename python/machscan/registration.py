@@ -21,11 +21,13 @@ __all__ = [
     "IcpHistory",
     "IcpMethod",
     "IcpResult",
+    "PositioningErrors",
     "RobustKernel",
     "allowance",
     "coarse_align",
     "icp",
     "locating_points",
+    "positioning_errors",
 ]
 
 #: Defaults of :func:`icp`'s options, from ``IcpOptions::new`` in the core.
@@ -213,3 +215,52 @@ def locating_points(
     if a.ndim == 3:
         return _core.locating_points_grid(a, m=m, keep=keep, seed=seed)
     return _core.locating_points_cloud(a, m=m, keep=keep, k=k, seed=seed)
+
+
+@dataclass(frozen=True, eq=False)
+class PositioningErrors:
+    """Per-axis positioning errors of measured points against the model (paper 003 eq 11–14),
+    mm: ``e_x = x_p − x_q``, ``e_y``, ``e_z`` and ``e_total = √(e_x² + e_y² + e_z²)``."""
+
+    e_x: NDArray[np.float64]
+    e_y: NDArray[np.float64]
+    e_z: NDArray[np.float64]
+    e_total: NDArray[np.float64]
+
+    def summary(self) -> str:
+        """Mean and largest |error| per axis, as the paper's table 1 lists them."""
+        rows = [f"{'':8} {'mean |e|':>10} {'max |e|':>10}"]
+        for name, e in (("e_x", self.e_x), ("e_y", self.e_y), ("e_z", self.e_z), ("e_total", self.e_total)):
+            a = np.abs(e)
+            rows.append(f"{name:8} {a.mean():10.4f} {a.max():10.4f}" if len(a) else f"{name:8} {'-':>10} {'-':>10}")
+        return "\n".join(rows)
+
+
+def positioning_errors(
+    measured: ArrayLike, model_points: ArrayLike, model_normals: ArrayLike | None = None
+) -> PositioningErrors:
+    """Positioning errors of measured points against the model (SPEC R5; paper 003 eq 11–14).
+
+    The reference of each measured point p is the closest model point q; with
+    ``model_normals`` it is the closest point of the model surface, the tangent plane at q
+    (``e = ((p − q)·n) n``), so that the spacing of the model points does not count as error.
+
+    Parameters
+    ----------
+    measured : array_like, shape (N, 3)
+        mm, in the model's frame.
+    model_points : array_like, shape (M, 3)
+    model_normals : array_like, shape (M, 3), optional
+
+    Returns
+    -------
+    PositioningErrors
+        ``.e_x``, ``.e_y``, ``.e_z``, ``.e_total`` and ``summary()``.
+
+    Examples
+    --------
+    >>> err = machscan.positioning_errors(probed, model, model_normals)
+    >>> print(err.summary())
+    """
+    e = _core.positioning_errors(measured, model_points, model_normals=model_normals)
+    return PositioningErrors(e[:, 0], e[:, 1], e[:, 2], np.linalg.norm(e, axis=1))

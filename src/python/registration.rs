@@ -5,7 +5,7 @@ use super::convert::{count, enter, indices_to_numpy, to_numpy, Dim, F64Array};
 use crate::cloud::{estimate_normals, Neighborhood};
 use crate::registration::{
     allowance as run_allowance, coarse_align as run_coarse_align, icp as run_icp, line_curvature, locating_points,
-    IcpMethod, IcpOptions, Robust, RobustKernel,
+    positioning_errors as run_positioning_errors, IcpMethod, IcpOptions, Robust, RobustKernel,
 };
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
@@ -220,7 +220,33 @@ fn allowance<'py>(
     to_numpy(py, a, &[n])
 }
 
+/// Positioning errors (SPEC R5); ``machscan.positioning_errors`` documents it and wraps the
+/// ``(N, 3)`` per-axis errors this returns.
+#[pyfunction]
+#[pyo3(signature = (measured, model_points, *, model_normals))]
+fn positioning_errors<'py>(
+    py: Python<'py>,
+    measured: &Bound<'py, PyAny>,
+    model_points: &Bound<'py, PyAny>,
+    model_normals: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let meas = F64Array::points(measured, "measured")?;
+    let model = F64Array::points(model_points, "model_points")?;
+    let n = model.shape()[0];
+    let normals = F64Array::extract_opt(
+        model_normals,
+        "model_normals",
+        &[Dim::Is(n), Dim::Is(3)],
+        "(one normal per model point)",
+    )?;
+    let (p, q) = (meas.rows::<3>()?, model.rows::<3>()?);
+    let nv = normals.as_ref().map(|a| a.rows::<3>()).transpose()?;
+    let e = enter(py, || run_positioning_errors(p, q, nv))?;
+    super::convert::points_to_numpy(py, e)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(positioning_errors, m)?)?;
     m.add_function(wrap_pyfunction!(allowance, m)?)?;
     m.add_function(wrap_pyfunction!(locating_points_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(locating_points_grid, m)?)?;

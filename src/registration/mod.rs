@@ -4,8 +4,10 @@ pub mod allowance;
 pub mod coarse;
 pub mod icp;
 pub mod locating;
+pub mod positioning;
 
 pub use allowance::allowance;
 pub use coarse::coarse_align;
 pub use icp::{icp, IcpMethod, IcpOptions, IcpResult, IcpStep, Robust, RobustKernel};
 pub use locating::{line_curvature, locating_points};
+pub use positioning::positioning_errors;
