@@ -1,11 +1,13 @@
 """The README tour runs as written: every ```python block, in order, in one namespace, from the
-repository root (where `../shared/data` is)."""
+repository root (where `../shared/data` is; a clone elsewhere reads it where `paths` finds it)."""
 
 import os
 import re
 from pathlib import Path
 
 import pytest
+
+from paths import DATA
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -29,6 +31,7 @@ def test_the_tour_runs_as_written(monkeypatch):
     monkeypatch.chdir(ROOT)
     namespace: dict = {"__name__": "readme"}
     for k, block in enumerate(code):
+        block = block.replace('Path("../shared/data")', f"Path({str(DATA)!r})")
         exec(compile(block, f"README.md python block {k + 1}", "exec"), namespace)
     assert os.path.isdir(namespace["out"])
     assert namespace["report"].contours, "the tour's inspection matched its contours"

@@ -12,6 +12,7 @@ import pytest
 
 import machscan
 from machscan import _core
+from paths import DATA
 
 STUB = Path(machscan.__file__).with_name("_core.pyi")
 
@@ -106,7 +107,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
         "_CriteriaDefaults": _core.fit_criteria_defaults(),
         "_Criteria": _core.fit_criteria_defaults()["tanh"],
         "_ContourErrorArrays": _core.contour_error(P[:10], P[:12]),
-        "_CloudArrays": _core.read_cloud(Path(__file__).parents[2] / "shared/data/pcl-bunny-icp/bun0.pcd"),
+        "_CloudArrays": _core.read_cloud(DATA / "pcl-bunny-icp/bun0.pcd"),
         "_ToolpathArrays": _core.read_toolpath(path),
         "_MountCalibrationArrays": _core.calibrate_mount(scs, scs + 1.0),
         "_IcpArrays": _core.icp(
@@ -196,7 +197,7 @@ def test_the_gil_is_released_while_kernels_run():
 def test_results_compare_and_hash_without_raising(tmp_path):
     x = (np.arange(64) - 32) * 0.025
     fits = machscan.fit_grooves(x, np.where(np.abs(x) < 0.25, -0.3, 0.0)[None, :])
-    cloud = machscan.io.read(Path(__file__).parents[2] / "shared/data/pcl-bunny-icp/bun0.pcd")
+    cloud = machscan.io.read(DATA / "pcl-bunny-icp/bun0.pcd")
     err = machscan.contour_error(P[:10], P[:12])
     cal = machscan.calibrate_mount([[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 0, 1.0]], [[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 0, 1.0]])
     for r in (fits, cloud, err, cal, machscan.level_groove_frame(x, np.zeros(64))):

@@ -670,21 +670,28 @@ unsafe fn fit_frame_avx2_fma(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveF
 
 #[inline(always)]
 fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
-    let all = SectionModel::ALL;
-    let models: &[SectionModel] = match &o.template {
-        TemplateKind::Tanh => return fit_tanh(x, z, o),
-        TemplateKind::Auto => &all,
-        TemplateKind::Section(m) => std::slice::from_ref(m),
-    };
+    if o.template == TemplateKind::Tanh {
+        return fit_tanh(x, z, o);
+    }
     let (lo, hi) = window_range(x.len().min(z.len()), o);
-    let settings = MeasureSettings {
+    measure_frame(&x[lo..hi], &z[lo..hi], &section_settings(o))
+}
+
+/// The section models' settings from the options: the models `template` asks for (all four
+/// for `Auto`).
+fn section_settings(o: &GrooveOptions) -> MeasureSettings<'_> {
+    const ALL: [SectionModel; 4] = SectionModel::ALL;
+    let models: &[SectionModel] = match &o.template {
+        TemplateKind::Section(m) => std::slice::from_ref(m),
+        _ => &ALL,
+    };
+    MeasureSettings {
         models,
         spike_threshold: o.spike_threshold,
         min_depth: o.min_depth,
         min_valid: o.min_valid,
         criteria: o.criteria.section(),
-    };
-    measure_frame(&x[lo..hi], &z[lo..hi], &settings)
+    }
 }
 
 /// The readings `[lo, hi)` of the window of `o.window` readings around `o.window_center`.
@@ -811,20 +818,8 @@ pub fn view_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> Result<FrameView> 
             fit,
         });
     }
-    let all = SectionModel::ALL;
-    let models: &[SectionModel] = match &o.template {
-        TemplateKind::Section(m) => std::slice::from_ref(m),
-        _ => &all,
-    };
     let (lo, hi) = window_range(x.len(), o);
-    let settings = MeasureSettings {
-        models,
-        spike_threshold: o.spike_threshold,
-        min_depth: o.min_depth,
-        min_valid: o.min_valid,
-        criteria: o.criteria.section(),
-    };
-    let (fit, detail) = super::measure::measure_frame_detailed(&x[lo..hi], &z[lo..hi], &settings);
+    let (fit, detail) = super::measure::measure_frame_detailed(&x[lo..hi], &z[lo..hi], &section_settings(o));
     let Some(d) = detail else { return Ok(empty(fit)) };
     // Levelled as `v = −s·x + c·z − b·c`: the absolute levelled height adds b·c back.
     let lift = d.b * d.cos;

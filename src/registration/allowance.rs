@@ -17,18 +17,8 @@ const GRAZING: f64 = 0.05;
 /// `t = n·(q0 − p) / (n·v)`). NaN where that plane grazes the normal (|n·v| < 0.05).
 pub fn allowance(model: &[[f64; 3]], normals: &[[f64; 3]], blank: &[[f64; 3]], k: usize) -> Result<Vec<f64>> {
     check_finite_points("model_points", model)?;
-    check_finite_points("model_normals", normals)?;
     check_finite_points("blank_points", blank)?;
-    if normals.len() != model.len() {
-        return Err(Error::shape(
-            "model_normals",
-            format!("({}, 3): one per model point", model.len()),
-            format!("({}, 3)", normals.len()),
-        ));
-    }
-    if let Some(i) = normals.iter().position(|n| Vector3::from(*n).norm() < 1e-12) {
-        return Err(Error::invalid("model_normals", format!("normal {i} is zero: it has no direction")));
-    }
+    super::check_normals("model_normals", normals, model.len())?;
     if k < 3 {
         return Err(Error::invalid("k", format!("a plane needs at least 3 blank points, got k = {k}")));
     }

@@ -21,17 +21,7 @@ pub fn positioning_errors(
         return Err(Error::invalid("model_points", "must hold at least one point"));
     }
     if let Some(n) = normals {
-        check_finite_points("model_normals", n)?;
-        if n.len() != model.len() {
-            return Err(Error::shape(
-                "model_normals",
-                format!("({}, 3): one per model point", model.len()),
-                format!("({}, 3)", n.len()),
-            ));
-        }
-        if let Some(i) = n.iter().position(|v| Vector3::from(*v).norm() < 1e-12) {
-            return Err(Error::invalid("model_normals", format!("normal {i} is zero: it has no direction")));
-        }
+        super::check_normals("model_normals", n, model.len())?;
     }
     let index = PointIndex::new(model)?;
     Ok(measured
