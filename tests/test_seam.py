@@ -100,6 +100,10 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
     path = tmp_path / "t.apt"
     path.write_text("GOTO/1,2,3\n")
     scs = np.array([[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 0, 1.0]])
+    # A Fibonacci sphere, and an ellipsoid whose normals fix a probe pose.
+    i = np.arange(200) + 0.5
+    z = 1 - 2 * i / 200
+    unit = np.column_stack([np.sqrt(1 - z * z) * np.cos(2.4 * i), np.sqrt(1 - z * z) * np.sin(2.4 * i), z])
     results = {
         "_GrooveFitArrays": _core.fit_grooves(x, z, options),
         "_FrameViewArrays": _core.view_groove_frame(x, z[0], options),
@@ -115,6 +119,12 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
             relative_fitness=0.0, relative_rmse=0.0, robust=None, robust_scale=None, trim=0.0, mse_threshold=None,
         ),
         "_IcpDefaults": _core.icp_defaults(),
+        "_ProbeFitArrays": _core.probe_fit(
+            unit * [10, 20, 30], unit * [10, 20, 30], unit / [10, 20, 30], probe_radius=0.0, init=None
+        ),
+        "_EnvelopeFitArrays": _core.envelope_fit(
+            10 * unit, unit, 10.5 * unit, min_allowance=0.0, k=8, init=None
+        ),
     }
     assert set(results) == set(declared), "every TypedDict of the stub is checked here"
     for name, value in results.items():

@@ -66,12 +66,16 @@ from machscan.kinematics import (
     scan_to_wcs,
 )
 from machscan.registration import (
+    EnvelopeFit,
     IcpResult,
     PositioningErrors,
+    PositioningResult,
     allowance,
     coarse_align,
+    envelope_fit,
     icp,
     locating_points,
+    position_workpiece,
     positioning_errors,
 )
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
@@ -82,6 +86,7 @@ __all__ = [
     "ContourErrorResult",
     "ContourResult",
     "Decomposition",
+    "EnvelopeFit",
     "FileFormatError",
     "FitCriteria",
     "GrooveFits",
@@ -93,6 +98,7 @@ __all__ = [
     "LevelledFrame",
     "MountCalibration",
     "PositioningErrors",
+    "PositioningResult",
     "Profiler",
     "Scan",
     "TriangleMesh",
@@ -108,6 +114,7 @@ __all__ = [
     "contour_error",
     "contours",
     "crop_box",
+    "envelope_fit",
     "estimate_normals",
     "euclidean_clusters",
     "fit_grooves",
@@ -125,6 +132,7 @@ __all__ = [
     "nearest_neighbors",
     "octree_simplify",
     "plot",
+    "position_workpiece",
     "positioning_errors",
     "principal_curvatures",
     "profile_to_points",

@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "__version__",
     "SENTINEL",
+    "ALLOWANCE_NEIGHBORS",
     "FileFormatError",
     "KinematicChain",
     "ab_mirror_support_points",
@@ -25,6 +26,7 @@ __all__ = [
     "contour_error",
     "crop_box",
     "estimate_normals",
+    "envelope_fit",
     "euclidean_clusters",
     "fit_criteria_defaults",
     "fit_grooves",
@@ -40,6 +42,7 @@ __all__ = [
     "nearest_neighbors",
     "octree_simplify",
     "principal_curvatures",
+    "probe_fit",
     "profile_to_points",
     "random_downsample",
     "read_cloud",
@@ -61,6 +64,7 @@ __all__ = [
 
 __version__: str
 SENTINEL: float
+ALLOWANCE_NEIGHBORS: int
 
 _Path = str | PathLike[str]
 _F64 = NDArray[np.float64]
@@ -80,6 +84,18 @@ class _IcpArrays(TypedDict):
     converged: bool
     history_fitness: _F64
     history_rmse: _F64
+
+class _ProbeFitArrays(TypedDict):
+    transformation: _F64
+    residuals: _F64
+    iterations: int
+
+class _EnvelopeFitArrays(TypedDict):
+    transformation: _F64
+    allowance: _F64
+    feasible: bool
+    iterations: int
+    converged: bool
 
 class _IcpDefaults(TypedDict):
     method: Literal["point_to_point", "point_to_plane"]
@@ -362,7 +378,7 @@ def interpolate_poses(
     >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
     array([[0.5]])
     """
-def allowance(model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int = 8) -> _F64:
+def allowance(model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int = ...) -> _F64:
     """Machining allowance (SPEC R7; paper 004 §1.2): the stock the blank leaves over each model
     point, measured along the point's outward normal to the least-squares plane of the ``k``
     nearest blank points (``t = n·(q0 − p) / (n·v)``, eq 10 as SPEC R7 corrects it).
@@ -412,12 +428,23 @@ def coarse_align(source: ArrayLike, target: ArrayLike) -> _F64:
     >>> r = machscan.icp(measured, model, 1.0, init)
     """
 
-def locating_points_cloud(points: ArrayLike, *, m: int, keep: float, k: int, seed: int) -> _I64:
+def locating_points_cloud(
+    points: ArrayLike,
+    *,
+    m: int,
+    keep: float,
+    k: int,
+    seed: int,
+    normals: ArrayLike | None,
+    pattern: Literal["random", "optimal"],
+) -> _I64:
     """Probe points on the flattest share of a cloud (SPEC R4): surface variation over the k
     nearest points; ``machscan.locating_points`` documents it.
     """
 
-def locating_points_grid(points: ArrayLike, *, m: int, keep: float, seed: int) -> _I64:
+def locating_points_grid(
+    points: ArrayLike, *, m: int, keep: float, seed: int, normals: ArrayLike | None, pattern: Literal["random", "optimal"]
+) -> _I64:
     """Probe points on the flattest share of a gridded scan ``(nu, nv, 3)`` (SPEC R4): U-direction
     line curvature; ``machscan.locating_points`` documents it.
     """
@@ -426,6 +453,22 @@ def positioning_errors(measured: ArrayLike, model_points: ArrayLike, *, model_no
     """Positioning errors (SPEC R5); ``machscan.positioning_errors`` documents it and wraps the
     ``(N, 3)`` per-axis errors this returns.
     """
+
+def probe_fit(
+    measured: ArrayLike, model_points: ArrayLike, model_normals: ArrayLike, *, probe_radius: float, init: ArrayLike | None
+) -> _ProbeFitArrays:
+    """"""
+
+def envelope_fit(
+    model_points: ArrayLike,
+    model_normals: ArrayLike,
+    blank_points: ArrayLike,
+    *,
+    min_allowance: float,
+    k: int,
+    init: ArrayLike | None,
+) -> _EnvelopeFitArrays:
+    """"""
 
 def icp_defaults() -> _IcpDefaults:
     """The defaults of the ICP options (``IcpOptions::new`` in the core), by name."""

@@ -1,5 +1,5 @@
-"""Figures for a groove inspection (paper 000 §3): what the paper plots, from a
-:class:`~machscan.GrooveReport`.
+"""Figures: what the papers plot. For a groove inspection (paper 000 §3), from a
+:class:`~machscan.GrooveReport`:
 
 * :func:`width_depth_along`: groove width and depth along each contour.
 * :func:`width_depth_histograms`: their distributions over all fitted frames.
@@ -8,6 +8,8 @@
 * :func:`error_along`: the error and its parts along one contour (paper fig. 12).
 * :func:`levelled_frame`: one profiler frame as the groove fit sees it, with the fitted
   template (paper fig. 4 and 10).
+
+For the stock on a blank (paper 004 §1.2): :func:`allowance_map`, the allowance over the part.
 
 matplotlib is an optional dependency (``pip install machscan[plot]``); it is imported when a
 function is called. Without an ``ax``/``axes`` argument every function makes a new figure
@@ -576,4 +578,98 @@ def levelled_frame(
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.legend(loc="lower left", fontsize="small")
     ax.set_title(title, fontsize="medium")
+    return fig
+
+
+def allowance_map(
+    points: ArrayLike,
+    allowance: ArrayLike,
+    *,
+    min_allowance: float = 0.0,
+    ax: Axes | None = None,
+    cmap: str = "RdYlBu",
+    max_points: int = 60000,
+    elev: float = 25.0,
+    azim: float = -60.0,
+) -> Figure:
+    """The machining allowance over the part (SPEC R7, paper 004 §1.2): the model points in 3D,
+    colored by the stock the blank leaves there, the color scale centred on ``min_allowance``
+    (red short of it, blue above it); points short of it are ringed in black, points without an
+    allowance (NaN: the blank's plane grazes the normal) are grey.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        The model points, mm.
+    allowance : array_like, shape (N,)
+        From :func:`machscan.allowance` or :class:`machscan.EnvelopeFit`, mm.
+    min_allowance : float
+        The least stock asked for, mm: the color scale's centre.
+    ax : matplotlib 3D Axes, optional
+        Where to draw (``projection="3d"``); default a new figure.
+    cmap : str
+        A diverging color map.
+    max_points : int
+        More points are drawn as an even subsample of about this many (short points always).
+    elev, azim : float
+        View angles of a new 3D axes, degrees.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> a = machscan.allowance(model, normals, blank)
+    >>> machscan.plot.allowance_map(model, a).savefig("allowance.png", dpi=150)
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    a = np.asarray(allowance, dtype=np.float64).reshape(-1)
+    if len(a) != len(p):
+        raise ValueError(f"allowance: expected one value per point ({len(p)}), got {len(a)}")
+    if max_points < 1:
+        raise ValueError(f"max_points: must be at least 1, got {max_points}")
+    plt = _pyplot()
+    from matplotlib.colors import TwoSlopeNorm
+
+    if ax is None:
+        fig = plt.figure(figsize=(8, 6.5), layout="constrained")
+        ax = fig.add_subplot(projection="3d")
+        ax.view_init(elev=elev, azim=azim)
+    else:
+        fig = ax.figure
+    finite = np.isfinite(a)
+    short = finite & (a < min_allowance)
+    keep = np.zeros(len(p), dtype=bool)
+    keep[:: max(1, int(np.ceil(len(p) / max_points)))] = True
+    keep |= short
+    if not finite.any():
+        _empty(ax, "no allowance")
+        return fig
+    lo, hi = float(a[finite].min()), float(a[finite].max())
+    # A two-slope norm needs the centre strictly inside the range.
+    span = max(hi - lo, 1e-9)
+    norm = TwoSlopeNorm(vcenter=min_allowance, vmin=min(lo, min_allowance - 1e-3 * span),
+                        vmax=max(hi, min_allowance + 1e-3 * span))
+    grey = keep & ~finite
+    if grey.any():
+        ax.scatter(*p[grey].T, s=2, color="0.6", lw=0)
+    ok = keep & finite
+    sc = ax.scatter(*p[ok].T, c=a[ok], cmap=cmap, norm=norm, s=3, lw=0)
+    if short.any():
+        ax.scatter(*p[short].T, s=12, facecolors="none", edgecolors="k", lw=0.6)
+    try:  # equal scales on a 3D axes (matplotlib >= 3.3)
+        ax.set_box_aspect(np.ptp(p[finite], axis=0) + 1e-9)
+    except (AttributeError, TypeError):  # pragma: no cover - a 2D axes given
+        pass
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    if hasattr(ax, "set_zlabel"):
+        ax.set_zlabel("z (mm)")
+    n_short = int(short.sum())
+    ax.set_title(
+        f"Allowance: min {lo:.3f}, mean {a[finite].mean():.3f}, max {hi:.3f} mm; "
+        f"{n_short} point{'s' if n_short != 1 else ''} below {min_allowance:g} mm"
+    )
+    fig.colorbar(sc, ax=ax, label="allowance (mm)", shrink=0.7)
     return fig

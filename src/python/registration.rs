@@ -3,9 +3,12 @@
 //! in the core), so each default is written once.
 use super::convert::{count, enter, indices_to_numpy, to_numpy, Dim, F64Array};
 use crate::cloud::{estimate_normals, Neighborhood};
+use crate::error::Error;
 use crate::registration::{
-    allowance as run_allowance, coarse_align as run_coarse_align, icp as run_icp, line_curvature, locating_points,
-    positioning_errors as run_positioning_errors, IcpMethod, IcpOptions, Robust, RobustKernel,
+    allowance as run_allowance, allowance::PLANE_POINTS, coarse_align as run_coarse_align,
+    envelope_fit as run_envelope_fit, icp as run_icp, line_curvature, locating_points,
+    positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, probe_pattern, IcpMethod, IcpOptions,
+    Robust, RobustKernel,
 };
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
@@ -28,6 +31,20 @@ fn icp_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("trim", o.trim)?;
     d.set_item("normal_neighbors", NORMAL_NEIGHBORS)?;
     Ok(d)
+}
+
+/// A 4×4 transform argument, the identity when omitted.
+fn transform_opt(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Matrix4<f64>> {
+    let a = F64Array::extract_opt(obj, name, &[Dim::Is(4), Dim::Is(4)], "(a 4×4 rigid transform)")?;
+    match &a {
+        Some(a) => Ok(Matrix4::from_row_slice(a.values()?)),
+        None => Ok(Matrix4::identity()),
+    }
+}
+
+/// A 4×4 transform as a NumPy array.
+fn transform_to_numpy<'py>(py: Python<'py>, t: &Matrix4<f64>) -> PyResult<Bound<'py, PyAny>> {
+    to_numpy(py, t.transpose().as_slice().to_vec(), &[4, 4])
 }
 
 /// Iterative closest point (SPEC R2) with Open3D's definitions; ``machscan.icp`` documents it
@@ -61,11 +78,7 @@ fn icp<'py>(
         &[Dim::Is(m), Dim::Is(3)],
         "(one normal per target point)",
     )?;
-    let init = F64Array::extract_opt(init, "init", &[Dim::Is(4), Dim::Is(4)], "(a 4×4 rigid transform)")?;
-    let init = match &init {
-        Some(a) => Matrix4::from_row_slice(a.values()?),
-        None => Matrix4::identity(),
-    };
+    let init = transform_opt(init, "init")?;
     let options = IcpOptions {
         max_distance,
         method: IcpMethod::parse(method)?,
@@ -90,7 +103,7 @@ fn icp<'py>(
         run_icp(s, t, n, &init, &options)
     })?;
     let d = PyDict::new(py);
-    d.set_item("transformation", to_numpy(py, r.transformation.transpose().as_slice().to_vec(), &[4, 4])?)?;
+    d.set_item("transformation", transform_to_numpy(py, &r.transformation)?)?;
     d.set_item("fitness", r.fitness)?;
     d.set_item("rmse", r.rmse)?;
     d.set_item("correspondences", r.correspondences)?;
@@ -131,13 +144,52 @@ fn coarse_align<'py>(
     let tgt = F64Array::points(target, "target")?;
     let (s, t) = (src.rows::<3>()?, tgt.rows::<3>()?);
     let m = enter(py, || run_coarse_align(s, t))?;
-    to_numpy(py, m.transpose().as_slice().to_vec(), &[4, 4])
+    transform_to_numpy(py, &m)
+}
+
+/// How the probe points are chosen from the flattest share.
+enum Pattern {
+    /// At random (the paper).
+    Random,
+    /// Those that fix the pose best along the model's normals (`probe_pattern`).
+    Optimal,
+}
+
+impl Pattern {
+    fn parse(name: &str) -> PyResult<Self> {
+        match name {
+            "random" => Ok(Pattern::Random),
+            "optimal" => Ok(Pattern::Optimal),
+            _ => Err(Error::invalid("pattern", format!("expected 'random' or 'optimal', got {name:?}")).into()),
+        }
+    }
+}
+
+/// Draw or design the probe points from a curvature per point.
+fn choose(
+    pts: &[[f64; 3]],
+    normals: Option<&[[f64; 3]]>,
+    curvature: &[f64],
+    m: usize,
+    keep: f64,
+    seed: u64,
+    pattern: &Pattern,
+) -> crate::error::Result<Vec<usize>> {
+    match (pattern, normals) {
+        (Pattern::Random, _) => locating_points(curvature, m, keep, seed),
+        (Pattern::Optimal, Some(n)) => probe_pattern(pts, n, curvature, m, keep),
+        (Pattern::Optimal, None) => Err(Error::invalid(
+            "normals",
+            "pattern 'optimal' weighs the points by their normals: give the model normals",
+        )),
+    }
 }
 
 /// Probe points on the flattest share of a cloud (SPEC R4): surface variation over the k
 /// nearest points; ``machscan.locating_points`` documents it.
 #[pyfunction]
-#[pyo3(signature = (points, *, m, keep, k, seed))]
+#[pyo3(signature = (points, *, m, keep, k, seed, normals, pattern))]
+#[allow(clippy::too_many_arguments)]
 fn locating_points_cloud<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
@@ -145,13 +197,18 @@ fn locating_points_cloud<'py>(
     keep: f64,
     k: i64,
     seed: u64,
+    normals: Option<&Bound<'py, PyAny>>,
+    pattern: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let (m, k) = (count("m", m)?, count("k", k)?);
+    let (m, k, pattern) = (count("m", m)?, count("k", k)?, Pattern::parse(pattern)?);
     let arr = F64Array::points(points, "points")?;
+    let n = arr.shape()[0];
+    let normals = F64Array::extract_opt(normals, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
     let pts = arr.rows::<3>()?;
+    let nv = normals.as_ref().map(|a| a.rows::<3>()).transpose()?;
     let chosen = enter(py, || {
         let (_, variation, _) = estimate_normals(pts, Neighborhood::Knn(k))?;
-        locating_points(&variation, m, keep, seed)
+        choose(pts, nv, &variation, m, keep, seed, &pattern)
     })?;
     indices_to_numpy(py, chosen)
 }
@@ -159,19 +216,28 @@ fn locating_points_cloud<'py>(
 /// Probe points on the flattest share of a gridded scan ``(nu, nv, 3)`` (SPEC R4): U-direction
 /// line curvature; ``machscan.locating_points`` documents it.
 #[pyfunction]
-#[pyo3(signature = (points, *, m, keep, seed))]
+#[pyo3(signature = (points, *, m, keep, seed, normals, pattern))]
 fn locating_points_grid<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
     m: i64,
     keep: f64,
     seed: u64,
+    normals: Option<&Bound<'py, PyAny>>,
+    pattern: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let m = count("m", m)?;
+    let (m, pattern) = (count("m", m)?, Pattern::parse(pattern)?);
     let arr = F64Array::extract(points, "points", &[Dim::Any("nu"), Dim::Any("nv"), Dim::Is(3)], "(a gridded scan)")?;
     let (nu, nv) = (arr.shape()[0], arr.shape()[1]);
+    let normals = F64Array::extract_opt(
+        normals,
+        "normals",
+        &[Dim::Is(nu), Dim::Is(nv), Dim::Is(3)],
+        "(one normal per grid point)",
+    )?;
     let pts = arr.rows::<3>()?;
-    let chosen = enter(py, || locating_points(&line_curvature(pts, nu, nv)?, m, keep, seed))?;
+    let normal_rows = normals.as_ref().map(|a| a.rows::<3>()).transpose()?;
+    let chosen = enter(py, || choose(pts, normal_rows, &line_curvature(pts, nu, nv)?, m, keep, seed, &pattern))?;
     indices_to_numpy(py, chosen)
 }
 
@@ -201,7 +267,7 @@ fn locating_points_grid<'py>(
 /// >>> a = machscan.allowance(model, normals, blank)
 /// >>> short = a < 0  # where the part would come out short
 #[pyfunction]
-#[pyo3(signature = (model_points, model_normals, blank_points, k=8))]
+#[pyo3(signature = (model_points, model_normals, blank_points, k=PLANE_POINTS as i64))]
 fn allowance<'py>(
     py: Python<'py>,
     model_points: &Bound<'py, PyAny>,
@@ -245,7 +311,67 @@ fn positioning_errors<'py>(
     super::convert::points_to_numpy(py, e)
 }
 
+/// The pose of a part from one round of touch-probe points (SPEC R6, paper 003 §4);
+/// ``machscan.position_workpiece`` runs the rounds and documents it.
+#[pyfunction]
+#[pyo3(signature = (measured, model_points, model_normals, *, probe_radius, init))]
+fn probe_fit<'py>(
+    py: Python<'py>,
+    measured: &Bound<'py, PyAny>,
+    model_points: &Bound<'py, PyAny>,
+    model_normals: &Bound<'py, PyAny>,
+    probe_radius: f64,
+    init: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let model = F64Array::points(model_points, "model_points")?;
+    let n = model.shape()[0];
+    let meas = F64Array::extract(measured, "measured", &[Dim::Is(n), Dim::Is(3)], "(one probe point per model point)")?;
+    let normals =
+        F64Array::extract(model_normals, "model_normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per model point)")?;
+    let init = transform_opt(init, "init")?;
+    let (p, q, v) = (meas.rows::<3>()?, model.rows::<3>()?, normals.rows::<3>()?);
+    let fit = enter(py, || run_probe_fit(p, q, v, probe_radius, &init))?;
+    let d = PyDict::new(py);
+    d.set_item("transformation", transform_to_numpy(py, &fit.transformation)?)?;
+    d.set_item("residuals", to_numpy(py, fit.residuals, &[n])?)?;
+    d.set_item("iterations", fit.iterations)?;
+    Ok(d)
+}
+
+/// The balanced envelope fit of a blank (SPEC R8); ``machscan.envelope_fit`` documents it.
+#[pyfunction]
+#[pyo3(signature = (model_points, model_normals, blank_points, *, min_allowance, k, init))]
+fn envelope_fit<'py>(
+    py: Python<'py>,
+    model_points: &Bound<'py, PyAny>,
+    model_normals: &Bound<'py, PyAny>,
+    blank_points: &Bound<'py, PyAny>,
+    min_allowance: f64,
+    k: i64,
+    init: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let k = count("k", k)?;
+    let model = F64Array::points(model_points, "model_points")?;
+    let n = model.shape()[0];
+    let normals =
+        F64Array::extract(model_normals, "model_normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per model point)")?;
+    let blank = F64Array::points(blank_points, "blank_points")?;
+    let init = transform_opt(init, "init")?;
+    let (m, v, b) = (model.rows::<3>()?, normals.rows::<3>()?, blank.rows::<3>()?);
+    let fit = enter(py, || run_envelope_fit(m, v, b, min_allowance, k, &init))?;
+    let d = PyDict::new(py);
+    d.set_item("transformation", transform_to_numpy(py, &fit.transformation)?)?;
+    d.set_item("allowance", to_numpy(py, fit.allowance, &[n])?)?;
+    d.set_item("feasible", fit.feasible)?;
+    d.set_item("iterations", fit.iterations)?;
+    d.set_item("converged", fit.converged)?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("ALLOWANCE_NEIGHBORS", PLANE_POINTS)?;
+    m.add_function(wrap_pyfunction!(probe_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(envelope_fit, m)?)?;
     m.add_function(wrap_pyfunction!(positioning_errors, m)?)?;
     m.add_function(wrap_pyfunction!(allowance, m)?)?;
     m.add_function(wrap_pyfunction!(locating_points_cloud, m)?)?;

@@ -12,6 +12,10 @@ use rayon::prelude::*;
 /// is NaN (reported, not guessed).
 const GRAZING: f64 = 0.05;
 
+/// Blank points of each local plane by default: enough for a stable plane through sensor
+/// noise, few enough to stay local at the blank's sampling.
+pub const PLANE_POINTS: usize = 8;
+
 /// The signed allowance of each model point along its unit outward normal, mm: `t` with
 /// `p + t·v` on the plane of the `k` nearest blank points (eq 10 as SPEC R7 corrects it:
 /// `t = n·(q0 − p) / (n·v)`). NaN where that plane grazes the normal (|n·v| < 0.05).
@@ -19,35 +23,57 @@ pub fn allowance(model: &[[f64; 3]], normals: &[[f64; 3]], blank: &[[f64; 3]], k
     check_finite_points("model_points", model)?;
     check_finite_points("blank_points", blank)?;
     super::check_normals("model_normals", normals, model.len())?;
-    if k < 3 {
-        return Err(Error::invalid("k", format!("a plane needs at least 3 blank points, got k = {k}")));
-    }
-    if k > blank.len() {
-        return Err(Error::invalid("k", format!("{k} neighbors asked, but the blank has {} points", blank.len())));
-    }
+    check_k(k, blank.len())?;
     let index = PointIndex::new(blank)?;
     Ok(model
         .par_iter()
         .zip(normals)
         .map(|(p, v)| {
             let (p, v) = (Vector3::from(*p), Vector3::from(*v).normalize());
-            let near = index.knn(&p.into(), k);
-            let q0 = near.iter().fold(Vector3::zeros(), |a, &(i, _)| a + Vector3::from(blank[i])) / k as f64;
-            let cov = near.iter().fold(Matrix3::zeros(), |a, &(i, _)| {
-                let d = Vector3::from(blank[i]) - q0;
-                a + d * d.transpose()
-            });
-            let eig = SymmetricEigen::new(cov);
-            let smallest = (0..3).min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b])).unwrap_or(0);
-            let n = eig.eigenvectors.column(smallest).into_owned();
-            let nv = n.dot(&v);
-            if nv.abs() < GRAZING {
-                f64::NAN
-            } else {
-                n.dot(&(q0 - p)) / nv
-            }
+            let (q0, n) = blank_plane(&index, blank, &p, k);
+            along_normal(&p, &v, &q0, &n)
         })
         .collect())
+}
+
+/// `k` for a plane of `k` blank points: at least 3, at most all of them.
+pub(super) fn check_k(k: usize, blank: usize) -> Result<()> {
+    if k < 3 {
+        return Err(Error::invalid("k", format!("a plane needs at least 3 blank points, got k = {k}")));
+    }
+    if k > blank {
+        return Err(Error::invalid("k", format!("{k} neighbors asked, but the blank has {blank} points")));
+    }
+    Ok(())
+}
+
+/// The least-squares plane of the `k` blank points nearest to `p`: its centroid and unit normal
+/// (eq 3–5; the sign of the normal is arbitrary).
+pub(super) fn blank_plane(
+    index: &PointIndex,
+    blank: &[[f64; 3]],
+    p: &Vector3<f64>,
+    k: usize,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let near = index.knn(&[p[0], p[1], p[2]], k);
+    let q0 = near.iter().fold(Vector3::zeros(), |a, &(i, _)| a + Vector3::from(blank[i])) / k as f64;
+    let cov = near.iter().fold(Matrix3::zeros(), |a, &(i, _)| {
+        let d = Vector3::from(blank[i]) - q0;
+        a + d * d.transpose()
+    });
+    let eig = SymmetricEigen::new(cov);
+    let smallest = (0..3).min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b])).unwrap_or(0);
+    (q0, eig.eigenvectors.column(smallest).into_owned())
+}
+
+/// `t` with `p + t·v` on the plane through `q0` with normal `n`; NaN where it grazes.
+pub(super) fn along_normal(p: &Vector3<f64>, v: &Vector3<f64>, q0: &Vector3<f64>, n: &Vector3<f64>) -> f64 {
+    let nv = n.dot(v);
+    if nv.abs() < GRAZING {
+        f64::NAN
+    } else {
+        n.dot(&(q0 - p)) / nv
+    }
 }
 
 #[cfg(test)]

@@ -2,17 +2,20 @@
 //! model. `icp` is the kernel the positioning and allowance workflows stand on.
 pub mod allowance;
 pub mod coarse;
+pub mod envelope;
 pub mod icp;
 pub mod locating;
 pub mod positioning;
 
 pub use allowance::allowance;
 pub use coarse::coarse_align;
+pub use envelope::{envelope_fit, EnvelopeFit};
 pub use icp::{icp, IcpMethod, IcpOptions, IcpResult, IcpStep, Robust, RobustKernel};
-pub use locating::{line_curvature, locating_points};
-pub use positioning::positioning_errors;
+pub use locating::{line_curvature, locating_points, probe_pattern};
+pub use positioning::{positioning_errors, probe_fit, ProbeFit};
 
 use crate::error::{check_finite_points, Error, Result};
+use nalgebra::{Matrix4, Rotation3, Vector3};
 
 /// Model normals: finite, one per model point, none zero (a zero normal has no direction).
 fn check_normals(name: &str, normals: &[[f64; 3]], points: usize) -> Result<()> {
@@ -28,4 +31,15 @@ fn check_normals(name: &str, normals: &[[f64; 3]], points: usize) -> Result<()> 
         return Err(Error::invalid(name, format!("normal {i} is zero: it has no direction")));
     }
     Ok(())
+}
+
+/// The small rigid motion that turns by the rotation vector `omega` about `centre` and then
+/// moves by `tau`: the update of the Gauss–Newton fits, linearised about the centre of their
+/// points so that rotation and translation are nearly uncoupled.
+fn twist(omega: &Vector3<f64>, tau: &Vector3<f64>, centre: &Vector3<f64>) -> Matrix4<f64> {
+    let r = Rotation3::new(*omega).into_inner();
+    let mut t = Matrix4::identity();
+    t.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+    t.fixed_view_mut::<3, 1>(0, 3).copy_from(&(centre - r * centre + tau));
+    t
 }

@@ -1,4 +1,4 @@
-"""Synthetic scans with exact ground truth, for tests, demos and benchmarks.
+"""Paper 000 groove plate scans and groove frames with exact ground truth, for tests, demos and benchmarks.
 
 :func:`groove_scan` reproduces the experiment of paper 000 §3 (on-machine measurement of
 laser-engraved chemical-milling grooves): a 200 mm x 200 mm aluminium plate covered with
@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scan import SENTINEL, Profiler, Scan
+from ..scan import SENTINEL, Profiler, Scan
 
 __all__ = [
     "DEFAULT_C2_OFFSET",

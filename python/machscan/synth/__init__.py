@@ -1,0 +1,52 @@
+"""Synthetic scans and parts with exact ground truth, for tests, demos and benchmarks.
+
+* :mod:`machscan.synth.grooves`: paper 000 groove plate scans (:func:`groove_scan`) and groove frames
+  (:func:`groove_frames`), with their truth.
+* :mod:`machscan.synth.blade`: paper 003 turbine blade (:class:`Blade`) and touch-probe simulator
+  (:class:`TouchProbe`, :func:`misplacement`).
+
+The package is pure NumPy (it does not use the compiled core), so its truth is independent of the code
+it tests.
+"""
+
+from machscan.synth.blade import Blade, TouchProbe, misplacement
+from machscan.synth.grooves import (
+    DEFAULT_C2_OFFSET,
+    DEFAULT_MOUNT,
+    GROOVE_SHAPES,
+    PLATE,
+    ContourShape,
+    Deflection,
+    GrooveFrames,
+    GrooveTruth,
+    PeriodicProfile,
+    SurfaceError,
+    default_contours,
+    flat_plate_scan,
+    groove_frames,
+    groove_scan,
+    pocket_plate,
+    surface_error,
+)
+
+__all__ = [
+    "DEFAULT_C2_OFFSET",
+    "DEFAULT_MOUNT",
+    "GROOVE_SHAPES",
+    "PLATE",
+    "Blade",
+    "ContourShape",
+    "Deflection",
+    "GrooveFrames",
+    "GrooveTruth",
+    "PeriodicProfile",
+    "SurfaceError",
+    "TouchProbe",
+    "default_contours",
+    "flat_plate_scan",
+    "groove_frames",
+    "groove_scan",
+    "misplacement",
+    "pocket_plate",
+    "surface_error",
+]
