@@ -181,3 +181,64 @@ def test_points_drop_the_vendor_sentinel_by_default(small, tmp_path, capsys):
     n_sentinel = int((scan.frames == machscan.SENTINEL).sum())
     assert n_sentinel > 0 and f"dropped   : {int((~np.isfinite(scan.frames)).sum()) + n_sentinel:,}" in out
     assert machscan.read_points(tmp_path / "c.ply")[:, 2].min() > -1000
+
+
+# ---- position and allowance (issue #9 §5) ---------------------------------------------------
+
+
+def test_position_simulate_prints_the_rounds(capsys):
+    assert main(["position", "--simulate"]) == 0
+    out = capsys.readouterr().out
+    assert "round" in out and "µm RMS along the normals" in out
+
+
+def test_position_plan_then_fit_equals_the_library(tmp_path, capsys):
+    # The plant's loop through files: plan → probe cycle (the simulator here) → fit → next plan.
+    blade = synth.Blade()
+    points, normals = blade.sample(120, 60)
+    model = tmp_path / "model.ply"
+    machscan.write_points(model, points.reshape(-1, 3), normals=normals.reshape(-1, 3))
+    truth = synth.misplacement(1, center=points.reshape(-1, 3).mean(axis=0))
+    probe = synth.TouchProbe(blade, truth, radius=1.5, noise=0.002, seed=1)
+    plan = tmp_path / "plan.csv"
+    assert main(["position", str(model), "--plan", str(plan)]) == 0
+    rows = np.loadtxt(plan, delimiter=",", skiprows=1)
+    measured = tmp_path / "probed.csv"
+    np.savetxt(measured, probe(rows[:, 1:4], rows[:, 4:7]), delimiter=",", header="x,y,z", comments="")
+    pose, nxt = tmp_path / "pose.txt", tmp_path / "next.csv"
+    args = ["position", str(model), "--plan", str(plan), "--measured", str(measured), "--probe-radius", "1.5"]
+    assert main([*args, "--out", str(pose), "--next-plan", str(nxt)]) == 0
+    assert "e_total" in capsys.readouterr().out
+    stored = machscan.io.read(model)  # as the command reads it (float32 in a PLY)
+    expected = machscan.registration.probe_round(stored.points, stored.normals, rows[:, 0].astype(int), np.eye(4),
+                                                 np.loadtxt(measured, delimiter=",", skiprows=1), probe_radius=1.5)
+    np.testing.assert_allclose(np.loadtxt(pose), expected.transformation, atol=1e-9)
+    assert np.abs(np.loadtxt(pose) - truth).max() < 0.02  # one round from 0.5 mm / 0.5° off: µm left
+    assert np.loadtxt(nxt, delimiter=",", skiprows=1).shape == rows.shape
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".pcd", ".csv"])
+def test_allowance_command_writes_a_scalar_field_open3d_reads(tmp_path, capsys, suffix):
+    open3d = pytest.importorskip("open3d")
+    blade = synth.Blade()
+    points, normals = blade.sample(80, 20)
+    u, v = np.meshgrid(np.arange(400) / 400, np.linspace(0, 1, 120), indexing="ij")
+    s, n = blade.surface(u, v)
+    blank = (s + 0.2 * n).reshape(-1, 3)
+    model, blank_file = tmp_path / "model.ply", tmp_path / "blank.xyz"
+    machscan.write_points(model, points.reshape(-1, 3), normals=normals.reshape(-1, 3))
+    machscan.write_points(blank_file, blank)
+    out = tmp_path / f"allowance{suffix}"
+    # (-1 mm: the thin trailing edge of the coarse model has planes across both faces.)
+    assert main(["allowance", str(model), str(blank_file), "--out", str(out), "--min-allowance", "-1"]) == 0
+    assert "allowance (mm)" in capsys.readouterr().out
+    stored = machscan.io.read(model)
+    expected = machscan.allowance(stored.points, stored.normals, machscan.read_points(blank_file))
+    if suffix == ".csv":
+        back = np.loadtxt(out, delimiter=",", skiprows=1)[:, 6]
+    else:
+        cloud = open3d.t.io.read_point_cloud(str(out))
+        back = cloud.point["allowance"].numpy().reshape(-1)
+    np.testing.assert_allclose(back, expected, atol=1e-6, equal_nan=True)
+    # Asking for more stock than there is: reported with exit status 3.
+    assert main(["allowance", str(model), str(blank_file), "--out", str(out), "--min-allowance", "0.5"]) == 3

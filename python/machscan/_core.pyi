@@ -398,7 +398,8 @@ def allowance(model_points: ArrayLike, model_normals: ArrayLike, blank_points: A
     -------
     ndarray, shape (N,)
         Signed allowance, mm: negative where the blank does not envelop the model; NaN where
-        the blank's local plane grazes the normal (|cos| < 0.05), so the line does not meet it.
+        the blank's local plane is inclined more than 60° to the model surface (an edge, or
+        neighbours all from one scan line), so it is not the blank over the point.
 
     Examples
     --------

@@ -4,6 +4,12 @@
     machscan grooves SCAN CAD [CAD ...] [--out DIR] raw scan + CAD contours → groove tables (CSV);
                                                     exit status 3 when no contour matched
     machscan points SCAN [--out cloud.ply]          raw scan → workpiece point cloud (PLY)
+    machscan position MODEL --plan plan.csv         model → probe points and approach directions
+    machscan position MODEL --plan plan.csv --measured probed.csv [--out pose.txt]
+                                                    one probe round → part pose, error table
+    machscan position --simulate                    the probe rounds on the built-in blade
+    machscan allowance MODEL BLANK [--out a.ply]    stock per model point (PLY/PCD/XYZ/CSV);
+                                                    exit status 3 when the minimum does not hold
 """
 
 from __future__ import annotations
@@ -168,6 +174,129 @@ def _points(args: argparse.Namespace) -> int:
     return 0
 
 
+def _read_model(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Model points and outward normals from a file: its normals, or for a mesh (STL/OBJ/PLY
+    with faces) the area-weighted normals of its vertices (outward for a consistently wound
+    mesh)."""
+    from machscan.io import read
+
+    f = read(path)
+    if f.normals is not None:
+        return f.points, f.normals
+    if len(f.triangles):
+        t = f.triangles
+        face = np.cross(f.points[t[:, 1]] - f.points[t[:, 0]], f.points[t[:, 2]] - f.points[t[:, 0]])
+        normals = np.zeros_like(f.points)
+        for k in range(3):
+            np.add.at(normals, t[:, k], face)
+        used = np.linalg.norm(normals, axis=1) > 0
+        return f.points[used], normals[used]
+    raise ValueError(f"model: {path} has no normals (nx, ny, nz) and no triangles: the allowance and the probe "
+                     "directions need the model's outward normals")
+
+
+def _write_table(path: Path, header: str, rows: np.ndarray) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savetxt(path, rows, delimiter=",", header=header, comments="", fmt="%.9g")
+
+
+def _position(args: argparse.Namespace) -> int:
+    from machscan import registration
+
+    if args.simulate:
+        return _position_simulated(args)
+    if args.model is None or args.plan is None:
+        raise ValueError("position: give MODEL and --plan (or --simulate)")
+    points, normals = _read_model(args.model)
+    pose = np.loadtxt(args.pose).reshape(4, 4) if args.pose else np.eye(4)
+    if args.measured is None:
+        idx = registration.locating_points(points, args.n_points, keep=args.keep, seed=args.seed, normals=normals,
+                                           pattern=args.pattern)
+        _write_plan(args.plan, points, normals, idx, pose)
+        print(f"plan      : {len(idx)} probe points of {len(points):,} ({args.pattern}, flattest {args.keep:.0%})")
+        print(f"written   : {args.plan} (index, x, y, z, dx, dy, dz: contact points and approach directions, mm)")
+        return 0
+    plan = np.loadtxt(args.plan, delimiter=",", skiprows=1, ndmin=2)
+    measured = np.genfromtxt(args.measured, delimiter=",", skip_header=1, usecols=(0, 1, 2), ndmin=2)
+    r = registration.probe_round(points, normals, plan[:, 0].astype(np.int64), pose, measured,
+                                 probe_radius=args.probe_radius)
+    result = registration.PositioningResult(r.transformation, (r,), plan[:, 0].astype(np.int64), converged=False)
+    print(result.summary())
+    if r.hits < 6:
+        _warn(f"only {r.hits} probe points found the part: no pose fitted")
+        return 3
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    np.savetxt(args.out, r.transformation, fmt="%.12g")
+    print(f"\npose      : model → machine, written to {args.out}")
+    print(f"correction: {r.correction * 1e3:.2f} µm RMS along the normals; probe again at the new pose while it "
+          "is above the probe noise")
+    if args.next_plan:
+        _write_plan(args.next_plan, points, normals, plan[:, 0].astype(np.int64), r.transformation)
+        print(f"written   : {args.next_plan} (the same points at the new pose)")
+    return 0
+
+
+def _write_plan(path: Path, points: np.ndarray, normals: np.ndarray, idx: np.ndarray, pose: np.ndarray) -> None:
+    n = normals[idx] / np.linalg.norm(normals[idx], axis=1, keepdims=True)
+    p = points[idx] @ pose[:3, :3].T + pose[:3, 3]
+    d = -(n @ pose[:3, :3].T)
+    _write_table(path, "index,x,y,z,dx,dy,dz", np.column_stack([idx, p, d]))
+
+
+def _position_simulated(args: argparse.Namespace) -> int:
+    from machscan.registration import position_workpiece
+    from machscan.synth import Blade, TouchProbe, misplacement
+
+    blade = Blade()
+    points, normals = blade.sample(200, 100)
+    truth = misplacement(args.seed, center=points.reshape(-1, 3).mean(axis=0))
+    probe = TouchProbe(blade, truth, radius=args.probe_radius, noise=0.002, seed=args.seed)
+    r = position_workpiece(points, normals, probe, n_points=args.n_points, seed=args.seed,
+                           probe_radius=args.probe_radius, keep=args.keep, pattern=args.pattern)
+    p, n = points.reshape(-1, 3), normals.reshape(-1, 3)
+    d = (p @ r.transformation[:3, :3].T + r.transformation[:3, 3]) - (p @ truth[:3, :3].T + truth[:3, 3])
+    along = np.einsum("ij,ij->i", d, n @ truth[:3, :3].T)
+    print("synthetic blade, 0.5 mm / 0.5° misplaced, probe noise 2 µm\n")
+    print(r.summary())
+    print(f"\npose error over the whole blade: {np.sqrt(np.mean(along**2)) * 1e3:.2f} µm RMS along the normals, "
+          f"{np.sqrt(np.mean(np.sum(d**2, axis=1))) * 1e3:.1f} µm RMS displacement (sliding along the faces)")
+    return 0
+
+
+def _allowance(args: argparse.Namespace) -> int:
+    from machscan.io import read_points, write_points
+    from machscan.registration import allowance, envelope_fit
+
+    model, normals = _read_model(args.model)
+    blank = read_points(args.blank)
+    if args.fit:
+        fit = envelope_fit(model, normals, blank, min_allowance=args.min_allowance, k=args.k)
+        a = fit.allowance
+        print(fit.summary())
+        print("blank pose (applied to the blank):")
+        print(np.array2string(fit.transformation, precision=6, suppress_small=True))
+        holds = fit.feasible
+    else:
+        a = allowance(model, normals, blank, k=args.k)
+        ok = a[np.isfinite(a)]
+        short = int(np.sum(ok < args.min_allowance))
+        print(f"allowance (mm): min {ok.min():.4f}  mean {ok.mean():.4f}  max {ok.max():.4f}  std {ok.std():.4f}")
+        print(f"{short} of {len(ok)} points below {args.min_allowance:g} mm; {len(a) - len(ok)} without a value")
+        holds = short == 0
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if out.suffix.lower() in (".csv", ".xyz", ".txt"):
+        # Text point files hold x, y, z only; the table keeps the normal and the allowance.
+        _write_table(out, "x,y,z,nx,ny,nz,allowance", np.column_stack([model, normals, a]))
+    else:
+        write_points(out, model, normals=normals, scalars={"allowance": a})
+    print(f"written   : {out} (model points, normals and the allowance, mm)")
+    if not holds:
+        _warn(f"the blank leaves less than {args.min_allowance:g} mm somewhere")
+        return 3
+    return 0
+
+
 def _scan_arguments(p: argparse.ArgumentParser) -> None:
     from machscan.scan import SENTINEL
 
@@ -230,6 +359,39 @@ def build_parser() -> argparse.ArgumentParser:
     pts.add_argument("--out", type=Path, default=Path("cloud.ply"), help="output PLY (default: %(default)s)")
     pts.add_argument("--ascii", action="store_true", help="write ASCII PLY instead of binary")
     pts.set_defaults(run=_points)
+
+    import inspect
+
+    from machscan.registration import ALLOWANCE_NEIGHBORS, position_workpiece
+
+    positioning = {k: v.default for k, v in inspect.signature(position_workpiece).parameters.items()}
+    pos = sub.add_parser("position", help="where the part sits: touch-probe plan, or the pose from one probe round")
+    pos.add_argument("model", nargs="?", type=Path, help="model points with normals (PLY/PCD/XYZ/CSV) or a mesh (STL)")
+    pos.add_argument("--plan", type=Path, help="probe plan CSV: written without --measured, read with it")
+    pos.add_argument("--measured", type=Path, help="probe readings CSV (x, y, z per plan row; empty: missed)")
+    pos.add_argument("--pose", type=Path, help="4×4 pose (model → machine) the plan was made at (default: identity)")
+    pos.add_argument("--out", type=Path, default=Path("pose.txt"), help="fitted pose (default: %(default)s)")
+    pos.add_argument("--next-plan", type=Path, help="write the plan at the fitted pose for the next round")
+    pos.add_argument("--n-points", type=int, default=positioning["n_points"], help="probe points (default: %(default)s)")
+    pos.add_argument("--keep", type=float, default=positioning["keep"], help="flattest share to choose from (default: %(default)s)")
+    pos.add_argument("--pattern", choices=("optimal", "random"), default=positioning["pattern"],
+                     help="designed points or the paper's random draw (default: %(default)s)")
+    pos.add_argument("--seed", type=int, default=positioning["seed"], help="seed of a random draw (default: %(default)s)")
+    pos.add_argument("--probe-radius", type=float, default=positioning["probe_radius"], help="probe ball radius, mm (default: %(default)s)")
+    pos.add_argument("--simulate", action="store_true", help="run the rounds on the built-in synthetic blade")
+    pos.set_defaults(run=_position)
+
+    al = sub.add_parser("allowance", help="machining allowance of a measured blank over the model")
+    al.add_argument("model", type=Path, help="model points with normals (PLY/PCD/XYZ/CSV) or a mesh (STL)")
+    al.add_argument("blank", type=Path, help="measured blank points, in the model's frame")
+    al.add_argument("--out", type=Path, default=Path("allowance.ply"),
+                    help="model points with the allowance as a scalar field (.ply, .pcd) or a column (.csv) "
+                         "(default: %(default)s)")
+    al.add_argument("--min-allowance", type=float, default=0.0, help="least stock wanted, mm (default: %(default)s)")
+    al.add_argument("--fit", action="store_true",
+                    help="first move the blank to the balanced envelope fit (every allowance ≥ the minimum)")
+    al.add_argument("--k", type=int, default=ALLOWANCE_NEIGHBORS, help="blank points per local plane (default: %(default)s)")
+    al.set_defaults(run=_allowance)
     return parser
 
 

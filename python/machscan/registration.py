@@ -37,6 +37,7 @@ __all__ = [
     "locating_points",
     "position_workpiece",
     "positioning_errors",
+    "probe_round",
 ]
 
 #: Defaults of :func:`icp`'s options, from ``IcpOptions::new`` in the core.
@@ -326,6 +327,8 @@ class ProbeRound:
     correction : float
         How far this round moved the probe points along their normals (RMS), mm: what the
         round changed.
+    moved : ndarray, shape (n,)
+        That move of each probe point, mm.
     """
 
     transformation: NDArray[np.float64]
@@ -337,6 +340,7 @@ class ProbeRound:
     errors: PositioningErrors
     rms: float
     correction: float
+    moved: NDArray[np.float64]
 
     @property
     def hits(self) -> int:
@@ -473,72 +477,105 @@ def position_workpiece(
     if not (np.isfinite(probe_radius) and probe_radius >= 0):
         raise ValueError(f"probe_radius: must be ≥ 0 mm, got {probe_radius}")
     indices = locating_points(grid, n_points, keep=keep, seed=seed, normals=normals, pattern=pattern)
-    points = grid.reshape(-1, 3)
-    normals = normals.reshape(-1, 3)
-    q = points[indices]
-    n = normals[indices] / np.linalg.norm(normals[indices], axis=1, keepdims=True)
     pose = np.eye(4) if init is None else np.array(init, dtype=np.float64)
     if pose.shape != (4, 4):
         raise ValueError(f"init: expected a 4×4 transform, got shape {pose.shape}")
+    points = grid.reshape(-1, 3)
+    q = points[indices]
+    n = normals.reshape(-1, 3)[indices]
+    n = n / np.linalg.norm(n, axis=1, keepdims=True)
     rounds: list[ProbeRound] = []
     converged = False
     for _ in range(max_rounds):
         commanded = q @ pose[:3, :3].T + pose[:3, 3]
         directions = -(n @ pose[:3, :3].T)
-        measured = np.asarray(measure(commanded, directions), dtype=np.float64)
-        if measured.shape != commanded.shape:
-            raise ValueError(f"measure: returned shape {measured.shape}, expected {commanded.shape} (one per point)")
-        hit = np.isfinite(measured).all(axis=1)
-        if hit.sum() < 6:
-            rounds.append(_missed_round(pose, commanded, directions, measured))
+        measured = measure(commanded, directions)
+        round_ = probe_round(grid, normals, indices, pose, measured, probe_radius=probe_radius)
+        rounds.append(round_)
+        if round_.hits < 6:
             break
-        fit = _core.probe_fit(measured[hit], q[hit], n[hit], probe_radius=probe_radius, init=pose)
-        new = fit["transformation"]
-        inverse = np.linalg.inv(new)
-        surface = np.full_like(measured, np.nan)
-        surface[hit] = measured[hit] @ inverse[:3, :3].T + inverse[:3, 3] - probe_radius * n[hit]
-        residuals = np.full(len(q), np.nan)
-        residuals[hit] = fit["residuals"]
-        # The correction: how far the new pose moves each probe point along its normal.
-        moved = (q @ new[:3, :3].T + new[:3, 3]) - commanded
-        d = np.einsum("ij,ij->i", moved, n @ new[:3, :3].T)
-        rms = float(np.sqrt(np.mean(fit["residuals"] ** 2)))
-        sigma2 = float(np.sum(fit["residuals"] ** 2)) / max(int(hit.sum()) - 6, 1)
-        correction = float(np.sqrt(np.mean(d**2)))
-        rounds.append(
-            ProbeRound(
-                transformation=new,
-                commanded=commanded,
-                directions=directions,
-                measured=measured,
-                surface=surface,
-                residuals=residuals,
-                errors=positioning_errors(surface[hit], points, normals),
-                rms=rms,
-                correction=correction,
-            )
-        )
-        pose = new
-        if correction <= tolerance or np.sum(d**2) <= _NOISE_CHI2 * sigma2:
+        d2 = np.nansum(round_.moved**2)
+        sigma2 = float(np.nansum(round_.residuals**2)) / max(round_.hits - 6, 1)
+        pose = round_.transformation
+        if round_.correction <= tolerance or d2 <= _NOISE_CHI2 * sigma2:
             converged = True
             break
     return PositioningResult(transformation=pose, rounds=tuple(rounds), indices=indices, converged=converged)
 
 
-def _missed_round(pose, commanded, directions, measured) -> ProbeRound:
-    """A round that hit too few points to fit: reported, the pose kept."""
-    empty = np.zeros(0)
-    nan = np.full_like(commanded, np.nan)
+def probe_round(
+    model_points: ArrayLike,
+    model_normals: ArrayLike,
+    indices: ArrayLike,
+    pose: ArrayLike,
+    measured: ArrayLike,
+    *,
+    probe_radius: float = 0.0,
+) -> ProbeRound:
+    """One round of :func:`position_workpiece` from probe readings taken elsewhere (a probe cycle
+    run by the NC program): the model points ``indices`` were probed at ``pose``, along their
+    normals, and ``measured`` came back. The fitted pose is ``.transformation``.
+
+    Parameters
+    ----------
+    model_points, model_normals : array_like, shape (N, 3) or (nu, nv, 3)
+    indices : array_like of int, shape (n,)
+        The probed model points (into the flattened model).
+    pose : array_like, shape (4, 4)
+        The pose (model → machine) the probe points were commanded at.
+    measured : array_like, shape (n, 3)
+        The probe readings (NaN rows: missed).
+    probe_radius : float
+        Ball radius, mm, when the readings are ball centres.
+
+    Returns
+    -------
+    ProbeRound
+        With the pose unchanged and ``rms`` NaN when fewer than 6 points were hit.
+    """
+    points = np.asarray(model_points, dtype=np.float64).reshape(-1, 3)
+    normals = np.asarray(model_normals, dtype=np.float64).reshape(-1, 3)
+    if normals.shape != points.shape:
+        raise ValueError(f"model_normals: expected the shape of model_points {points.shape}, got {normals.shape}")
+    idx = np.asarray(indices, dtype=np.int64)
+    if idx.ndim != 1 or (len(idx) and (idx.min() < 0 or idx.max() >= len(points))):
+        raise ValueError(f"indices: expected indices into the {len(points)} model points")
+    pose = np.array(pose, dtype=np.float64)
+    if pose.shape != (4, 4):
+        raise ValueError(f"init: expected a 4×4 transform, got shape {pose.shape}")
+    q = points[idx]
+    n = normals[idx] / np.linalg.norm(normals[idx], axis=1, keepdims=True)
+    commanded = q @ pose[:3, :3].T + pose[:3, 3]
+    directions = -(n @ pose[:3, :3].T)
+    measured = np.asarray(measured, dtype=np.float64)
+    if measured.shape != commanded.shape:
+        raise ValueError(f"measure: returned shape {measured.shape}, expected {commanded.shape} (one per point)")
+    hit = np.isfinite(measured).all(axis=1)
+    nan3 = np.full_like(commanded, np.nan)
+    if hit.sum() < 6:
+        empty = np.zeros(0)
+        return ProbeRound(pose, commanded, directions, measured, nan3, np.full(len(q), np.nan),
+                          PositioningErrors(empty, empty, empty, empty), float("nan"), float("nan"), nan3[:, 0])
+    fit = _core.probe_fit(measured[hit], q[hit], n[hit], probe_radius=probe_radius, init=pose)
+    new = fit["transformation"]
+    inverse = np.linalg.inv(new)
+    surface = nan3.copy()
+    surface[hit] = measured[hit] @ inverse[:3, :3].T + inverse[:3, 3] - probe_radius * n[hit]
+    residuals = np.full(len(q), np.nan)
+    residuals[hit] = fit["residuals"]
+    # How far the fitted pose moves each probe point along its normal: what the round changed.
+    moved = np.einsum("ij,ij->i", (q @ new[:3, :3].T + new[:3, 3]) - commanded, n @ new[:3, :3].T)
     return ProbeRound(
-        transformation=pose,
+        transformation=new,
         commanded=commanded,
         directions=directions,
         measured=measured,
-        surface=nan,
-        residuals=np.full(len(commanded), np.nan),
-        errors=PositioningErrors(empty, empty, empty, empty),
-        rms=float("nan"),
-        correction=float("nan"),
+        surface=surface,
+        residuals=residuals,
+        errors=positioning_errors(surface[hit], points, normals),
+        rms=float(np.sqrt(np.mean(fit["residuals"] ** 2))),
+        correction=float(np.sqrt(np.mean(moved**2))),
+        moved=moved,
     )
 
 

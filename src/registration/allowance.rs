@@ -7,10 +7,11 @@ use crate::spatial::PointIndex;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
 
-/// The plane's normal is this close to perpendicular to the model normal (|cos| below): the
-/// line along the normal does not meet the plane where it is meant to, and the allowance there
-/// is NaN (reported, not guessed).
-const GRAZING: f64 = 0.05;
+/// The plane's normal is this far from the model normal (|cos| below, 60°): the plane is not
+/// the blank's surface over the point but a neighbouring feature — an edge, or a scan line
+/// whose points all lie in one section — so the line along the normal meets it far off, and
+/// the allowance there is NaN (reported, not guessed). Stock varies far more gently.
+const GRAZING: f64 = 0.5;
 
 /// Blank points of each local plane by default: enough for a stable plane through sensor
 /// noise, few enough to stay local at the blank's sampling.
@@ -18,7 +19,8 @@ pub const PLANE_POINTS: usize = 8;
 
 /// The signed allowance of each model point along its unit outward normal, mm: `t` with
 /// `p + t·v` on the plane of the `k` nearest blank points (eq 10 as SPEC R7 corrects it:
-/// `t = n·(q0 − p) / (n·v)`). NaN where that plane grazes the normal (|n·v| < 0.05).
+/// `t = n·(q0 − p) / (n·v)`). NaN where that plane is inclined more than 60° to the
+/// model surface (|n·v| < 0.5).
 pub fn allowance(model: &[[f64; 3]], normals: &[[f64; 3]], blank: &[[f64; 3]], k: usize) -> Result<Vec<f64>> {
     check_finite_points("model_points", model)?;
     check_finite_points("blank_points", blank)?;
