@@ -268,3 +268,20 @@ def test_levelled_frame_draws_the_template_of_the_fits(template):
         assert section.get_label() == f"fitted section ({template})"
     lf = machscan.level_groove_frame(x, z, template=template)
     _assert_section_drawn(section, lf, fits, 0)
+
+
+def test_allowance_map_colors_the_stock_and_rings_the_short_points():
+    rng = np.random.default_rng(0)
+    p = rng.normal(size=(500, 3))
+    a = np.linspace(-0.1, 0.4, 500)
+    a[7] = np.nan
+    fig = plot.allowance_map(p, a)
+    ax = fig.axes[0]
+    colored = [c for c in ax.collections if c.get_array() is not None]
+    assert len(colored) == 1 and np.allclose(np.sort(colored[0].get_array()), np.sort(a[np.isfinite(a)]))
+    short = int(np.sum(a[np.isfinite(a)] < 0))
+    assert f"{short} points below 0 mm" in ax.get_title()
+    assert colored[0].norm.vcenter == 0.0
+    with pytest.raises(ValueError, match="allowance"):
+        plot.allowance_map(p, a[:-1])
+    plt.close(fig)

@@ -102,8 +102,8 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
     scs = np.array([[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 0, 1.0]])
     # A Fibonacci sphere, and an ellipsoid whose normals fix a probe pose.
     i = np.arange(200) + 0.5
-    z = 1 - 2 * i / 200
-    unit = np.column_stack([np.sqrt(1 - z * z) * np.cos(2.4 * i), np.sqrt(1 - z * z) * np.sin(2.4 * i), z])
+    h = 1 - 2 * i / 200
+    unit = np.column_stack([np.sqrt(1 - h * h) * np.cos(2.4 * i), np.sqrt(1 - h * h) * np.sin(2.4 * i), h])
     results = {
         "_GrooveFitArrays": _core.fit_grooves(x, z, options),
         "_FrameViewArrays": _core.view_groove_frame(x, z[0], options),

@@ -378,33 +378,9 @@ def interpolate_poses(
     >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
     array([[0.5]])
     """
-def allowance(model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int = ...) -> _F64:
-    """Machining allowance (SPEC R7; paper 004 §1.2): the stock the blank leaves over each model
-    point, measured along the point's outward normal to the least-squares plane of the ``k``
-    nearest blank points (``t = n·(q0 − p) / (n·v)``, eq 10 as SPEC R7 corrects it).
-
-    Parameters
-    ----------
-    model_points : array_like, shape (N, 3)
-        The finished part (CAD points), mm.
-    model_normals : array_like, shape (N, 3)
-        Their outward normals (normalised here; none may be zero).
-    blank_points : array_like, shape (M, 3)
-        The measured blank, in the model's frame (e.g. after :func:`machscan.icp`), mm.
-    k : int
-        Blank points of each local plane, 3 ≤ k ≤ M.
-
-    Returns
-    -------
-    ndarray, shape (N,)
-        Signed allowance, mm: negative where the blank does not envelop the model; NaN where
-        the blank's local plane is inclined more than 60° to the model surface (an edge, or
-        neighbours all from one scan line), so it is not the blank over the point.
-
-    Examples
-    --------
-    >>> a = machscan.allowance(model, normals, blank)
-    >>> short = a < 0  # where the part would come out short
+def allowance(model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int) -> _F64:
+    """Machining allowance (SPEC R7); ``machscan.allowance`` documents it (with the default of
+    ``k``, ``ALLOWANCE_NEIGHBORS``).
     """
 
 def coarse_align(source: ArrayLike, target: ArrayLike) -> _F64:
@@ -458,7 +434,9 @@ def positioning_errors(measured: ArrayLike, model_points: ArrayLike, *, model_no
 def probe_fit(
     measured: ArrayLike, model_points: ArrayLike, model_normals: ArrayLike, *, probe_radius: float, init: ArrayLike | None
 ) -> _ProbeFitArrays:
-    """"""
+    """The pose of a part from one round of touch-probe points (SPEC R6, paper 003 §4);
+    ``machscan.position_workpiece`` runs the rounds and documents it.
+    """
 
 def envelope_fit(
     model_points: ArrayLike,
@@ -469,7 +447,7 @@ def envelope_fit(
     k: int,
     init: ArrayLike | None,
 ) -> _EnvelopeFitArrays:
-    """"""
+    """The balanced envelope fit of a blank (SPEC R8); ``machscan.envelope_fit`` documents it."""
 
 def icp_defaults() -> _IcpDefaults:
     """The defaults of the ICP options (``IcpOptions::new`` in the core), by name."""

@@ -373,11 +373,13 @@ def build_parser() -> argparse.ArgumentParser:
     pos.add_argument("--out", type=Path, default=Path("pose.txt"), help="fitted pose (default: %(default)s)")
     pos.add_argument("--next-plan", type=Path, help="write the plan at the fitted pose for the next round")
     pos.add_argument("--n-points", type=int, default=positioning["n_points"], help="probe points (default: %(default)s)")
-    pos.add_argument("--keep", type=float, default=positioning["keep"], help="flattest share to choose from (default: %(default)s)")
+    pos.add_argument("--keep", type=float, default=positioning["keep"],
+                     help="flattest share to choose from (default: %(default)s)")
     pos.add_argument("--pattern", choices=("optimal", "random"), default=positioning["pattern"],
                      help="designed points or the paper's random draw (default: %(default)s)")
     pos.add_argument("--seed", type=int, default=positioning["seed"], help="seed of a random draw (default: %(default)s)")
-    pos.add_argument("--probe-radius", type=float, default=positioning["probe_radius"], help="probe ball radius, mm (default: %(default)s)")
+    pos.add_argument("--probe-radius", type=float, default=positioning["probe_radius"],
+                     help="probe ball radius, mm (default: %(default)s)")
     pos.add_argument("--simulate", action="store_true", help="run the rounds on the built-in synthetic blade")
     pos.set_defaults(run=_position)
 

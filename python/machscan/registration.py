@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
-from machscan._core import ALLOWANCE_NEIGHBORS, allowance, coarse_align
+from machscan._core import ALLOWANCE_NEIGHBORS, coarse_align
 
 __all__ = [
     "ALLOWANCE_NEIGHBORS",
@@ -26,7 +26,6 @@ __all__ = [
     "IcpResult",
     "PositioningErrors",
     "PositioningResult",
-    "ProbeMeasure",
     "ProbePattern",
     "ProbeRound",
     "RobustKernel",
@@ -39,6 +38,39 @@ __all__ = [
     "positioning_errors",
     "probe_round",
 ]
+
+def allowance(
+    model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int = ALLOWANCE_NEIGHBORS
+) -> NDArray[np.float64]:
+    """Machining allowance (SPEC R7; paper 004 §1.2): the stock the blank leaves over each model
+    point, measured along the point's outward normal to the least-squares plane of the ``k``
+    nearest blank points (``t = n·(q0 − p) / (n·v)``, eq 10 as SPEC R7 corrects it).
+
+    Parameters
+    ----------
+    model_points : array_like, shape (N, 3)
+        The finished part (CAD points), mm.
+    model_normals : array_like, shape (N, 3)
+        Their outward normals (normalised here; none may be zero).
+    blank_points : array_like, shape (M, 3)
+        The measured blank, in the model's frame (e.g. after :func:`machscan.icp`), mm.
+    k : int
+        Blank points of each local plane, 3 ≤ k ≤ M.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Signed allowance, mm: negative where the blank does not envelop the model; NaN where
+        the blank's local plane is inclined more than 60° to the model surface (an edge, or
+        neighbours all from one scan line), so it is not the blank over the point.
+
+    Examples
+    --------
+    >>> a = machscan.allowance(model, normals, blank)
+    >>> short = a < 0  # where the part would come out short
+    """
+    return _core.allowance(model_points, model_normals, blank_points, k)
+
 
 #: Defaults of :func:`icp`'s options, from ``IcpOptions::new`` in the core.
 ICP_DEFAULTS = _core.icp_defaults()

@@ -241,34 +241,10 @@ fn locating_points_grid<'py>(
     indices_to_numpy(py, chosen)
 }
 
-/// Machining allowance (SPEC R7; paper 004 §1.2): the stock the blank leaves over each model
-/// point, measured along the point's outward normal to the least-squares plane of the ``k``
-/// nearest blank points (``t = n·(q0 − p) / (n·v)``, eq 10 as SPEC R7 corrects it).
-///
-/// Parameters
-/// ----------
-/// model_points : array_like, shape (N, 3)
-///     The finished part (CAD points), mm.
-/// model_normals : array_like, shape (N, 3)
-///     Their outward normals (normalised here; none may be zero).
-/// blank_points : array_like, shape (M, 3)
-///     The measured blank, in the model's frame (e.g. after :func:`machscan.icp`), mm.
-/// k : int
-///     Blank points of each local plane, 3 ≤ k ≤ M.
-///
-/// Returns
-/// -------
-/// ndarray, shape (N,)
-///     Signed allowance, mm: negative where the blank does not envelop the model; NaN where
-///     the blank's local plane is inclined more than 60° to the model surface (an edge, or
-///     neighbours all from one scan line), so it is not the blank over the point.
-///
-/// Examples
-/// --------
-/// >>> a = machscan.allowance(model, normals, blank)
-/// >>> short = a < 0  # where the part would come out short
+/// Machining allowance (SPEC R7); ``machscan.allowance`` documents it (with the default of
+/// ``k``, ``ALLOWANCE_NEIGHBORS``).
 #[pyfunction]
-#[pyo3(signature = (model_points, model_normals, blank_points, k=PLANE_POINTS as i64))]
+#[pyo3(signature = (model_points, model_normals, blank_points, k))]
 fn allowance<'py>(
     py: Python<'py>,
     model_points: &Bound<'py, PyAny>,

@@ -165,6 +165,9 @@ pub fn envelope_fit(
     };
     let mut pose = *init;
     let mut here = problem.evaluate(&pose)?;
+    // A move may not escape the constraint by turning a blank plane away until the allowance
+    // there is NaN: a point with an allowance at the start keeps one.
+    let measured: Vec<bool> = here.allowance.iter().map(|a| a.is_finite()).collect();
     let mut region = FIRST_REGION;
     let (mut iterations, mut converged) = (0, false);
     while iterations < MAX_ITERATIONS {
@@ -178,7 +181,11 @@ pub fn envelope_fit(
         let trial_pose =
             twist(&(Vector3::new(xi[0], xi[1], xi[2]) / scale), &Vector3::new(xi[3], xi[4], xi[5]), &centre) * pose;
         let trial = problem.evaluate(&trial_pose)?;
-        let actual = here.merit(min_allowance) - trial.merit(min_allowance);
+        let actual = if measured.iter().zip(&trial.allowance).any(|(m, a)| *m && a.is_nan()) {
+            f64::NEG_INFINITY
+        } else {
+            here.merit(min_allowance) - trial.merit(min_allowance)
+        };
         let ratio = actual / predicted;
         if ratio > 1e-4 {
             (pose, here) = (trial_pose, trial);
