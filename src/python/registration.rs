@@ -42,6 +42,18 @@ fn transform_opt(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Matrix4
     }
 }
 
+/// Model points and their normals, one per point.
+fn model_with_normals<'py>(
+    model_points: &Bound<'py, PyAny>,
+    model_normals: &Bound<'py, PyAny>,
+) -> PyResult<(F64Array<'py>, F64Array<'py>)> {
+    let model = F64Array::points(model_points, "model_points")?;
+    let n = model.shape()[0];
+    let normals =
+        F64Array::extract(model_normals, "model_normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per model point)")?;
+    Ok((model, normals))
+}
+
 /// A 4×4 transform as a NumPy array.
 fn transform_to_numpy<'py>(py: Python<'py>, t: &Matrix4<f64>) -> PyResult<Bound<'py, PyAny>> {
     to_numpy(py, t.transpose().as_slice().to_vec(), &[4, 4])
@@ -253,10 +265,8 @@ fn allowance<'py>(
     k: i64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let k = count("k", k)?;
-    let model = F64Array::points(model_points, "model_points")?;
+    let (model, normals) = model_with_normals(model_points, model_normals)?;
     let n = model.shape()[0];
-    let normals =
-        F64Array::extract(model_normals, "model_normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per model point)")?;
     let blank = F64Array::points(blank_points, "blank_points")?;
     let (m, v, b) = (model.rows::<3>()?, normals.rows::<3>()?, blank.rows::<3>()?);
     let a = enter(py, || run_allowance(m, v, b, k))?;
@@ -300,11 +310,9 @@ fn probe_fit<'py>(
     probe_radius: f64,
     init: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let model = F64Array::points(model_points, "model_points")?;
+    let (model, normals) = model_with_normals(model_points, model_normals)?;
     let n = model.shape()[0];
     let meas = F64Array::extract(measured, "measured", &[Dim::Is(n), Dim::Is(3)], "(one probe point per model point)")?;
-    let normals =
-        F64Array::extract(model_normals, "model_normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per model point)")?;
     let init = transform_opt(init, "init")?;
     let (p, q, v) = (meas.rows::<3>()?, model.rows::<3>()?, normals.rows::<3>()?);
     let fit = enter(py, || run_probe_fit(p, q, v, probe_radius, &init))?;
@@ -328,10 +336,8 @@ fn envelope_fit<'py>(
     init: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let k = count("k", k)?;
-    let model = F64Array::points(model_points, "model_points")?;
+    let (model, normals) = model_with_normals(model_points, model_normals)?;
     let n = model.shape()[0];
-    let normals =
-        F64Array::extract(model_normals, "model_normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per model point)")?;
     let blank = F64Array::points(blank_points, "blank_points")?;
     let init = transform_opt(init, "init")?;
     let (m, v, b) = (model.rows::<3>()?, normals.rows::<3>()?, blank.rows::<3>()?);

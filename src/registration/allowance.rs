@@ -79,11 +79,11 @@ pub(super) fn along_normal(p: &Vector3<f64>, v: &Vector3<f64>, q0: &Vector3<f64>
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// `n` points on a sphere of radius `r` (Fibonacci lattice) and their outward normals.
-    fn sphere(n: usize, r: f64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    pub(crate) fn sphere(n: usize, r: f64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
         let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
         (0..n)
             .map(|i| {

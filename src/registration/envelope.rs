@@ -325,19 +325,7 @@ fn barrier(q: &Matrix7, c: &Vector7, rows: &[(f64, Vector7)], mut y: Vector7, si
 mod tests {
     use super::*;
     use crate::geom::mount_rotation;
-
-    /// `n` points on a sphere of radius `r` (Fibonacci lattice) and their outward normals.
-    fn sphere(n: usize, r: f64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
-        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-        (0..n)
-            .map(|i| {
-                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-                let (s, a) = ((1.0 - z * z).sqrt(), golden * i as f64);
-                let u = [s * a.cos(), s * a.sin(), z];
-                (u.map(|c| r * c), u)
-            })
-            .unzip()
-    }
+    use crate::registration::allowance::tests::sphere;
 
     fn moved(t: &Matrix4<f64>, points: &[[f64; 3]]) -> Vec<[f64; 3]> {
         points.iter().map(|p| transform_point(t, *p)).collect()
