@@ -378,7 +378,9 @@ def interpolate_poses(
     >>> machscan.interpolate_poses([0.0, 1.0], [[0.0], [2.0]], [0.25], rotary=())
     array([[0.5]])
     """
-def allowance(model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int) -> _F64:
+def allowance(
+    model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int, surface: Literal["quadric", "plane"]
+) -> _F64:
     """Machining allowance (SPEC R7); ``machscan.allowance`` documents it (with the default of
     ``k``, ``ALLOWANCE_NEIGHBORS``).
     """
@@ -445,6 +447,7 @@ def envelope_fit(
     *,
     min_allowance: float,
     k: int,
+    surface: Literal["quadric", "plane"],
     init: ArrayLike | None,
 ) -> _EnvelopeFitArrays:
     """The balanced envelope fit of a blank (SPEC R8); ``machscan.envelope_fit`` documents it."""

@@ -270,14 +270,14 @@ def _allowance(args: argparse.Namespace) -> int:
     model, normals = _read_model(args.model)
     blank = read_points(args.blank)
     if args.fit:
-        fit = envelope_fit(model, normals, blank, min_allowance=args.min_allowance, k=args.k)
+        fit = envelope_fit(model, normals, blank, min_allowance=args.min_allowance, k=args.k, surface=args.surface)
         a = fit.allowance
         print(fit.summary())
         print("blank pose (applied to the blank):")
         print(np.array2string(fit.transformation, precision=6, suppress_small=True))
         holds = fit.feasible
     else:
-        a = allowance(model, normals, blank, k=args.k)
+        a = allowance(model, normals, blank, k=args.k, surface=args.surface)
         ok = a[np.isfinite(a)]
         short = int(np.sum(ok < args.min_allowance))
         print(f"allowance (mm): min {ok.min():.4f}  mean {ok.mean():.4f}  max {ok.max():.4f}  std {ok.std():.4f}")
@@ -362,7 +362,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     import inspect
 
-    from machscan.registration import ALLOWANCE_NEIGHBORS, position_workpiece
+    from machscan.registration import ALLOWANCE_NEIGHBORS, ALLOWANCE_SURFACE, BlankSurface, position_workpiece
 
     positioning = {k: v.default for k, v in inspect.signature(position_workpiece).parameters.items()}
     pos = sub.add_parser("position", help="where the part sits: touch-probe plan, or the pose from one probe round")
@@ -392,7 +392,9 @@ def build_parser() -> argparse.ArgumentParser:
     al.add_argument("--min-allowance", type=float, default=0.0, help="least stock wanted, mm (default: %(default)s)")
     al.add_argument("--fit", action="store_true",
                     help="first move the blank to the balanced envelope fit (every allowance ≥ the minimum)")
-    al.add_argument("--k", type=int, default=ALLOWANCE_NEIGHBORS, help="blank points per local plane (default: %(default)s)")
+    al.add_argument("--k", type=int, default=ALLOWANCE_NEIGHBORS, help="blank points per local surface (default: %(default)s)")
+    al.add_argument("--surface", choices=get_args(BlankSurface), default=ALLOWANCE_SURFACE,
+                    help="the blank's local surface: quadric, or the paper's plane (default: %(default)s)")
     al.set_defaults(run=_allowance)
     return parser
 

@@ -11,7 +11,7 @@
 //! log-barrier interior point method; each step is checked against the exact allowance and
 //! shrunk by a trust region when it does not keep what the linearisation promised (SQP with an
 //! exact L∞ penalty).
-use super::allowance::{along_normal, blank_plane, check_k};
+use super::allowance::{check_k, meet, BlankSurface};
 use super::twist;
 use crate::error::{check_finite_points, Error, Result};
 use crate::geom::{transform_point, transform_vector};
@@ -81,16 +81,17 @@ struct Problem<'a> {
     blank: &'a [[f64; 3]],
     index: PointIndex,
     k: usize,
+    surface: BlankSurface,
     centre: Vector3<f64>,
     scale: f64,
 }
 
 impl Problem<'_> {
     /// The blank is at `pose` (blank → model frame). The model point is taken into the blank's
-    /// frame, where the index is; the plane found there is taken back, and moving it by a small
-    /// motion (ω about the centre, τ) moves the point where the normal meets it by
-    /// `ω × (x − c) + τ`, which changes the allowance by that along the plane normal over
-    /// `n·v`.
+    /// frame, where the index is; the blank's local surface found there is taken back, and
+    /// moving it by a small motion (ω about the centre, τ) moves the point where the normal
+    /// meets it by `ω × (x − c) + τ`, which changes the allowance by that along the surface
+    /// normal there over `n·v`.
     fn evaluate(&self, pose: &Matrix4<f64>) -> Result<Evaluation> {
         let inverse = pose.try_inverse().ok_or_else(|| Error::invalid("init", "is not invertible"))?;
         let local: Vec<(f64, Option<SVector<f64, 6>>)> = self
@@ -100,11 +101,9 @@ impl Problem<'_> {
             .map(|(p, v)| {
                 let pb = Vector3::from(transform_point(&inverse, *p));
                 let vb = Vector3::from(transform_vector(&inverse, [v[0], v[1], v[2]]));
-                let (q0, n) = blank_plane(&self.index, self.blank, &pb, self.k);
-                let a = along_normal(&pb, &vb, &q0, &n);
-                if a.is_nan() {
-                    return (a, None);
-                }
+                let Some((a, n)) = meet(&self.index, self.blank, &pb, &vb, self.k, self.surface) else {
+                    return (f64::NAN, None);
+                };
                 let n = Vector3::from(transform_vector(pose, [n[0], n[1], n[2]]));
                 let nv = n.dot(v);
                 let x = Vector3::from(*p) + a * v;
@@ -139,6 +138,7 @@ pub fn envelope_fit(
     blank: &[[f64; 3]],
     min_allowance: f64,
     k: usize,
+    surface: BlankSurface,
     init: &Matrix4<f64>,
 ) -> Result<EnvelopeFit> {
     check_finite_points("model_points", model)?;
@@ -160,6 +160,7 @@ pub fn envelope_fit(
         blank,
         index: PointIndex::new(blank)?,
         k,
+        surface,
         centre,
         scale,
     };
@@ -333,7 +334,7 @@ mod tests {
 
     /// Where the blank's centre ends up and the allowance of the blank put back concentric.
     fn centred(blank: &[[f64; 3]], model: &[[f64; 3]], normals: &[[f64; 3]]) -> Vec<f64> {
-        crate::registration::allowance(model, normals, blank, 8).unwrap()
+        crate::registration::allowance(model, normals, blank, 8, BlankSurface::Quadric).unwrap()
     }
 
     #[test]
@@ -346,7 +347,16 @@ mod tests {
         let mut displaced = Matrix4::identity();
         displaced.fixed_view_mut::<3, 3>(0, 0).copy_from(&mount_rotation(0.01, 0.02, -0.01));
         displaced.fixed_view_mut::<3, 1>(0, 3).copy_from(&Vector3::new(0.3, -0.1, 0.2));
-        let fit = envelope_fit(&model, &normals, &moved(&displaced, &blank), 0.0, 8, &Matrix4::identity()).unwrap();
+        let fit = envelope_fit(
+            &model,
+            &normals,
+            &moved(&displaced, &blank),
+            0.0,
+            8,
+            BlankSurface::Quadric,
+            &Matrix4::identity(),
+        )
+        .unwrap();
         assert!(fit.feasible && fit.converged, "{fit:?}");
         let centre = Vector3::from(transform_point(&(fit.transformation * displaced), [0.0; 3]));
         assert!(centre.norm() < 1e-3, "centre {centre}");
@@ -365,7 +375,16 @@ mod tests {
         let (blank, _) = sphere(20000, 20.5);
         let mut shifted = Matrix4::identity();
         shifted[(0, 3)] = 0.2;
-        let fit = envelope_fit(&model, &normals, &moved(&shifted, &blank), 0.6, 8, &Matrix4::identity()).unwrap();
+        let fit = envelope_fit(
+            &model,
+            &normals,
+            &moved(&shifted, &blank),
+            0.6,
+            8,
+            BlankSurface::Quadric,
+            &Matrix4::identity(),
+        )
+        .unwrap();
         assert!(!fit.feasible);
         let smallest = |a: &[f64]| a.iter().copied().fold(f64::INFINITY, f64::min);
         let best = smallest(&centred(&blank, &model, &normals));
@@ -375,7 +394,9 @@ mod tests {
     #[test]
     fn bad_input_is_refused_by_name() {
         let (model, normals) = sphere(50, 1.0);
-        let e = |m: f64, k| envelope_fit(&model, &normals, &model, m, k, &Matrix4::identity()).unwrap_err();
+        let e = |m: f64, k| {
+            envelope_fit(&model, &normals, &model, m, k, BlankSurface::Plane, &Matrix4::identity()).unwrap_err()
+        };
         assert!(e(f64::NAN, 8).to_string().contains("min_allowance"));
         assert!(e(0.0, 2).to_string().contains("k"));
     }
