@@ -242,3 +242,31 @@ def test_allowance_command_writes_a_scalar_field_open3d_reads(tmp_path, capsys, 
     np.testing.assert_allclose(back, expected, atol=1e-6, equal_nan=True)
     # Asking for more stock than there is: reported with exit status 3.
     assert main(["allowance", str(model), str(blank_file), "--out", str(out), "--min-allowance", "0.5"]) == 3
+
+
+def test_an_stl_model_is_read_with_outward_vertex_normals(tmp_path, capsys):
+    # A CAD model as a mesh: the vertex normals are the area-weighted normals of the faces
+    # (outward for a consistently wound mesh), so the allowance is that of the true normals.
+    blade = synth.Blade()
+    points, normals = blade.sample(120, 30)
+    idx = np.arange(120 * 30).reshape(120, 30)
+    nxt = np.roll(idx, -1, axis=0)
+    tri = np.concatenate([np.stack([idx[:, :-1], idx[:, 1:], nxt[:, :-1]], -1).reshape(-1, 3),
+                          np.stack([idx[:, 1:], nxt[:, 1:], nxt[:, :-1]], -1).reshape(-1, 3)])
+    stl, blank_file, out = tmp_path / "blade.stl", tmp_path / "blank.xyz", tmp_path / "a.csv"
+    machscan.write_mesh(stl, points.reshape(-1, 3), tri)
+    u, v = np.meshgrid(np.arange(900) / 900, np.linspace(0, 1, 300), indexing="ij")
+    s, n = blade.surface(u, v)
+    machscan.write_points(blank_file, (s + 0.2 * n).reshape(-1, 3))
+    assert main(["allowance", str(stl), str(blank_file), "--out", str(out), "--min-allowance", "-1"]) == 0
+    from scipy.spatial import cKDTree
+
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    _, j = cKDTree(points.reshape(-1, 3)).query(table[:, :3])  # the mesh's vertex order is its own
+    cos = np.einsum("ij,ij->i", table[:, 3:6] / np.linalg.norm(table[:, 3:6], axis=1, keepdims=True),
+                    normals.reshape(-1, 3)[j])
+    assert cos.min() > 0.99  # outward, as the true normals
+    assert np.nanmedian(np.abs(table[:, 6] - 0.2)) < 1e-3
+    plan = tmp_path / "plan.csv"
+    assert main(["position", str(stl), "--plan", str(plan)]) == 0
+    assert np.loadtxt(plan, delimiter=",", skiprows=1).shape == (160, 7)
