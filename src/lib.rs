@@ -12,6 +12,7 @@ pub mod geom;
 pub mod groove;
 pub mod io;
 pub mod kinematics;
+pub mod mesh;
 pub mod optim;
 pub mod python;
 pub mod registration;

@@ -133,7 +133,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
 
 def _public_callables():
     modules = [machscan, machscan.io, machscan.cloud, machscan.kinematics, machscan.grooves, machscan.contours,
-               machscan.inspection, machscan.scan, machscan.registration]
+               machscan.inspection, machscan.scan, machscan.registration, machscan.mesh]
     seen = {}
     for m in modules:
         for name in getattr(m, "__all__", []):

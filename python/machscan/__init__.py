@@ -14,7 +14,8 @@ The API is organised by domain, and the everyday names are also here at the top 
 - :mod:`machscan.grooves` — the per-frame groove fit;
 - :mod:`machscan.contours` — CAD polylines, contour matching and the contour error;
 - :mod:`machscan.inspection` — the groove inspection workflow of paper 000;
-- :mod:`machscan.registration` — ICP, coarse alignment, locating points, allowance;
+- :mod:`machscan.registration` — ICP, coarse alignment, locating points, positioning, allowance;
+- :mod:`machscan.mesh` — surface meshes (Delaunay of a height field);
 - :mod:`machscan.cad` — CAD contours from CSV and APT files;
 - :mod:`machscan.synth` — synthetic scans and parts with exact ground truth;
 - :mod:`machscan.plot` — figures (needs matplotlib).
@@ -23,7 +24,7 @@ The API is organised by domain, and the everyday names are also here at the top 
 import importlib as _importlib
 import warnings as _warnings
 
-from machscan import cloud, contours, grooves, inspection, io, kinematics, registration, scan
+from machscan import cloud, contours, grooves, inspection, io, kinematics, mesh, registration, scan
 from machscan._core import __version__
 from machscan.cloud import (
     crop_box,
@@ -65,6 +66,7 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
+from machscan.mesh import delaunay_xy
 from machscan.registration import (
     EnvelopeFit,
     IcpResult,
@@ -114,6 +116,7 @@ __all__ = [
     "contour_error",
     "contours",
     "crop_box",
+    "delaunay_xy",
     "envelope_fit",
     "estimate_normals",
     "euclidean_clusters",
@@ -129,6 +132,7 @@ __all__ = [
     "level_groove_frame",
     "locating_points",
     "match_contours",
+    "mesh",
     "nearest_neighbors",
     "octree_simplify",
     "plot",

@@ -25,6 +25,7 @@ __all__ = [
     "coarse_align",
     "contour_error",
     "crop_box",
+    "delaunay_xy",
     "estimate_normals",
     "envelope_fit",
     "euclidean_clusters",
@@ -431,6 +432,39 @@ def locating_points_grid(
 def positioning_errors(measured: ArrayLike, model_points: ArrayLike, *, model_normals: ArrayLike | None) -> _F64:
     """Positioning errors (SPEC R5); ``machscan.positioning_errors`` documents it and wraps the
     ``(N, 3)`` per-axis errors this returns.
+    """
+
+def delaunay_xy(points: ArrayLike, max_edge: float | None = None) -> _I64:
+    """Delaunay triangulation of a surface seen from above (SPEC S1; paper 002 §3.1): the points'
+    xy projection is triangulated (spade, exact predicates) and the triangles lifted back to 3D.
+    For height-field surfaces such as a skin on the machine table.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        mm.
+    max_edge : float, optional
+        Leave out triangles with an edge longer than this in 3D, mm: the long thin triangles a
+        concave outline leaves along its convex hull.
+
+    Returns
+    -------
+    ndarray of int64, shape (M, 3)
+        Triangles as indices into ``points``, counter-clockwise seen from +z. The same triangles
+        as ``scipy.spatial.Delaunay(points[:, :2])`` for points in general position (with four
+        or more on one circle, one of the valid triangulations).
+
+    Raises
+    ------
+    ValueError
+        Points not finite, all on one line in xy, or fewer than three distinct ones. Points with
+        the same x and y as an earlier one are not an error: they are left out of every triangle
+        (the first one is kept).
+
+    Examples
+    --------
+    >>> faces = machscan.delaunay_xy(scan, max_edge=5.0)
+    >>> machscan.write_mesh("skin.ply", scan, faces)
     """
 
 def probe_fit(

@@ -8,6 +8,7 @@ mod error;
 mod groove;
 mod io;
 mod kinematics;
+mod mesh;
 mod registration;
 mod spatial;
 
@@ -23,5 +24,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     contour::register(m)?;
     cloud::register(m)?;
     registration::register(m)?;
+    mesh::register(m)?;
     Ok(())
 }
