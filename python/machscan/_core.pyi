@@ -22,6 +22,7 @@ __all__ = [
     "ac_table_rotate",
     "allowance",
     "calibrate_mount",
+    "closest_points",
     "coarse_align",
     "contour_error",
     "crop_box",
@@ -97,6 +98,12 @@ class _EnvelopeFitArrays(TypedDict):
     feasible: bool
     iterations: int
     converged: bool
+
+class _ClosestArrays(TypedDict):
+    points: _F64
+    distances: _F64
+    triangles: _I64
+    barycentric: _F64
 
 class _IcpDefaults(TypedDict):
     method: Literal["point_to_point", "point_to_plane"]
@@ -432,6 +439,11 @@ def locating_points_grid(
 def positioning_errors(measured: ArrayLike, model_points: ArrayLike, *, model_normals: ArrayLike | None) -> _F64:
     """Positioning errors (SPEC R5); ``machscan.positioning_errors`` documents it and wraps the
     ``(N, 3)`` per-axis errors this returns.
+    """
+
+def closest_points(vertices: ArrayLike, faces: ArrayLike, queries: ArrayLike) -> _ClosestArrays:
+    """Closest points on a triangle mesh (SPEC S2); ``machscan.closest_points`` documents it and
+    wraps the ``_ClosestArrays`` this returns.
     """
 
 def delaunay_xy(points: ArrayLike, max_edge: float | None = None) -> _I64:

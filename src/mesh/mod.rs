@@ -1,5 +1,7 @@
 //! Surface meshes of scanned and theoretical surfaces (SPEC S1–S3; paper 002 §3): the Delaunay
-//! triangulation of a height-field surface in its xy projection.
+//! triangulation of a height-field surface in its xy projection, and closest points on a mesh.
+pub mod closest;
 pub mod delaunay;
 
+pub use closest::{closest_points, Closest, TriangleBvh};
 pub use delaunay::delaunay_xy;

@@ -198,3 +198,23 @@ pub fn indices_to_numpy<'py, I: Copy + TryInto<i64>>(py: Python<'py>, v: Vec<I>)
     let v: Vec<i64> = v.into_iter().map(|i| i.try_into().unwrap_or(-1)).collect();
     to_numpy(py, v, &[n])
 }
+
+/// Triangle vertex indices given as numbers: whole, ≥ 0 and below 2^32.
+pub fn triangle_indices(name: &str, values: &[f64]) -> PyResult<Vec<[u32; 3]>> {
+    let (rows, _) = values.as_chunks::<3>();
+    rows.iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let mut out = [0u32; 3];
+            for (o, &v) in out.iter_mut().zip(t) {
+                if !(v >= 0.0 && v < u32::MAX as f64 && v.fract() == 0.0) {
+                    return Err(PyValueError::new_err(format!(
+                        "{name}: row {k} holds {v}, which is not a vertex index"
+                    )));
+                }
+                *o = v as u32;
+            }
+            Ok(out)
+        })
+        .collect()
+}

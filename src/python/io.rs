@@ -1,7 +1,7 @@
 //! Bindings of `crate::io`: one reader and one writer for point and mesh files, and APT/CL
 //! toolpaths. The Python layer (`machscan.io`) turns the arrays into `CloudFile`,
 //! `TriangleMesh` and `Toolpath` objects.
-use super::convert::{count, enter, to_numpy, Dim, F64Array};
+use super::convert::{count, enter, to_numpy, triangle_indices, Dim, F64Array};
 use crate::io::{CloudRef, Dtype, FileFormat, TextColumns, WriteOptions};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -77,7 +77,7 @@ fn write_cloud(
         }
     }
     let tri = F64Array::extract_opt(triangles, "triangles", &[Dim::Any("T"), Dim::Is(3)], "(vertex indices)")?;
-    let tri: Option<Vec<[u32; 3]>> = tri.map(|t| triangle_indices(t.values()?)).transpose()?;
+    let tri: Option<Vec<[u32; 3]>> = tri.map(|t| triangle_indices("triangles", t.values()?)).transpose()?;
     let values: Vec<(&str, &[f64])> =
         named.iter().map(|(k, a)| Ok((k.as_str(), a.values()?))).collect::<PyResult<_>>()?;
     let data = CloudRef {
@@ -88,26 +88,6 @@ fn write_cloud(
     };
     let options = WriteOptions { binary, compressed, dtype };
     enter(py, || crate::io::write_file(&path, &data, options))
-}
-
-/// Triangle vertex indices given as numbers: whole, ≥ 0 and below 2^32.
-fn triangle_indices(values: &[f64]) -> PyResult<Vec<[u32; 3]>> {
-    let (rows, _) = values.as_chunks::<3>();
-    rows.iter()
-        .enumerate()
-        .map(|(k, t)| {
-            let mut out = [0u32; 3];
-            for (o, &v) in out.iter_mut().zip(t) {
-                if !(v >= 0.0 && v < u32::MAX as f64 && v.fract() == 0.0) {
-                    return Err(PyValueError::new_err(format!(
-                        "triangles: row {k} holds {v}, which is not a vertex index"
-                    )));
-                }
-                *o = v as u32;
-            }
-            Ok(out)
-        })
-        .collect()
 }
 
 /// The extensions ``machscan.io.read`` reads, e.g. ``("ply", "pcd", ...)``.

@@ -1,7 +1,8 @@
 //! Bindings of `crate::mesh`.
-use super::convert::{enter, to_numpy, F64Array};
-use crate::mesh::delaunay_xy as run_delaunay_xy;
+use super::convert::{enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
+use crate::mesh::{closest_points as run_closest_points, delaunay_xy as run_delaunay_xy};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 /// Delaunay triangulation of a surface seen from above (SPEC S1; paper 002 §3.1): the points'
 /// xy projection is triangulated (spade, exact predicates) and the triangles lifted back to 3D.
@@ -43,7 +44,32 @@ fn delaunay_xy<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, max_edge: Optio
     to_numpy(py, faces.into_iter().flat_map(|t| t.map(i64::from)).collect(), &[m, 3])
 }
 
+/// Closest points on a triangle mesh (SPEC S2); ``machscan.closest_points`` documents it and
+/// wraps the ``_ClosestArrays`` this returns.
+#[pyfunction]
+fn closest_points<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    queries: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let v = F64Array::points(vertices, "vertices")?;
+    let f = F64Array::extract(faces, "faces", &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+    let q = F64Array::points(queries, "queries")?;
+    let tri = triangle_indices("faces", f.values()?)?;
+    let (vr, qr) = (v.rows::<3>()?, q.rows::<3>()?);
+    let found = enter(py, || run_closest_points(vr, &tri, qr))?;
+    let n = found.len();
+    let d = PyDict::new(py);
+    d.set_item("points", points_to_numpy(py, found.iter().map(|c| c.point).collect())?)?;
+    d.set_item("distances", to_numpy(py, found.iter().map(|c| c.distance).collect(), &[n])?)?;
+    d.set_item("triangles", to_numpy(py, found.iter().map(|c| c.triangle as i64).collect(), &[n])?)?;
+    d.set_item("barycentric", points_to_numpy(py, found.iter().map(|c| c.barycentric).collect())?)?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(delaunay_xy, m)?)?;
     Ok(())
 }
