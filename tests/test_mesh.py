@@ -104,3 +104,37 @@ def test_closest_points_refuse_bad_faces_by_name():
         machscan.closest_points(v, [[0, 1, 0.5]], v)
     with pytest.raises(ValueError, match="queries"):
         machscan.closest_points(v, [[0, 1, 2]], [[np.nan, 0, 0]])
+
+
+def test_insert_points_makes_surface_points_vertices_and_keeps_the_surface():
+    rng = np.random.default_rng(1)
+    xy = rng.uniform(0, 100, (400, 2))
+    surface = lambda x, y: 0.002 * (x - 50) ** 2 + 0.001 * x * y  # noqa: E731
+    vertices = np.column_stack([xy, surface(*xy.T)])
+    faces = machscan.delaunay_xy(vertices)
+
+    def area(v, f):
+        a, b, c = (v[f[:, k]] for k in range(3))
+        return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum()
+
+    # Points on the mesh: inside triangles, at an edge midpoint, and at a vertex.
+    t = rng.integers(len(faces), size=30)
+    w = rng.dirichlet([1, 1, 1], size=30)
+    inside = np.einsum("nk,nkj->nj", w, vertices[faces[t]])
+    edges = np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    edge_mid = vertices[unique[counts == 2][0]].mean(axis=0)  # an interior edge
+    points = np.vstack([inside, edge_mid, vertices[7]])
+    r = machscan.insert_points(vertices, faces, points)
+    assert r.landings[-2:] == ["edge", "vertex"] and r.indices[-1] == 7
+    assert r.landings.count("face") == 30
+    np.testing.assert_allclose(r.vertices[r.indices], points, atol=1e-12)
+    assert area(r.vertices, r.faces) == pytest.approx(area(vertices, faces), rel=1e-13)
+    # 30 faces split in three (+2 each), one interior edge split (+2): and every new vertex is used.
+    assert len(r.faces) == len(faces) + 30 * 2 + 2
+    assert set(np.unique(r.faces)) == set(range(len(r.vertices)))
+    # Still counter-clockwise seen from +z.
+    a, b, c = (r.vertices[r.faces[:, k]] for k in range(3))
+    assert (np.cross(b - a, c - a)[:, 2] > 0).all()
+    with pytest.raises(ValueError, match="tolerance"):
+        machscan.insert_points(vertices, faces, points, tolerance=-1)

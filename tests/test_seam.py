@@ -123,6 +123,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
             unit * [10, 20, 30], unit * [10, 20, 30], unit / [10, 20, 30], probe_radius=0.0, init=None
         ),
         "_ClosestArrays": _core.closest_points(scs[:3], [[0, 1, 2]], scs),
+        "_InsertedArrays": _core.insert_points(scs[:3], [[0, 1, 2]], scs[:1], tolerance=1e-6),
         "_EnvelopeFitArrays": _core.envelope_fit(
             10 * unit, unit, 10.5 * unit, min_allowance=0.0, k=8, surface="quadric", init=None
         ),

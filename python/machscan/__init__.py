@@ -15,7 +15,7 @@ The API is organised by domain, and the everyday names are also here at the top 
 - :mod:`machscan.contours` — CAD polylines, contour matching and the contour error;
 - :mod:`machscan.inspection` — the groove inspection workflow of paper 000;
 - :mod:`machscan.registration` — ICP, coarse alignment, locating points, positioning, allowance;
-- :mod:`machscan.mesh` — surface meshes (Delaunay of a height field, closest points);
+- :mod:`machscan.mesh` — surface meshes (Delaunay of a height field, closest points, insertion);
 - :mod:`machscan.cad` — CAD contours from CSV and APT files;
 - :mod:`machscan.synth` — synthetic scans and parts with exact ground truth;
 - :mod:`machscan.plot` — figures (needs matplotlib).
@@ -66,7 +66,7 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
-from machscan.mesh import ClosestPoints, closest_points, delaunay_xy
+from machscan.mesh import ClosestPoints, InsertedPoints, closest_points, delaunay_xy, insert_points
 from machscan.registration import (
     EnvelopeFit,
     IcpResult,
@@ -97,6 +97,7 @@ __all__ = [
     "GrooveReport",
     "GrooveStatus",
     "IcpResult",
+    "InsertedPoints",
     "KinematicChain",
     "LevelledFrame",
     "MountCalibration",
@@ -125,6 +126,7 @@ __all__ = [
     "fit_grooves",
     "grooves",
     "icp",
+    "insert_points",
     "inspect_grooves",
     "inspection",
     "interpolate_poses",

@@ -35,6 +35,7 @@ __all__ = [
     "groove_defaults",
     "icp",
     "icp_defaults",
+    "insert_points",
     "interpolate_poses",
     "locating_points_cloud",
     "locating_points_grid",
@@ -104,6 +105,12 @@ class _ClosestArrays(TypedDict):
     distances: _F64
     triangles: _I64
     barycentric: _F64
+
+class _InsertedArrays(TypedDict):
+    vertices: _F64
+    faces: _I64
+    indices: _I64
+    landings: list[Literal["vertex", "edge", "face"]]
 
 class _IcpDefaults(TypedDict):
     method: Literal["point_to_point", "point_to_plane"]
@@ -444,6 +451,11 @@ def positioning_errors(measured: ArrayLike, model_points: ArrayLike, *, model_no
 def closest_points(vertices: ArrayLike, faces: ArrayLike, queries: ArrayLike) -> _ClosestArrays:
     """Closest points on a triangle mesh (SPEC S2); ``machscan.closest_points`` documents it and
     wraps the ``_ClosestArrays`` this returns.
+    """
+
+def insert_points(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, tolerance: float) -> _InsertedArrays:
+    """Points inserted into a mesh as vertices (SPEC S2); ``machscan.insert_points`` documents it
+    and wraps the ``_InsertedArrays`` this returns.
     """
 
 def delaunay_xy(points: ArrayLike, max_edge: float | None = None) -> _I64:

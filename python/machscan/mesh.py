@@ -1,11 +1,12 @@
 """Surface meshes (SPEC S1–S3; paper 002 §3): the triangulated theoretical and scanned surfaces
 that mirror-milling compensation works on. :func:`delaunay_xy` meshes a height-field surface by
 the Delaunay triangulation of its xy projection; :func:`closest_points` finds the nearest point
-of a mesh to each query."""
+of a mesh to each query; :func:`insert_points` makes points of the surface vertices of its mesh."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -13,7 +14,11 @@ from numpy.typing import ArrayLike, NDArray
 from machscan import _core
 from machscan._core import delaunay_xy
 
-__all__ = ["ClosestPoints", "closest_points", "delaunay_xy"]
+__all__ = ["ClosestPoints", "InsertedPoints", "Landing", "closest_points", "delaunay_xy", "insert_points"]
+
+#: Where an inserted point landed: on a vertex, on an edge (its triangles split in two each),
+#: or inside a triangle (split in three).
+Landing = Literal["vertex", "edge", "face"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,3 +71,57 @@ def closest_points(vertices: ArrayLike, faces: ArrayLike, queries: ArrayLike) ->
     """
     out = _core.closest_points(vertices, faces, queries)
     return ClosestPoints(out["points"], out["distances"], out["triangles"], out["barycentric"])
+
+
+@dataclass(frozen=True, eq=False)
+class InsertedPoints:
+    """Result of :func:`insert_points`: the mesh with the points as vertices.
+
+    Attributes
+    ----------
+    vertices : ndarray, shape (V + k, 3)
+        The mesh's vertices, then one per point that did not land on a vertex.
+    faces : ndarray of int64, shape (M', 3)
+        The triangles, split where the points landed (the first M keep their places).
+    indices : ndarray of int64, shape (N,)
+        The vertex of each point.
+    landings : list of str
+        ``"vertex"``, ``"edge"`` or ``"face"`` per point.
+    """
+
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    indices: NDArray[np.int64]
+    landings: list[Landing]
+
+
+def insert_points(
+    vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, tolerance: float = 1e-6
+) -> InsertedPoints:
+    """Points of the surface as vertices of its mesh (SPEC S2; paper 002 §3.2, fig. 6), so that
+    geodesic distances start and end exactly there. Each point, in order, goes to its closest
+    point of the mesh: within ``tolerance`` of a vertex it is that vertex; within ``tolerance``
+    of an edge the edge's triangles are split in two each; otherwise its triangle is split in
+    three. Triangles are only split, never flipped: the surface and its area stay as they were.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (V, 3)
+    faces : array_like of int, shape (M, 3)
+    points : array_like, shape (N, 3)
+        On or near the surface, mm (a point off it is inserted at its closest point).
+    tolerance : float
+        Snapping distance to a vertex or an edge, mm.
+
+    Returns
+    -------
+    InsertedPoints
+        ``.vertices``, ``.faces``, ``.indices`` (the vertex of each point), ``.landings``.
+
+    Examples
+    --------
+    >>> mesh = machscan.insert_points(scan, machscan.delaunay_xy(scan), matching_points)
+    >>> mesh.indices  # sources of geodesic distances
+    """
+    out = _core.insert_points(vertices, faces, points, tolerance=tolerance)
+    return InsertedPoints(out["vertices"], out["faces"], out["indices"], list(out["landings"]))

@@ -142,7 +142,7 @@ fn box_distance2(lo: &Vector3<f64>, hi: &Vector3<f64>, q: &Vector3<f64>) -> f64 
 
 /// The closest point of triangle `abc` to `p` and its barycentric weights, by the Voronoi
 /// regions of the vertices, edges and face (Ericson, Real-Time Collision Detection §5.1.5).
-fn closest_on_triangle(
+pub(super) fn closest_on_triangle(
     p: &Vector3<f64>,
     a: &Vector3<f64>,
     b: &Vector3<f64>,

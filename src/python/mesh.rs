@@ -1,6 +1,8 @@
 //! Bindings of `crate::mesh`.
 use super::convert::{enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
-use crate::mesh::{closest_points as run_closest_points, delaunay_xy as run_delaunay_xy};
+use crate::mesh::{
+    closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, insert_points as run_insert_points, Landing,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -68,7 +70,43 @@ fn closest_points<'py>(
     Ok(d)
 }
 
+/// Points inserted into a mesh as vertices (SPEC S2); ``machscan.insert_points`` documents it
+/// and wraps the ``_InsertedArrays`` this returns.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, points, *, tolerance))]
+fn insert_points<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    points: &Bound<'py, PyAny>,
+    tolerance: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let v = F64Array::points(vertices, "vertices")?;
+    let f = F64Array::extract(faces, "faces", &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+    let p = F64Array::points(points, "points")?;
+    let tri = triangle_indices("faces", f.values()?)?;
+    let (vr, pr) = (v.rows::<3>()?, p.rows::<3>()?);
+    let r = enter(py, || run_insert_points(vr, &tri, pr, tolerance))?;
+    let (m, n) = (r.faces.len(), r.indices.len());
+    let d = PyDict::new(py);
+    d.set_item("vertices", points_to_numpy(py, r.vertices)?)?;
+    d.set_item("faces", to_numpy(py, r.faces.into_iter().flat_map(|t| t.map(i64::from)).collect(), &[m, 3])?)?;
+    d.set_item("indices", to_numpy(py, r.indices.into_iter().map(i64::from).collect(), &[n])?)?;
+    let names: Vec<&str> = r
+        .landings
+        .iter()
+        .map(|l| match l {
+            Landing::Vertex => "vertex",
+            Landing::Edge => "edge",
+            Landing::Face => "face",
+        })
+        .collect();
+    d.set_item("landings", names)?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(insert_points, m)?)?;
     m.add_function(wrap_pyfunction!(closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(delaunay_xy, m)?)?;
     Ok(())
