@@ -46,6 +46,14 @@ fn delaunay_xy<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, max_edge: Optio
     to_numpy(py, faces.into_iter().flat_map(|t| t.map(i64::from)).collect(), &[m, 3])
 }
 
+/// A mesh argument: vertices and the triangles' vertex indices.
+fn mesh<'py>(vertices: &Bound<'py, PyAny>, faces: &Bound<'py, PyAny>) -> PyResult<(F64Array<'py>, Vec<[u32; 3]>)> {
+    let v = F64Array::points(vertices, "vertices")?;
+    let f = F64Array::extract(faces, "faces", &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+    let tri = triangle_indices("faces", f.values()?)?;
+    Ok((v, tri))
+}
+
 /// Closest points on a triangle mesh (SPEC S2); ``machscan.closest_points`` documents it and
 /// wraps the ``_ClosestArrays`` this returns.
 #[pyfunction]
@@ -55,10 +63,8 @@ fn closest_points<'py>(
     faces: &Bound<'py, PyAny>,
     queries: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let v = F64Array::points(vertices, "vertices")?;
-    let f = F64Array::extract(faces, "faces", &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+    let (v, tri) = mesh(vertices, faces)?;
     let q = F64Array::points(queries, "queries")?;
-    let tri = triangle_indices("faces", f.values()?)?;
     let (vr, qr) = (v.rows::<3>()?, q.rows::<3>()?);
     let found = enter(py, || run_closest_points(vr, &tri, qr))?;
     let n = found.len();
@@ -81,10 +87,8 @@ fn insert_points<'py>(
     points: &Bound<'py, PyAny>,
     tolerance: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let v = F64Array::points(vertices, "vertices")?;
-    let f = F64Array::extract(faces, "faces", &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+    let (v, tri) = mesh(vertices, faces)?;
     let p = F64Array::points(points, "points")?;
-    let tri = triangle_indices("faces", f.values()?)?;
     let (vr, pr) = (v.rows::<3>()?, p.rows::<3>()?);
     let r = enter(py, || run_insert_points(vr, &tri, pr, tolerance))?;
     let (m, n) = (r.faces.len(), r.indices.len());
