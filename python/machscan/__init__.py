@@ -66,7 +66,7 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
-from machscan.mesh import ClosestPoints, InsertedPoints, closest_points, delaunay_xy, insert_points
+from machscan.mesh import ClosestPoints, InsertedPoints, closest_points, delaunay_xy, geodesic_distances, insert_points
 from machscan.registration import (
     EnvelopeFit,
     IcpResult,
@@ -124,6 +124,7 @@ __all__ = [
     "estimate_normals",
     "euclidean_clusters",
     "fit_grooves",
+    "geodesic_distances",
     "grooves",
     "icp",
     "insert_points",

@@ -34,6 +34,7 @@ __all__ = [
     "fit_grooves",
     "groove_defaults",
     "icp",
+    "geodesic_distances_fmm",
     "icp_defaults",
     "insert_points",
     "interpolate_poses",
@@ -457,6 +458,9 @@ def insert_points(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, t
     """Points inserted into a mesh as vertices (SPEC S2); ``machscan.insert_points`` documents it
     and wraps the ``_InsertedArrays`` this returns.
     """
+
+def geodesic_distances_fmm(vertices: ArrayLike, faces: ArrayLike, sources: Sequence[int]) -> _F64:
+    """Geodesic distances by fast marching (SPEC S3); ``machscan.geodesic_distances`` documents it."""
 
 def delaunay_xy(points: ArrayLike, max_edge: float | None = None) -> _I64:
     """Delaunay triangulation of a surface seen from above (SPEC S1; paper 002 §3.1): the points'

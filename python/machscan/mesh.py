@@ -1,7 +1,8 @@
 """Surface meshes (SPEC S1–S3; paper 002 §3): the triangulated theoretical and scanned surfaces
 that mirror-milling compensation works on. :func:`delaunay_xy` meshes a height-field surface by
 the Delaunay triangulation of its xy projection; :func:`closest_points` finds the nearest point
-of a mesh to each query; :func:`insert_points` makes points of the surface vertices of its mesh."""
+of a mesh to each query; :func:`insert_points` makes points of the surface vertices of its mesh;
+:func:`geodesic_distances` measures along the surface."""
 
 from __future__ import annotations
 
@@ -14,7 +15,20 @@ from numpy.typing import ArrayLike, NDArray
 from machscan import _core
 from machscan._core import delaunay_xy
 
-__all__ = ["ClosestPoints", "InsertedPoints", "Landing", "closest_points", "delaunay_xy", "insert_points"]
+__all__ = [
+    "ClosestPoints",
+    "GeodesicMethod",
+    "InsertedPoints",
+    "Landing",
+    "closest_points",
+    "delaunay_xy",
+    "geodesic_distances",
+    "insert_points",
+]
+
+#: How :func:`geodesic_distances` measures (fast marching; the exact and heat methods of issue
+#: #10 §2 are not built yet).
+GeodesicMethod = Literal["fmm"]
 
 #: Where an inserted point landed: on a vertex, on an edge (its triangles split in two each),
 #: or inside a triangle (split in three).
@@ -125,3 +139,38 @@ def insert_points(
     """
     out = _core.insert_points(vertices, faces, points, tolerance=tolerance)
     return InsertedPoints(out["vertices"], out["faces"], out["indices"], list(out["landings"]))
+
+
+def geodesic_distances(
+    vertices: ArrayLike, faces: ArrayLike, sources: ArrayLike, *, method: GeodesicMethod = "fmm"
+) -> NDArray[np.float64]:
+    """Geodesic distances along a triangle mesh from each source vertex to every vertex (SPEC
+    S3; paper 002 §3.2), sources in parallel with the GIL released.
+
+    ``method="fmm"``: fast marching with the virtual-source update (the point in the triangle's
+    plane at the two known distances; exact on flat parts of the mesh, so a flat plate measures
+    Euclidean distances to 1e-9), the edge update where that point's line misses the triangle.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (V, 3)
+    faces : array_like of int, shape (M, 3)
+    sources : array_like of int, shape (S,)
+        Source vertices, e.g. ``insert_points(...).indices``.
+    method : {"fmm"}
+
+    Returns
+    -------
+    ndarray, shape (S, V)
+        mm; ``inf`` at vertices no face uses or no face path reaches.
+
+    Examples
+    --------
+    >>> d = machscan.geodesic_distances(mesh.vertices, mesh.faces, mesh.indices)
+    """
+    if method != "fmm":
+        raise ValueError(f"method: only 'fmm' is built so far, got {method!r}")
+    src = np.atleast_1d(np.asarray(sources))
+    if src.ndim != 1 or (src.size and not np.issubdtype(src.dtype, np.integer)):
+        raise ValueError(f"sources: expected vertex indices (S,), got {src.dtype} of shape {src.shape}")
+    return _core.geodesic_distances_fmm(vertices, faces, [int(s) for s in src])

@@ -3,8 +3,10 @@
 //! points inserted as vertices.
 pub mod closest;
 pub mod delaunay;
+pub mod geodesic;
 pub mod insert;
 
 pub use closest::{closest_points, Closest, TriangleBvh};
 pub use delaunay::delaunay_xy;
+pub use geodesic::geodesic_fmm;
 pub use insert::{insert_points, Inserted, Landing};

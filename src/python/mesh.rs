@@ -1,7 +1,9 @@
 //! Bindings of `crate::mesh`.
 use super::convert::{enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
+use crate::error::Error;
 use crate::mesh::{
-    closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, insert_points as run_insert_points, Landing,
+    closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, geodesic_fmm,
+    insert_points as run_insert_points, Landing,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -109,7 +111,30 @@ fn insert_points<'py>(
     Ok(d)
 }
 
+/// Geodesic distances by fast marching (SPEC S3); ``machscan.geodesic_distances`` documents it.
+#[pyfunction]
+fn geodesic_distances_fmm<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    sources: Vec<i64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (v, tri) = mesh(vertices, faces)?;
+    let n = v.shape()[0];
+    let src: Vec<usize> = sources
+        .iter()
+        .map(|&s| {
+            usize::try_from(s).map_err(|_| Error::invalid("sources", format!("{s} is not a vertex index")).into())
+        })
+        .collect::<PyResult<_>>()?;
+    let vr = v.rows::<3>()?;
+    let d = enter(py, || geodesic_fmm(vr, &tri, &src))?;
+    let k = d.len();
+    to_numpy(py, d.into_iter().flatten().collect(), &[k, n])
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(geodesic_distances_fmm, m)?)?;
     m.add_function(wrap_pyfunction!(insert_points, m)?)?;
     m.add_function(wrap_pyfunction!(closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(delaunay_xy, m)?)?;
