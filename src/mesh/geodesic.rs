@@ -32,15 +32,38 @@ impl PartialOrd for Front {
     }
 }
 
-/// The faces around each vertex.
-fn vertex_faces(vertices: usize, faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut around = vec![Vec::new(); vertices];
-    for (t, f) in faces.iter().enumerate() {
-        for &v in f {
-            around[v as usize].push(t as u32);
+/// The faces around each vertex, as one flat list with offsets (vertex v's faces are
+/// `faces[start[v]..start[v + 1]]`): one allocation instead of one per vertex.
+struct Around {
+    start: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl Around {
+    fn new(vertices: usize, faces: &[[u32; 3]]) -> Self {
+        let mut start = vec![0u32; vertices + 1];
+        for f in faces {
+            for &v in f {
+                start[v as usize + 1] += 1;
+            }
         }
+        for v in 0..vertices {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut list = vec![0u32; 3 * faces.len()];
+        for (t, f) in faces.iter().enumerate() {
+            for &v in f {
+                list[fill[v as usize] as usize] = t as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Around { start, faces: list }
     }
-    around
+
+    fn of(&self, v: usize) -> &[u32] {
+        &self.faces[self.start[v] as usize..self.start[v + 1] as usize]
+    }
 }
 
 /// The distance at `c` from `a` and `b` (known at `ta`, `tb`) across their triangle.
@@ -73,7 +96,7 @@ fn update(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>, ta: f64, tb: f64
 }
 
 /// Distances from `source` to every vertex; `inf` where no face leads.
-fn march(vertices: &[[f64; 3]], faces: &[[u32; 3]], around: &[Vec<u32>], source: u32) -> Vec<f64> {
+fn march(vertices: &[[f64; 3]], faces: &[[u32; 3]], around: &Around, source: u32) -> Vec<f64> {
     let n = vertices.len();
     let mut t = vec![f64::INFINITY; n];
     let mut known = vec![false; n];
@@ -87,7 +110,7 @@ fn march(vertices: &[[f64; 3]], faces: &[[u32; 3]], around: &[Vec<u32>], source:
             continue;
         }
         known[vi] = true;
-        for &f in &around[vi] {
+        for &f in around.of(vi) {
             let face = faces[f as usize];
             for k in 0..3 {
                 let c = face[k];
@@ -130,11 +153,11 @@ pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]
     if let Some(&s) = sources.iter().find(|&&s| s >= vertices.len()) {
         return Err(Error::invalid("sources", format!("vertex {s} is beyond the {} given", vertices.len())));
     }
-    let around = vertex_faces(vertices.len(), faces);
+    let around = Around::new(vertices.len(), faces);
     Ok(sources
         .par_iter()
         .map(|&s| {
-            if around[s].is_empty() {
+            if around.of(s).is_empty() {
                 unreached(vertices.len(), s)
             } else {
                 march(vertices, faces, &around, s as u32)
