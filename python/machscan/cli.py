@@ -237,9 +237,9 @@ def _position(args: argparse.Namespace) -> int:
 
 
 def _write_plan(path: Path, points: np.ndarray, normals: np.ndarray, idx: np.ndarray, pose: np.ndarray) -> None:
-    n = normals[idx] / np.linalg.norm(normals[idx], axis=1, keepdims=True)
-    p = points[idx] @ pose[:3, :3].T + pose[:3, 3]
-    d = -(n @ pose[:3, :3].T)
+    from machscan.registration import probe_plan
+
+    p, d = probe_plan(points, normals, idx, pose)
     _write_table(path, "index,x,y,z,dx,dy,dz", np.column_stack([idx, p, d]))
 
 

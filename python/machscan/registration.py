@@ -38,6 +38,7 @@ __all__ = [
     "locating_points",
     "position_workpiece",
     "positioning_errors",
+    "probe_plan",
     "probe_round",
 ]
 
@@ -522,10 +523,7 @@ def position_workpiece(
     >>> r = machscan.position_workpiece(points, normals, probe, n_points=160)
     >>> print(r.summary())
     """
-    grid = np.asarray(model_points, dtype=np.float64)
-    normals = np.asarray(model_normals, dtype=np.float64)
-    if normals.shape != grid.shape:
-        raise ValueError(f"model_normals: expected the shape of model_points {grid.shape}, got {normals.shape}")
+    grid, normals = _model(model_points, model_normals)
     if not callable(measure):
         raise TypeError(f"measure: expected a callable measure(points, directions), got {type(measure).__name__}")
     if max_rounds < 1:
@@ -533,20 +531,15 @@ def position_workpiece(
     if not (np.isfinite(probe_radius) and probe_radius >= 0):
         raise ValueError(f"probe_radius: must be ≥ 0 mm, got {probe_radius}")
     indices = locating_points(grid, n_points, keep=keep, seed=seed, normals=normals, pattern=pattern)
-    pose = np.eye(4) if init is None else np.array(init, dtype=np.float64)
-    if pose.shape != (4, 4):
-        raise ValueError(f"init: expected a 4×4 transform, got shape {pose.shape}")
-    points = grid.reshape(-1, 3)
-    q = points[indices]
-    n = normals.reshape(-1, 3)[indices]
-    n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    pose = _pose(init, "init")
+    points, normals = grid.reshape(-1, 3), normals.reshape(-1, 3)
+    q, n = _targets(points, normals, indices)
     rounds: list[ProbeRound] = []
     converged = False
     for _ in range(max_rounds):
-        commanded = q @ pose[:3, :3].T + pose[:3, 3]
-        directions = -(n @ pose[:3, :3].T)
+        commanded, directions = _commands(q, n, pose)
         measured = measure(commanded, directions)
-        round_ = probe_round(grid, normals, indices, pose, measured, probe_radius=probe_radius)
+        round_ = _fit_round(points, normals, q, n, pose, commanded, directions, measured, probe_radius)
         rounds.append(round_)
         if round_.hits < 6:
             break
@@ -589,20 +582,76 @@ def probe_round(
     ProbeRound
         With the pose unchanged and ``rms`` NaN when fewer than 6 points were hit.
     """
-    points = np.asarray(model_points, dtype=np.float64).reshape(-1, 3)
-    normals = np.asarray(model_normals, dtype=np.float64).reshape(-1, 3)
+    grid, normals = _model(model_points, model_normals)
+    points, normals = grid.reshape(-1, 3), normals.reshape(-1, 3)
+    q, n = _targets(points, normals, indices)
+    pose = _pose(pose, "pose")
+    commanded, directions = _commands(q, n, pose)
+    return _fit_round(points, normals, q, n, pose, commanded, directions, measured, probe_radius)
+
+
+def probe_plan(
+    model_points: ArrayLike, model_normals: ArrayLike, indices: ArrayLike, pose: ArrayLike | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Where to send the probe (the plan of one round of :func:`position_workpiece`): the model
+    points ``indices`` at ``pose``, in machine coordinates, and the approach directions (minus
+    their unit normals at that pose).
+
+    Parameters
+    ----------
+    model_points, model_normals : array_like, shape (N, 3) or (nu, nv, 3)
+    indices : array_like of int, shape (n,)
+        The probe points (into the flattened model), e.g. from :func:`locating_points`.
+    pose : array_like, shape (4, 4), optional
+        Model → machine (default: identity), e.g. the last round's ``.transformation``.
+
+    Returns
+    -------
+    points, directions : ndarray, shape (n, 3)
+        Commanded contact points, mm, and unit approach directions.
+
+    Examples
+    --------
+    >>> points, directions = machscan.registration.probe_plan(model, normals, idx, pose)
+    """
+    grid, normals = _model(model_points, model_normals)
+    q, n = _targets(grid.reshape(-1, 3), normals.reshape(-1, 3), indices)
+    return _commands(q, n, _pose(pose, "pose"))
+
+
+def _model(model_points: ArrayLike, model_normals: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Model points and normals of one shape, (N, 3) or a grid (nu, nv, 3)."""
+    points = np.asarray(model_points, dtype=np.float64)
+    normals = np.asarray(model_normals, dtype=np.float64)
     if normals.shape != points.shape:
         raise ValueError(f"model_normals: expected the shape of model_points {points.shape}, got {normals.shape}")
+    return points, normals
+
+
+def _pose(value: ArrayLike | None, name: str) -> NDArray[np.float64]:
+    """A 4×4 transform argument, the identity when omitted."""
+    pose = np.eye(4) if value is None else np.array(value, dtype=np.float64)
+    if pose.shape != (4, 4):
+        raise ValueError(f"{name}: expected a 4×4 transform, got shape {pose.shape}")
+    return pose
+
+
+def _targets(points, normals, indices) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The probed model points and their unit normals (points and normals flattened)."""
     idx = np.asarray(indices, dtype=np.int64)
     if idx.ndim != 1 or (len(idx) and (idx.min() < 0 or idx.max() >= len(points))):
         raise ValueError(f"indices: expected indices into the {len(points)} model points")
-    pose = np.array(pose, dtype=np.float64)
-    if pose.shape != (4, 4):
-        raise ValueError(f"init: expected a 4×4 transform, got shape {pose.shape}")
-    q = points[idx]
-    n = normals[idx] / np.linalg.norm(normals[idx], axis=1, keepdims=True)
-    commanded = q @ pose[:3, :3].T + pose[:3, 3]
-    directions = -(n @ pose[:3, :3].T)
+    n = normals[idx]
+    return points[idx], n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def _commands(q, n, pose) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The model points at the pose, and the approach along their normals."""
+    return q @ pose[:3, :3].T + pose[:3, 3], -(n @ pose[:3, :3].T)
+
+
+def _fit_round(points, normals, q, n, pose, commanded, directions, measured, probe_radius) -> ProbeRound:
+    """Fits the pose to one round's readings (the core of :func:`probe_round`)."""
     measured = np.asarray(measured, dtype=np.float64)
     if measured.shape != commanded.shape:
         raise ValueError(f"measure: returned shape {measured.shape}, expected {commanded.shape} (one per point)")

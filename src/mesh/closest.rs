@@ -45,12 +45,7 @@ impl<'a> TriangleBvh<'a> {
     /// axis. Faces are checked: indices in range.
     pub fn new(vertices: &'a [[f64; 3]], faces: &'a [[u32; 3]]) -> Result<Self> {
         check_finite_points("vertices", vertices)?;
-        if let Some((i, f)) = faces.iter().enumerate().find(|(_, f)| f.iter().any(|&v| v as usize >= vertices.len())) {
-            return Err(Error::invalid(
-                "faces",
-                format!("triangle {i} = {f:?} refers to a vertex beyond the {} given", vertices.len()),
-            ));
-        }
+        super::check_faces(vertices.len(), faces)?;
         if faces.is_empty() {
             return Err(Error::invalid("faces", "must hold at least one triangle"));
         }

@@ -144,12 +144,7 @@ fn march(vertices: &[[f64; 3]], faces: &[[u32; 3]], around: &Around, source: u32
 /// `inf`.
 pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<Vec<Vec<f64>>> {
     check_finite_points("vertices", vertices)?;
-    if let Some((i, f)) = faces.iter().enumerate().find(|(_, f)| f.iter().any(|&v| v as usize >= vertices.len())) {
-        return Err(Error::invalid(
-            "faces",
-            format!("triangle {i} = {f:?} refers to a vertex beyond the {} given", vertices.len()),
-        ));
-    }
+    super::check_faces(vertices.len(), faces)?;
     if let Some(&s) = sources.iter().find(|&&s| s >= vertices.len()) {
         return Err(Error::invalid("sources", format!("vertex {s} is beyond the {} given", vertices.len())));
     }

@@ -10,3 +10,15 @@ pub use closest::{closest_points, Closest, TriangleBvh};
 pub use delaunay::delaunay_xy;
 pub use geodesic::geodesic_fmm;
 pub use insert::{insert_points, Inserted, Landing};
+
+use crate::error::{Error, Result};
+
+/// Faces whose indices all name one of the vertices.
+fn check_faces(vertices: usize, faces: &[[u32; 3]]) -> Result<()> {
+    match faces.iter().enumerate().find(|(_, f)| f.iter().any(|&v| v as usize >= vertices)) {
+        Some((i, f)) => {
+            Err(Error::invalid("faces", format!("triangle {i} = {f:?} refers to a vertex beyond the {vertices} given")))
+        }
+        None => Ok(()),
+    }
+}

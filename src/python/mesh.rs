@@ -1,6 +1,5 @@
 //! Bindings of `crate::mesh`.
-use super::convert::{enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
-use crate::error::Error;
+use super::convert::{count, enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
 use crate::mesh::{
     closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, geodesic_fmm,
     insert_points as run_insert_points, Landing,
@@ -121,12 +120,7 @@ fn geodesic_distances_fmm<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let (v, tri) = mesh(vertices, faces)?;
     let n = v.shape()[0];
-    let src: Vec<usize> = sources
-        .iter()
-        .map(|&s| {
-            usize::try_from(s).map_err(|_| Error::invalid("sources", format!("{s} is not a vertex index")).into())
-        })
-        .collect::<PyResult<_>>()?;
+    let src: Vec<usize> = sources.iter().map(|&s| count("sources", s)).collect::<PyResult<_>>()?;
     let vr = v.rows::<3>()?;
     let d = enter(py, || geodesic_fmm(vr, &tri, &src))?;
     let k = d.len();

@@ -151,9 +151,7 @@ pub fn envelope_fit(
     if model.is_empty() {
         return Err(Error::invalid("model_points", "must hold at least one point"));
     }
-    let n = model.len() as f64;
-    let centre = model.iter().fold(Vector3::zeros(), |a, p| a + Vector3::from(*p)) / n;
-    let scale = (model.iter().map(|p| (Vector3::from(*p) - centre).norm_squared()).sum::<f64>() / n).sqrt().max(1e-9);
+    let (centre, scale) = super::spread(model);
     let problem = Problem {
         model,
         normals: normals.iter().map(|v| Vector3::from(*v).normalize()).collect(),

@@ -125,8 +125,7 @@ pub fn probe_pattern(
     }
     let candidates = flattest(curvature, m, keep)?;
     let n = points.len() as f64;
-    let centre = points.iter().fold(Vector3::zeros(), |a, p| a + Vector3::from(*p)) / n;
-    let scale = (points.iter().map(|p| (Vector3::from(*p) - centre).norm_squared()).sum::<f64>() / n).sqrt().max(1e-9);
+    let (centre, scale) = super::spread(points);
     // The row of a point in the linearised fit: a small motion (ω·scale, τ) moves it along its
     // normal by g·(ω·scale, τ).
     let row = |i: usize| {

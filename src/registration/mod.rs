@@ -43,3 +43,13 @@ fn twist(omega: &Vector3<f64>, tau: &Vector3<f64>, centre: &Vector3<f64>) -> Mat
     t.fixed_view_mut::<3, 1>(0, 3).copy_from(&(centre - r * centre + tau));
     t
 }
+
+/// The centroid of points and their RMS distance from it (at least 1e-9): the centre and the
+/// length scale of the Gauss–Newton fits, whose rotations are scaled by it so that rank tests
+/// and trust regions compare millimetres with millimetres.
+fn spread(points: &[[f64; 3]]) -> (Vector3<f64>, f64) {
+    let n = points.len().max(1) as f64;
+    let centre = points.iter().fold(Vector3::zeros(), |a, p| a + Vector3::from(*p)) / n;
+    let rms = (points.iter().map(|p| (Vector3::from(*p) - centre).norm_squared()).sum::<f64>() / n).sqrt();
+    (centre, rms.max(1e-9))
+}

@@ -104,11 +104,9 @@ pub fn probe_fit(
     let normals: Vec<Vector3<f64>> = normals.iter().map(|n| Vector3::from(*n).normalize()).collect();
     // The machine → model transform is refined; the probe points are moved into the model frame.
     let mut to_model = inverse;
-    let n = measured.len() as f64;
-    let centre = model.iter().fold(Vector3::zeros(), |a, q| a + Vector3::from(*q)) / n;
     // Rotations are scaled by the probe pattern's radius of gyration, so that the rank test
     // compares millimetres with millimetres.
-    let scale = (model.iter().map(|q| (Vector3::from(*q) - centre).norm_squared()).sum::<f64>() / n).sqrt().max(1e-9);
+    let (centre, scale) = super::spread(model);
     let residual = |t: &Matrix4<f64>, i: usize| {
         let s = Vector3::from(transform_point(t, measured[i]));
         (s - Vector3::from(model[i])).dot(&normals[i]) - probe_radius
