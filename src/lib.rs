@@ -12,11 +12,13 @@ pub mod geom;
 pub mod groove;
 pub mod io;
 pub mod kinematics;
+pub mod matching;
 pub mod mesh;
 pub mod optim;
 pub mod python;
 pub mod registration;
 pub mod spatial;
+pub mod toolpath;
 
 pub use error::{Error, Result};
 

@@ -161,6 +161,34 @@ pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]
         .collect())
 }
 
+/// How geodesic distances are computed (`method=` in Python).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GeodesicMethod {
+    /// Fast marching: first order, ~0.2 % on scanned meshes, the fastest.
+    Fmm,
+}
+
+impl GeodesicMethod {
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "fmm" => Ok(GeodesicMethod::Fmm),
+            _ => Err(Error::invalid("method", format!("expected 'fmm', got {name:?}"))),
+        }
+    }
+}
+
+/// Geodesic distances from each source vertex to every vertex by `method`, one row per source.
+pub fn geodesic_distances(
+    vertices: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    sources: &[usize],
+    method: GeodesicMethod,
+) -> Result<Vec<Vec<f64>>> {
+    match method {
+        GeodesicMethod::Fmm => geodesic_fmm(vertices, faces, sources),
+    }
+}
+
 /// A source that no face uses reaches only itself.
 fn unreached(n: usize, s: usize) -> Vec<f64> {
     let mut t = vec![f64::INFINITY; n];

@@ -5,11 +5,13 @@ pub mod closest;
 pub mod delaunay;
 pub mod geodesic;
 pub mod insert;
+pub mod locate;
 
 pub use closest::{closest_points, Closest, TriangleBvh};
 pub use delaunay::delaunay_xy;
-pub use geodesic::geodesic_fmm;
+pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod};
 pub use insert::{insert_points, Inserted, Landing};
+pub use locate::{XyLanding, XyLocator};
 
 use crate::error::{Error, Result};
 
