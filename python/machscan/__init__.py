@@ -15,7 +15,9 @@ The API is organised by domain, and the everyday names are also here at the top 
 - :mod:`machscan.contours` — CAD polylines, contour matching and the contour error;
 - :mod:`machscan.inspection` — the groove inspection workflow of paper 000;
 - :mod:`machscan.registration` — ICP, coarse alignment, locating points, positioning, allowance;
-- :mod:`machscan.mesh` — surface meshes (Delaunay of a height field, closest points, insertion);
+- :mod:`machscan.mesh` — surface meshes (Delaunay of a height field, closest points, insertion, geodesics);
+- :mod:`machscan.matching` — isometric matching of a bent skin (mirror milling);
+- :mod:`machscan.toolpath` — toolpath compensation onto the bent skin;
 - :mod:`machscan.cad` — CAD contours from CSV and APT files;
 - :mod:`machscan.synth` — synthetic scans and parts with exact ground truth;
 - :mod:`machscan.plot` — figures (needs matplotlib).
@@ -24,7 +26,19 @@ The API is organised by domain, and the everyday names are also here at the top 
 import importlib as _importlib
 import warnings as _warnings
 
-from machscan import cloud, contours, grooves, inspection, io, kinematics, mesh, registration, scan
+from machscan import (
+    cloud,
+    contours,
+    grooves,
+    inspection,
+    io,
+    kinematics,
+    matching,
+    mesh,
+    registration,
+    scan,
+    toolpath,
+)
 from machscan._core import __version__
 from machscan.cloud import (
     crop_box,
@@ -66,6 +80,7 @@ from machscan.kinematics import (
     profile_to_points,
     scan_to_wcs,
 )
+from machscan.matching import IsometricMatch, isometric_match
 from machscan.mesh import ClosestPoints, InsertedPoints, closest_points, delaunay_xy, geodesic_distances, insert_points
 from machscan.registration import (
     EnvelopeFit,
@@ -81,11 +96,13 @@ from machscan.registration import (
     positioning_errors,
 )
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
+from machscan.toolpath import CompensatedToolpath, compensate_toolpath
 
 __all__ = [
     "SENTINEL",
     "ClosestPoints",
     "CloudFile",
+    "CompensatedToolpath",
     "ContourErrorResult",
     "ContourResult",
     "Decomposition",
@@ -98,6 +115,7 @@ __all__ = [
     "GrooveStatus",
     "IcpResult",
     "InsertedPoints",
+    "IsometricMatch",
     "KinematicChain",
     "LevelledFrame",
     "MountCalibration",
@@ -116,6 +134,7 @@ __all__ = [
     "closest_points",
     "cloud",
     "coarse_align",
+    "compensate_toolpath",
     "contour_error",
     "contours",
     "crop_box",
@@ -132,11 +151,13 @@ __all__ = [
     "inspection",
     "interpolate_poses",
     "io",
+    "isometric_match",
     "kinematics",
     "knn_graph",
     "level_groove_frame",
     "locating_points",
     "match_contours",
+    "matching",
     "mesh",
     "nearest_neighbors",
     "octree_simplify",
@@ -158,6 +179,7 @@ __all__ = [
     "scan_to_wcs",
     "surface_variation",
     "synth",
+    "toolpath",
     "uniform_downsample",
     "voxel_downsample",
     "write_mesh",

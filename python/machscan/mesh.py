@@ -141,6 +141,18 @@ def insert_points(
     return InsertedPoints(out["vertices"], out["faces"], out["indices"], list(out["landings"]))
 
 
+def _surface(value: object, name: str) -> tuple[ArrayLike, ArrayLike | None]:
+    """A surface argument as (points, faces or None): scan points (meshed in the core), a ``(vertices,
+    faces)`` pair, or a mesh with ``.vertices`` and ``.triangles`` (:class:`machscan.io.TriangleMesh`)."""
+    if isinstance(value, tuple):
+        if len(value) != 2:
+            raise ValueError(f"{name}: expected points (N, 3) or a (vertices, faces) pair, got a tuple of {len(value)}")
+        return value[0], value[1]
+    if hasattr(value, "vertices") and hasattr(value, "triangles"):
+        return value.vertices, value.triangles
+    return value, None  # type: ignore[return-value]
+
+
 def geodesic_distances(
     vertices: ArrayLike, faces: ArrayLike, sources: ArrayLike, *, method: GeodesicMethod = "fmm"
 ) -> NDArray[np.float64]:

@@ -24,3 +24,31 @@ fn check_faces(vertices: usize, faces: &[[u32; 3]]) -> Result<()> {
         None => Ok(()),
     }
 }
+
+/// The faces of a surface argument given either as scan points (meshed by `delaunay_xy`, long
+/// edges beyond `max_edge` left out) or as a mesh; errors name the argument, `name`.
+pub fn surface_faces(
+    name: &str,
+    points: &[[f64; 3]],
+    faces: Option<Vec<[u32; 3]>>,
+    max_edge: Option<f64>,
+) -> Result<Vec<[u32; 3]>> {
+    let renamed = |e: Error| match e {
+        Error::Invalid { name: arg, reason } if arg == "points" || arg == "vertices" || arg == "faces" => {
+            Error::invalid(name, reason)
+        }
+        other => other,
+    };
+    crate::error::check_finite_points(name, points)?;
+    let faces = match faces {
+        Some(f) => {
+            check_faces(points.len(), &f).map_err(renamed)?;
+            f
+        }
+        None => delaunay_xy(points, max_edge).map_err(renamed)?,
+    };
+    if faces.is_empty() {
+        return Err(Error::invalid(name, "the surface has no triangles"));
+    }
+    Ok(faces)
+}

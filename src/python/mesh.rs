@@ -55,6 +55,23 @@ fn mesh<'py>(vertices: &Bound<'py, PyAny>, faces: &Bound<'py, PyAny>) -> PyResul
     Ok((v, tri))
 }
 
+/// A surface argument: points (meshed in the core) or the vertices of a mesh with its faces.
+pub(super) fn surface<'py>(
+    points: &Bound<'py, PyAny>,
+    faces: Option<&Bound<'py, PyAny>>,
+    name: &str,
+) -> PyResult<(F64Array<'py>, Option<Vec<[u32; 3]>>)> {
+    let v = F64Array::points(points, name)?;
+    let tri = match faces {
+        Some(f) => {
+            let f = F64Array::extract(f, name, &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+            Some(triangle_indices(name, f.values()?)?)
+        }
+        None => None,
+    };
+    Ok((v, tri))
+}
+
 /// Closest points on a triangle mesh (SPEC S2); ``machscan.closest_points`` documents it and
 /// wraps the ``_ClosestArrays`` this returns.
 #[pyfunction]

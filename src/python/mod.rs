@@ -8,9 +8,11 @@ mod error;
 mod groove;
 mod io;
 mod kinematics;
+mod matching;
 mod mesh;
 mod registration;
 mod spatial;
+mod toolpath;
 
 use pyo3::prelude::*;
 
@@ -25,5 +27,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     cloud::register(m)?;
     registration::register(m)?;
     mesh::register(m)?;
+    matching::register(m)?;
+    toolpath::register(m)?;
     Ok(())
 }

@@ -4,6 +4,7 @@
   (:func:`groove_frames`), with their truth.
 * :mod:`machscan.synth.blade`: paper 003 turbine blade (:class:`Blade`) and touch-probe simulator
   (:class:`TouchProbe`, :func:`misplacement`).
+* :mod:`machscan.synth.skin`: paper 002 thin skin bent when clamped (:class:`BentSkin`), for mirror milling.
 
 The package is pure NumPy (it does not use the compiled core), so its truth is independent of the code
 it tests.
@@ -28,12 +29,14 @@ from machscan.synth.grooves import (
     pocket_plate,
     surface_error,
 )
+from machscan.synth.skin import BentSkin
 
 __all__ = [
     "DEFAULT_C2_OFFSET",
     "DEFAULT_MOUNT",
     "GROOVE_SHAPES",
     "PLATE",
+    "BentSkin",
     "Blade",
     "ContourShape",
     "Deflection",

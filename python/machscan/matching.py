@@ -1,0 +1,159 @@
+"""Isometric matching (SPEC S4; paper 002 §3.3): where each theoretical matching point of a thin skin went
+on the scanned, bent skin, from geodesic distances that bending keeps.
+
+A skin clamped on a mirror-milling machine bends without stretching, so the geodesic distance along it
+between any two of its points stays what the design says. :func:`isometric_match` moves the actual matching
+points over the scanned surface until their geodesic distances to two locating points and to one another equal
+the theoretical ones (the paper's Levenberg–Marquardt, eq 10–16). :func:`machscan.compensate_toolpath` then
+carries the toolpath along.
+
+The assumption is the method's limit: where the skin stretches (a doubly curved part pressed onto a fixture,
+heat), geodesic distances change and the matched points are off by about the stretch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from machscan import _core
+from machscan.mesh import GeodesicMethod, _surface
+
+__all__ = ["IsometricMatch", "Jacobian", "MatchStop", "isometric_match"]
+
+#: The Jacobian of the distances: ``"quadratic"``, the paper's (eq 12–13: a quadratic of x, y fitted to a
+#: point's distances to all matching points, differentiated); ``"gradient"``, the gradient of the point's
+#: distance field at each matching point (SPEC S4 Beyond).
+Jacobian = Literal["quadratic", "gradient"]
+
+#: Why the iterations stopped: ``"tolerance"`` (E ≤ tolerance), ``"step"`` (the last step moved no point by
+#: more than a hundredth of the tolerance), ``"stalled"`` (no step lowers T any more: the scan's noise floor),
+#: ``"max_iterations"``.
+MatchStop = Literal["tolerance", "step", "stalled", "max_iterations"]
+
+
+@dataclass(frozen=True, eq=False)
+class IsometricMatch:
+    """Result of :func:`isometric_match`.
+
+    Attributes
+    ----------
+    points : ndarray, shape (n, 3)
+        The matched actual points, on the actual surface, mm; row i belongs to theoretical matching point i.
+    locating : ndarray, shape (2, 3)
+        The actual locating points, put on the actual surface.
+    objective : ndarray, shape (iterations + 1,)
+        T = ‖V₂ − V₁‖ (eq 14) at the start, then after each iteration (unchanged after a rejected step), mm.
+    max_error : ndarray, shape (iterations + 1,)
+        E = max |V₂ − V₁| (eq 15), mm.
+    residuals : ndarray, shape (2n + n(n−1)/2,)
+        The final V₂ − V₁, mm: d(r₁, pⱼ), d(r₂, pⱼ), then d(pᵢ, pⱼ) for i < j.
+    iterations : int
+    stop : str
+        See :data:`MatchStop`.
+    converged : bool
+        False only when the iteration limit stopped it.
+    """
+
+    points: NDArray[np.float64]
+    locating: NDArray[np.float64]
+    objective: NDArray[np.float64]
+    max_error: NDArray[np.float64]
+    residuals: NDArray[np.float64]
+    iterations: int
+    stop: MatchStop
+    converged: bool
+
+    def __repr__(self) -> str:
+        return (
+            f"IsometricMatch({len(self.points)} points, T {self.objective[-1]:.4g} mm, "
+            f"E {self.max_error[-1]:.4g} mm, {self.iterations} iterations, stop {self.stop!r})"
+        )
+
+
+def isometric_match(
+    theoretical_points: ArrayLike | tuple[ArrayLike, ArrayLike],
+    actual_points: ArrayLike | tuple[ArrayLike, ArrayLike],
+    theoretical_locating: ArrayLike,
+    actual_locating: ArrayLike,
+    theoretical_matching: ArrayLike,
+    actual_initial: ArrayLike | None = None,
+    jacobian: Jacobian = "quadratic",
+    *,
+    method: GeodesicMethod = "fmm",
+    max_edge: float | None = None,
+    max_iterations: int = 50,
+    tolerance: float = 1e-3,
+) -> IsometricMatch:
+    """Match theoretical points onto the scanned, bent surface by their geodesic distances (SPEC S4; paper
+    002 §3.3, eq 10–16).
+
+    Both surfaces are meshed (points by :func:`machscan.delaunay_xy`; a ``(vertices, faces)`` pair or a
+    :class:`machscan.io.TriangleMesh` as given) and the locating and matching points inserted as vertices
+    (:func:`machscan.insert_points`). V₁ holds the theoretical geodesic distances from each matching point pᵢ to
+    r₁, r₂ and to every other pⱼ (``2n + n(n−1)/2`` of them); V₂ the same on the actual surface. Each
+    iteration solves ``(JᵀJ + u·I) δ = −Jᵀ(V₂ − V₁)`` for the x, y moves of the actual matching points, puts
+    them back on the actual surface at their new x, y (the surfaces are height fields over xy), and keeps the
+    step when T fell (u ÷ 5, else u × 5; u starts at 0.001).
+
+    Parameters
+    ----------
+    theoretical_points, actual_points : array_like (N, 3), or (vertices, faces)
+        The theoretical surface (e.g. sampled from CAD) and the scan of the clamped part, mm.
+    theoretical_locating, actual_locating : array_like, shape (2, 3)
+        r₁, r₂ on the theoretical surface and as measured on the machine.
+    theoretical_matching : array_like, shape (n, 3)
+        p₁ … pₙ, e.g. a grid over the part (n ≥ 7 for the quadratic Jacobian, ≥ 3 otherwise).
+    actual_initial : array_like, shape (n, 3), optional
+        Where the actual matching points start (their x, y); by default the theoretical ones moved by the x, y
+        rigid motion that takes r₁, r₂ to r′₁, r′₂.
+    jacobian : {"quadratic", "gradient"}
+        See :data:`Jacobian`. Both end at the same points; the gradient needs fewer iterations.
+    method : {"fmm"}
+        How geodesic distances are measured (:func:`machscan.geodesic_distances`).
+    max_edge : float, optional
+        Long-edge trim when meshing point surfaces, mm (:func:`machscan.delaunay_xy`).
+    max_iterations : int
+        Each try of a step counts, accepted or not.
+    tolerance : float
+        Stop when E ≤ tolerance, mm.
+
+    Returns
+    -------
+    IsometricMatch
+        ``.points``, ``.objective`` and ``.max_error`` per iteration, ``.iterations``, ``.stop``.
+
+    Raises
+    ------
+    ValueError
+        An argument of the wrong shape, not finite, a starting point outside the actual surface's xy outline,
+        locating or matching points the surface does not join, a bad option.
+
+    Examples
+    --------
+    >>> skin = machscan.synth.BentSkin()
+    >>> match = machscan.isometric_match(skin.grid(2.0), skin.scan(), skin.locating(),
+    ...                                  skin.actual(skin.locating())[0], skin.matching_grid())
+    >>> match.points  # where the 8 × 8 theoretical matching points went
+    """
+    tp, tf = _surface(theoretical_points, "theoretical_points")
+    ap, af = _surface(actual_points, "actual_points")
+    out = _core.isometric_match(
+        tp,
+        tf,
+        ap,
+        af,
+        theoretical_locating,
+        actual_locating,
+        theoretical_matching,
+        actual_initial,
+        jacobian=jacobian,
+        method=method,
+        max_edge=max_edge,
+        max_iterations=max_iterations,
+        tolerance=tolerance,
+    )
+    return IsometricMatch(**out)
