@@ -104,6 +104,8 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
     i = np.arange(200) + 0.5
     h = 1 - 2 * i / 200
     unit = np.column_stack([np.sqrt(1 - h * h) * np.cos(2.4 * i), np.sqrt(1 - h * h) * np.sin(2.4 * i), h])
+    # A flat 7 × 7 grid, for the mesh-based kernels.
+    grid = np.column_stack([np.arange(49) % 7, np.arange(49) // 7, np.zeros(49)]).astype(float)
     results = {
         "_GrooveFitArrays": _core.fit_grooves(x, z, options),
         "_FrameViewArrays": _core.view_groove_frame(x, z[0], options),
@@ -124,6 +126,13 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
         ),
         "_ClosestArrays": _core.closest_points(scs[:3], [[0, 1, 2]], scs),
         "_InsertedArrays": _core.insert_points(scs[:3], [[0, 1, 2]], scs[:1], tolerance=1e-6),
+        "_IsometricMatchArrays": _core.isometric_match(
+            grid, None, grid, None, grid[[0, -1]], grid[[0, -1]], grid[[11, 13, 15, 25, 27, 29, 38, 40]], None,
+            jacobian="gradient", method="fmm", max_edge=None, max_iterations=1, tolerance=1e-3,
+        ),
+        "_CompensatedArrays": _core.compensate_toolpath(
+            grid[:5], grid, grid, grid, None, interpolation="cubic", normals="smooth", radius=None, max_edge=None
+        ),
         "_EnvelopeFitArrays": _core.envelope_fit(
             10 * unit, unit, 10.5 * unit, min_allowance=0.0, k=8, surface="quadric", init=None
         ),
@@ -135,7 +144,8 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
 
 def _public_callables():
     modules = [machscan, machscan.io, machscan.cloud, machscan.kinematics, machscan.grooves, machscan.contours,
-               machscan.inspection, machscan.scan, machscan.registration, machscan.mesh]
+               machscan.inspection, machscan.scan, machscan.registration, machscan.mesh, machscan.matching,
+               machscan.toolpath]
     seen = {}
     for m in modules:
         for name in getattr(m, "__all__", []):

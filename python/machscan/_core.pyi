@@ -24,6 +24,7 @@ __all__ = [
     "calibrate_mount",
     "closest_points",
     "coarse_align",
+    "compensate_toolpath",
     "contour_error",
     "crop_box",
     "delaunay_xy",
@@ -38,6 +39,7 @@ __all__ = [
     "icp_defaults",
     "insert_points",
     "interpolate_poses",
+    "isometric_match",
     "locating_points_cloud",
     "locating_points_grid",
     "positioning_errors",
@@ -112,6 +114,22 @@ class _InsertedArrays(TypedDict):
     faces: _I64
     indices: _I64
     landings: list[Literal["vertex", "edge", "face"]]
+
+class _IsometricMatchArrays(TypedDict):
+    points: _F64
+    locating: _F64
+    objective: _F64
+    max_error: _F64
+    residuals: _F64
+    iterations: int
+    stop: Literal["tolerance", "step", "stalled", "max_iterations"]
+    converged: bool
+
+class _CompensatedArrays(TypedDict):
+    points: _F64
+    axes: _F64
+    inside: NDArray[np.bool_]
+    offsets: _F64
 
 class _IcpDefaults(TypedDict):
     method: Literal["point_to_point", "point_to_plane"]
@@ -461,6 +479,42 @@ def insert_points(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, t
 
 def geodesic_distances_fmm(vertices: ArrayLike, faces: ArrayLike, sources: Sequence[int]) -> _F64:
     """Geodesic distances by fast marching (SPEC S3); ``machscan.geodesic_distances`` documents it."""
+
+def isometric_match(
+    theoretical_points: ArrayLike,
+    theoretical_faces: ArrayLike | None,
+    actual_points: ArrayLike,
+    actual_faces: ArrayLike | None,
+    theoretical_locating: ArrayLike,
+    actual_locating: ArrayLike,
+    theoretical_matching: ArrayLike,
+    actual_initial: ArrayLike | None,
+    *,
+    jacobian: str,
+    method: str,
+    max_edge: float | None,
+    max_iterations: int,
+    tolerance: float,
+) -> _IsometricMatchArrays:
+    """Isometric matching (SPEC S4); ``machscan.isometric_match`` documents it and wraps the
+    ``_IsometricMatchArrays`` this returns.
+    """
+
+def compensate_toolpath(
+    tool_points: ArrayLike,
+    theoretical_matching: ArrayLike,
+    actual_matching: ArrayLike,
+    actual_points: ArrayLike,
+    actual_faces: ArrayLike | None,
+    *,
+    interpolation: str,
+    normals: str,
+    radius: float | None,
+    max_edge: float | None,
+) -> _CompensatedArrays:
+    """Toolpath compensation (SPEC S5); ``machscan.compensate_toolpath`` documents it and wraps the
+    ``_CompensatedArrays`` this returns.
+    """
 
 def delaunay_xy(points: ArrayLike, max_edge: float | None = None) -> _I64:
     """Delaunay triangulation of a surface seen from above (SPEC S1; paper 002 §3.1): the points'
