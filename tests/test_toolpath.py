@@ -60,7 +60,7 @@ def test_given_tool_axes_turn_with_the_surface(skin):
     r = machscan.compensate_toolpath(np.hstack([tools, np.tile(axis, (len(tools), 1))]), tm, am, scan)
     # The truth: the axis as a point offset 1 mm along it, carried by the bend, minus the carried foot (the
     # bend is a rotation of the normal; its differential maps the lead direction to the tangent).
-    foot, n = s.actual(tools)
+    _foot, n = s.actual(tools)
     u = tools[:, 0] / s.radius
     tangent = np.column_stack([np.cos(u), np.zeros_like(u), np.sin(u)]) @ s.pose[:3, :3].T
     want = axis[0] * tangent + axis[2] * n
@@ -68,7 +68,7 @@ def test_given_tool_axes_turn_with_the_surface(skin):
 
 
 def test_points_outside_the_matching_hull_are_flagged_not_dropped(skin):
-    s, scan, tm, am = skin
+    _s, scan, tm, am = skin
     tools = np.array([[0.0, 0.0, 0.0], [145.0, 0.0, 0.0], [0.0, -95.0, 0.0], [139.0, 89.0, 0.0]])
     r = machscan.compensate_toolpath(tools, tm, am, scan)
     np.testing.assert_array_equal(r.inside, [True, False, False, True])
@@ -84,7 +84,8 @@ def test_a_mesh_a_toolpath_object_and_apt_files_go_through_the_same_way(skin, tm
     b = machscan.compensate_toolpath(tools, tm, am, (scan, faces))
     np.testing.assert_array_equal(a.points, b.points)
     path = tmp_path / "theoretical.cl"
-    machscan.io.write_toolpath(path, tools, axes=np.tile([0.0, 0.0, 1.0], (len(tools), 1)), feeds=np.full(len(tools), 800.0))
+    up = np.tile([0.0, 0.0, 1.0], (len(tools), 1))
+    machscan.io.write_toolpath(path, tools, axes=up, feeds=np.full(len(tools), 800.0))
     c = machscan.compensate_toolpath(machscan.io.read_toolpath(path), tm, am, scan)
     np.testing.assert_allclose(c.points, a.points, atol=1e-12)
     out = tmp_path / "compensated.cl"
@@ -97,12 +98,12 @@ def test_a_mesh_a_toolpath_object_and_apt_files_go_through_the_same_way(skin, tm
 def test_bad_arguments_are_refused_by_name(skin):
     s, scan, tm, am = skin
     tools = s.raster(step=50.0, spacing=25.0)
+    line = np.column_stack([np.arange(64.0), np.arange(64.0), np.zeros(64)])
     cases = [
         (dict(tool_points=tools[:, :2]), "tool_points"),
         (dict(tool_points=np.hstack([tools, np.ones((len(tools), 3))])), "tool_points"),
         (dict(actual_matching=am[:-1]), "actual_matching"),
-        (dict(theoretical_matching=np.column_stack([np.arange(64.0), np.arange(64.0), np.zeros(64)])),
-         "theoretical_matching"),
+        (dict(theoretical_matching=line), "theoretical_matching"),
         (dict(actual_surface=scan[:, :2]), "actual_surface"),
         (dict(interpolation="spline"), "interpolation"),
         (dict(normals="vertex"), "normals"),

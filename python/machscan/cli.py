@@ -1,15 +1,20 @@
 """The ``machscan`` command (also ``python -m machscan``).
 
-    machscan demo [--out DIR] [--seed 0]            synthetic engraved plate → groove tables
-    machscan grooves SCAN CAD [CAD ...] [--out DIR] raw scan + CAD contours → groove tables (CSV);
-                                                    exit status 3 when no contour matched
-    machscan points SCAN [--out cloud.ply]          raw scan → workpiece point cloud (PLY)
-    machscan position MODEL --plan plan.csv         model → probe points and approach directions
-    machscan position MODEL --plan plan.csv --measured probed.csv [--out pose.txt]
-                                                    one probe round → part pose, error table
-    machscan position --simulate                    the probe rounds on the built-in blade
-    machscan allowance MODEL BLANK [--out a.ply]    stock per model point (PLY/PCD/XYZ/CSV);
-                                                    exit status 3 when the minimum does not hold
+machscan demo [--out DIR] [--seed 0]            synthetic engraved plate → groove tables
+machscan grooves SCAN CAD [CAD ...] [--out DIR] raw scan + CAD contours → groove tables (CSV);
+                                                exit status 3 when no contour matched
+machscan points SCAN [--out cloud.ply]          raw scan → workpiece point cloud (PLY)
+machscan position MODEL --plan plan.csv         model → probe points and approach directions
+machscan position MODEL --plan plan.csv --measured probed.csv [--out pose.txt]
+                                                one probe round → part pose, error table
+machscan position --simulate                    the probe rounds on the built-in blade
+machscan allowance MODEL BLANK [--out a.ply]    stock per model point (PLY/PCD/XYZ/CSV);
+                                                exit status 3 when the minimum does not hold
+machscan compensate THEORETICAL SCAN TOOLPATH --locating loc.csv --matching match.csv [--out DIR]
+                                                mirror milling: toolpath onto the bent skin (CL)
+                                                and a report; exit status 3 when the match did
+                                                not converge or tool points lie outside the hull
+machscan compensate --simulate [--out DIR]      the same on the built-in bent skin, with its truth
 """
 
 from __future__ import annotations
@@ -46,8 +51,10 @@ def _check_readings(scan) -> None:
     k = int(np.argmax(counts))
     share = counts[k] / sample.size
     if share >= 0.05:
-        _warn(f"{100 * share:.0f} % of the valid readings are exactly {values[k]!r}: if that is the profiler's "
-              f"no-reading code, pass --sentinel {values[k]!r} (or --valid-range) so they are dropped")
+        _warn(
+            f"{100 * share:.0f} % of the valid readings are exactly {values[k]!r}: if that is the profiler's "
+            f"no-reading code, pass --sentinel {values[k]!r} (or --valid-range) so they are dropped"
+        )
 
 
 def _scan_summary(scan, points: np.ndarray, seconds: float) -> list[str]:
@@ -71,8 +78,13 @@ def _load_scan(args: argparse.Namespace):
     if missing:
         raise ValueError(f"scan: {path} is a CSV export; give --{' --'.join(m.replace('_', '-') for m in missing)} too")
     readings = args.readings or _csv_readings(path)
-    profiler = Profiler(readings=readings, pitch=args.pitch, valid_range=tuple(args.valid_range) if args.valid_range else None,
-                        sentinel=args.sentinel, name="profiler")
+    profiler = Profiler(
+        readings=readings,
+        pitch=args.pitch,
+        valid_range=tuple(args.valid_range) if args.valid_range else None,
+        sentinel=args.sentinel,
+        name="profiler",
+    )
     return read_scan_csv(path, args.poses, profiler, args.c2_offset, args.mount)
 
 
@@ -141,16 +153,26 @@ def _grooves(args: argparse.Namespace) -> int:
     scan = _load_scan(args)
     _check_readings(scan)
     cad = read_contours(args.cad)
-    report = inspect_grooves(scan, cad, window=args.window, template=args.template, alpha=args.alpha,
-                             nominal_width=args.nominal_width, cluster_radius=args.cluster_radius,
-                             max_match_distance=args.max_match_distance, max_se_ratio=args.max_se_ratio)
+    report = inspect_grooves(
+        scan,
+        cad,
+        window=args.window,
+        template=args.template,
+        alpha=args.alpha,
+        nominal_width=args.nominal_width,
+        cluster_radius=args.cluster_radius,
+        max_match_distance=args.max_match_distance,
+        max_se_ratio=args.max_se_ratio,
+    )
     print(report.summary())
     paths = report.to_csv(args.out)
     print(f"\nwritten   : {', '.join(str(p) for p in paths)}")
     fitted = int(report.fits.ok.sum())
     if fitted < 0.5 * len(report.fits):
-        _warn(f"only {fitted} of {len(report.fits)} frames have a fitted groove: check --window, --template "
-              f"and the invalid readings (--sentinel, --valid-range)")
+        _warn(
+            f"only {fitted} of {len(report.fits)} frames have a fitted groove: check --window, --template "
+            f"and the invalid readings (--sentinel, --valid-range)"
+        )
     problem = report.matching_problem()
     if problem:
         _warn(problem)
@@ -191,8 +213,10 @@ def _read_model(path: Path) -> tuple[np.ndarray, np.ndarray]:
             np.add.at(normals, t[:, k], face)
         used = np.linalg.norm(normals, axis=1) > 0
         return f.points[used], normals[used]
-    raise ValueError(f"model: {path} has no normals (nx, ny, nz) and no triangles: the allowance and the probe "
-                     "directions need the model's outward normals")
+    raise ValueError(
+        f"model: {path} has no normals (nx, ny, nz) and no triangles: the allowance and the probe "
+        "directions need the model's outward normals"
+    )
 
 
 def _write_table(path: Path, header: str, rows: np.ndarray) -> None:
@@ -210,16 +234,16 @@ def _position(args: argparse.Namespace) -> int:
     points, normals = _read_model(args.model)
     pose = np.loadtxt(args.pose).reshape(4, 4) if args.pose else np.eye(4)
     if args.measured is None:
-        idx = registration.locating_points(points, args.n_points, keep=args.keep, seed=args.seed, normals=normals,
-                                           pattern=args.pattern)
+        idx = registration.locating_points(
+            points, args.n_points, keep=args.keep, seed=args.seed, normals=normals, pattern=args.pattern
+        )
         _write_plan(args.plan, points, normals, idx, pose)
         print(f"plan      : {len(idx)} probe points of {len(points):,} ({args.pattern}, flattest {args.keep:.0%})")
         print(f"written   : {args.plan} (index, x, y, z, dx, dy, dz: contact points and approach directions, mm)")
         return 0
     plan = np.loadtxt(args.plan, delimiter=",", skiprows=1, ndmin=2)
     measured = np.genfromtxt(args.measured, delimiter=",", skip_header=1, usecols=(0, 1, 2), ndmin=2)
-    r = registration.probe_round(points, normals, plan[:, 0].astype(np.int64), pose, measured,
-                                 probe_radius=args.probe_radius)
+    r = registration.probe_round(points, normals, plan[:, 0].astype(np.int64), pose, measured, probe_radius=args.probe_radius)
     result = registration.PositioningResult(r.transformation, (r,), plan[:, 0].astype(np.int64), converged=False)
     print(result.summary())
     if r.hits < 6:
@@ -228,8 +252,10 @@ def _position(args: argparse.Namespace) -> int:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     np.savetxt(args.out, r.transformation, fmt="%.12g")
     print(f"\npose      : model → machine, written to {args.out}")
-    print(f"correction: {r.correction * 1e3:.2f} µm RMS along the normals; probe again at the new pose while it "
-          "is above the probe noise")
+    print(
+        f"correction: {r.correction * 1e3:.2f} µm RMS along the normals; probe again at the new pose while it "
+        "is above the probe noise"
+    )
     if args.next_plan:
         _write_plan(args.next_plan, points, normals, plan[:, 0].astype(np.int64), r.transformation)
         print(f"written   : {args.next_plan} (the same points at the new pose)")
@@ -251,15 +277,25 @@ def _position_simulated(args: argparse.Namespace) -> int:
     points, normals = blade.sample(200, 100)
     truth = misplacement(args.seed, center=points.reshape(-1, 3).mean(axis=0))
     probe = TouchProbe(blade, truth, radius=args.probe_radius, noise=0.002, seed=args.seed)
-    r = position_workpiece(points, normals, probe, n_points=args.n_points, seed=args.seed,
-                           probe_radius=args.probe_radius, keep=args.keep, pattern=args.pattern)
+    r = position_workpiece(
+        points,
+        normals,
+        probe,
+        n_points=args.n_points,
+        seed=args.seed,
+        probe_radius=args.probe_radius,
+        keep=args.keep,
+        pattern=args.pattern,
+    )
     p, n = points.reshape(-1, 3), normals.reshape(-1, 3)
     d = (p @ r.transformation[:3, :3].T + r.transformation[:3, 3]) - (p @ truth[:3, :3].T + truth[:3, 3])
     along = np.einsum("ij,ij->i", d, n @ truth[:3, :3].T)
     print("synthetic blade, 0.5 mm / 0.5° misplaced, probe noise 2 µm\n")
     print(r.summary())
-    print(f"\npose error over the whole blade: {np.sqrt(np.mean(along**2)) * 1e3:.2f} µm RMS along the normals, "
-          f"{np.sqrt(np.mean(np.sum(d**2, axis=1))) * 1e3:.1f} µm RMS displacement (sliding along the faces)")
+    print(
+        f"\npose error over the whole blade: {np.sqrt(np.mean(along**2)) * 1e3:.2f} µm RMS along the normals, "
+        f"{np.sqrt(np.mean(np.sum(d**2, axis=1))) * 1e3:.1f} µm RMS displacement (sliding along the faces)"
+    )
     return 0
 
 
@@ -297,6 +333,128 @@ def _allowance(args: argparse.Namespace) -> int:
     return 0
 
 
+def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
+    """A CSV table of numbers with one header line, of one of ``widths`` columns."""
+    rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if rows.shape[1] not in widths:
+        raise ValueError(f"{name}: {path} has {rows.shape[1]} columns, expected {' or '.join(map(str, widths))}")
+    return rows
+
+
+def _compensate(args: argparse.Namespace) -> int:
+    from machscan.io import Toolpath, read_points, read_toolpath, write_toolpath
+
+    if args.simulate:
+        return _compensate_simulated(args)
+    if args.theoretical is None or args.scan is None or args.toolpath is None or args.locating is None or args.matching is None:
+        raise ValueError("compensate: give THEORETICAL SCAN TOOLPATH --locating and --matching (or --simulate)")
+    theoretical, scan = read_points(args.theoretical), read_points(args.scan)
+    locating = _read_rows(args.locating, "--locating", (6,))
+    if len(locating) != 2:
+        raise ValueError(f"--locating: {args.locating} has {len(locating)} rows, expected the 2 locating points")
+    matching = _read_rows(args.matching, "--matching", (3, 6))
+    toolpath = read_toolpath(args.toolpath)
+    return _run_compensation(args, theoretical, scan, locating, matching, toolpath, Toolpath, write_toolpath)
+
+
+def _run_compensation(args, theoretical, scan, locating, matching, toolpath, toolpath_class, write_toolpath, truth=None) -> int:
+    from machscan.matching import isometric_match
+    from machscan.toolpath import compensate_toolpath
+
+    t0 = time.perf_counter()
+    initial = matching[:, 3:6] if matching.shape[1] == 6 else None
+    match = isometric_match(
+        theoretical,
+        scan,
+        locating[:, :3],
+        locating[:, 3:],
+        matching[:, :3],
+        initial,
+        jacobian=args.jacobian,
+        method=args.method,
+        max_edge=args.max_edge,
+    )
+    t1 = time.perf_counter()
+    path = compensate_toolpath(
+        toolpath,
+        matching[:, :3],
+        match.points,
+        scan,
+        interpolation=args.interpolation,
+        normals=args.normals,
+        max_edge=args.max_edge,
+    )
+    t2 = time.perf_counter()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_toolpath(out / "compensated.cl", path.points, axes=path.axes, feeds=toolpath.feeds, segments=toolpath.segments)
+    _write_table(out / "matched.csv", "x,y,z,actual_x,actual_y,actual_z", np.column_stack([matching[:, :3], match.points]))
+    moved = np.linalg.norm(path.points - toolpath.points, axis=1)
+    _write_table(
+        out / "report.csv",
+        "index,x,y,z,compensated_x,compensated_y,compensated_z,i,j,k,moved,inside",
+        np.column_stack([np.arange(len(moved)), toolpath.points, path.points, path.axes, moved, path.inside]),
+    )
+    print(
+        f"matching  : {len(match.points)} points, T {match.objective[-1] * 1e3:.2f} µm, E {match.max_error[-1] * 1e3:.2f} "
+        f"µm after {match.iterations} iterations (stop: {match.stop}, {args.jacobian} Jacobian, {args.method} "
+        f"geodesics), {t1 - t0:.1f} s"
+    )
+    print(
+        f"toolpath  : {len(moved)} points moved by {moved.min():.3f} … {moved.max():.3f} mm, "
+        f"{int((~path.inside).sum())} outside the matching hull, {t2 - t1:.2f} s"
+    )
+    if truth is not None:
+        want, normals = truth
+        err = np.linalg.norm(path.points - want, axis=1)[path.inside]
+        before = np.linalg.norm(toolpath.points - want, axis=1)[path.inside]
+        tilt = np.degrees(np.arccos(np.clip(np.sum(path.axes * normals, axis=1), -1, 1)))[path.inside]
+        print(
+            f"truth     : compensated path within {err.max() * 1e3:.1f} µm (max; {np.sqrt(np.mean(err**2)) * 1e3:.1f} "
+            f"µm RMS), axes within {tilt.max():.3f}°; uncompensated {before.max():.3f} mm "
+            f"({100 * (1 - err.max() / before.max()):.2f} % less)"
+        )
+    print(f"written   : {out / 'compensated.cl'}, {out / 'matched.csv'}, {out / 'report.csv'}")
+    if not match.converged or not path.inside.all():
+        _warn(
+            "the match did not converge"
+            if not match.converged
+            else "tool points outside the matching hull were extrapolated (report.csv, inside = 0)"
+        )
+        return 3
+    return 0
+
+
+def _compensate_simulated(args: argparse.Namespace) -> int:
+    from machscan.io import Toolpath, write_points, write_toolpath
+    from machscan.synth import BentSkin, misplacement
+
+    skin = BentSkin(pose=misplacement(args.seed, translation=1.0, rotation=np.deg2rad(0.5)))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    theoretical, scan = skin.grid(1.3), skin.scan(1.3, 0.005, seed=args.seed)
+    r = skin.locating()
+    locating = np.column_stack([r, skin.actual(r)[0]])
+    matching = skin.matching_grid()
+    tools = np.vstack([skin.raster(depth=0.0), skin.raster(step=25.0, depth=-2.0)])
+    up = np.tile([0.0, 0.0, 1.0], (len(tools), 1))
+    toolpath = Toolpath(
+        tools, up, np.full(len(tools), 1200.0), np.repeat([0, 1], [len(skin.raster()), len(tools) - len(skin.raster())])
+    )
+    write_points(out / "theoretical.ply", theoretical)
+    write_points(out / "scan.ply", scan)
+    _write_table(out / "locating.csv", "x,y,z,actual_x,actual_y,actual_z", locating)
+    _write_table(out / "matching.csv", "x,y,z", matching)
+    write_toolpath(out / "theoretical.cl", tools, axes=up, feeds=toolpath.feeds, segments=toolpath.segments)
+    print(
+        "synthetic skin: 300 × 200 mm bent to R = 1000 mm, misplaced 1 mm / 0.5°, scanned at 1.3 mm with 5 µm "
+        f"noise; inputs in {out}\n"
+    )
+    return _run_compensation(
+        args, theoretical, scan, locating, matching, toolpath, Toolpath, write_toolpath, truth=skin.actual(tools)
+    )
+
+
 def _scan_arguments(p: argparse.ArgumentParser) -> None:
     from machscan.scan import SENTINEL
 
@@ -306,11 +464,13 @@ def _scan_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--pitch", type=float, help="reading spacing, mm")
     g.add_argument("--readings", type=int, help="readings per frame (default: the file's)")
     g.add_argument("--c2-offset", type=float, nargs=3, metavar=("LX", "LY", "LZ"), help="C2 axis offset, mm")
-    g.add_argument("--mount", type=float, nargs=6, metavar=("THETA", "PSI", "PHI", "DX", "DY", "DZ"),
-                   help="sensor mount, rad and mm")
+    g.add_argument(
+        "--mount", type=float, nargs=6, metavar=("THETA", "PSI", "PHI", "DX", "DY", "DZ"), help="sensor mount, rad and mm"
+    )
     g.add_argument("--valid-range", type=float, nargs=2, metavar=("LO", "HI"), help="measuring range, mm")
-    g.add_argument("--sentinel", type=float, default=SENTINEL,
-                   help="value the profiler returns for no reading (default: %(default)s)")
+    g.add_argument(
+        "--sentinel", type=float, default=SENTINEL, help="value the profiler returns for no reading (default: %(default)s)"
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -329,29 +489,51 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="run the groove inspection on a built-in synthetic scan")
     demo.add_argument("--out", type=Path, default=Path("machscan-demo"), help="output folder (default: %(default)s)")
     demo.add_argument("--seed", type=int, default=0, help="seed of the synthetic scan (default: %(default)s)")
-    demo.add_argument("--cloud-every", type=int, default=10,
-                      help="write the workpiece points of every Nth frame (default: %(default)s)")
+    demo.add_argument(
+        "--cloud-every", type=int, default=10, help="write the workpiece points of every Nth frame (default: %(default)s)"
+    )
     demo.set_defaults(run=_demo)
 
     gr = sub.add_parser("grooves", help="groove width, depth and contour error from a raw scan and CAD contours")
     _scan_arguments(gr)
     gr.add_argument("cad", nargs="+", type=Path, help="CAD contours: CSV (contour, x, y, z) or APT/CL files (GOTO points)")
     gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
-    gr.add_argument("--window", type=int, default=200,
-                    help="readings around the line center fitted per frame (default: %(default)s)")
-    gr.add_argument("--template", choices=get_args(Template), default=GROOVE_DEFAULTS["template"],
-                    help="groove shape fitted: the best of the four section models (auto), one of them, or the "
-                         "paper's tanh template (default: %(default)s)")
-    gr.add_argument("--alpha", type=float, default=GROOVE_DEFAULTS["alpha"],
-                    help="tanh template only: shape coefficient, 1/mm (default: %(default)s)")
-    gr.add_argument("--nominal-width", type=float, default=GROOVE_DEFAULTS["nominal_width"],
-                    help="tanh template only: starting groove width, mm (default: %(default)s)")
-    gr.add_argument("--max-se-ratio", type=float, default=None,
-                    help="leave out frames whose width or depth standard error exceeds this many times the "
-                         "median (default: keep all; 5 suits the tanh template)")
+    gr.add_argument(
+        "--window", type=int, default=200, help="readings around the line center fitted per frame (default: %(default)s)"
+    )
+    gr.add_argument(
+        "--template",
+        choices=get_args(Template),
+        default=GROOVE_DEFAULTS["template"],
+        help="groove shape fitted: the best of the four section models (auto), one of them, or the "
+        "paper's tanh template (default: %(default)s)",
+    )
+    gr.add_argument(
+        "--alpha",
+        type=float,
+        default=GROOVE_DEFAULTS["alpha"],
+        help="tanh template only: shape coefficient, 1/mm (default: %(default)s)",
+    )
+    gr.add_argument(
+        "--nominal-width",
+        type=float,
+        default=GROOVE_DEFAULTS["nominal_width"],
+        help="tanh template only: starting groove width, mm (default: %(default)s)",
+    )
+    gr.add_argument(
+        "--max-se-ratio",
+        type=float,
+        default=None,
+        help="leave out frames whose width or depth standard error exceeds this many times the "
+        "median (default: keep all; 5 suits the tanh template)",
+    )
     gr.add_argument("--cluster-radius", type=float, default=5.0, help="contour segmentation distance, mm (default: %(default)s)")
-    gr.add_argument("--max-match-distance", type=float, default=10.0,
-                    help="largest distance between a scanned contour and its CAD contour, mm (default: %(default)s)")
+    gr.add_argument(
+        "--max-match-distance",
+        type=float,
+        default=10.0,
+        help="largest distance between a scanned contour and its CAD contour, mm (default: %(default)s)",
+    )
     gr.set_defaults(run=_grooves)
 
     pts = sub.add_parser("points", help="turn a raw scan into a workpiece point cloud (PLY)")
@@ -373,29 +555,88 @@ def build_parser() -> argparse.ArgumentParser:
     pos.add_argument("--out", type=Path, default=Path("pose.txt"), help="fitted pose (default: %(default)s)")
     pos.add_argument("--next-plan", type=Path, help="write the plan at the fitted pose for the next round")
     pos.add_argument("--n-points", type=int, default=positioning["n_points"], help="probe points (default: %(default)s)")
-    pos.add_argument("--keep", type=float, default=positioning["keep"],
-                     help="flattest share to choose from (default: %(default)s)")
-    pos.add_argument("--pattern", choices=("optimal", "random"), default=positioning["pattern"],
-                     help="designed points or the paper's random draw (default: %(default)s)")
+    pos.add_argument(
+        "--keep", type=float, default=positioning["keep"], help="flattest share to choose from (default: %(default)s)"
+    )
+    pos.add_argument(
+        "--pattern",
+        choices=("optimal", "random"),
+        default=positioning["pattern"],
+        help="designed points or the paper's random draw (default: %(default)s)",
+    )
     pos.add_argument("--seed", type=int, default=positioning["seed"], help="seed of a random draw (default: %(default)s)")
-    pos.add_argument("--probe-radius", type=float, default=positioning["probe_radius"],
-                     help="probe ball radius, mm (default: %(default)s)")
+    pos.add_argument(
+        "--probe-radius", type=float, default=positioning["probe_radius"], help="probe ball radius, mm (default: %(default)s)"
+    )
     pos.add_argument("--simulate", action="store_true", help="run the rounds on the built-in synthetic blade")
     pos.set_defaults(run=_position)
 
     al = sub.add_parser("allowance", help="machining allowance of a measured blank over the model")
     al.add_argument("model", type=Path, help="model points with normals (PLY/PCD/XYZ/CSV) or a mesh (STL)")
     al.add_argument("blank", type=Path, help="measured blank points, in the model's frame")
-    al.add_argument("--out", type=Path, default=Path("allowance.ply"),
-                    help="model points with the allowance as a scalar field (.ply, .pcd) or a column (.csv) "
-                         "(default: %(default)s)")
+    al.add_argument(
+        "--out",
+        type=Path,
+        default=Path("allowance.ply"),
+        help="model points with the allowance as a scalar field (.ply, .pcd) or a column (.csv) (default: %(default)s)",
+    )
     al.add_argument("--min-allowance", type=float, default=0.0, help="least stock wanted, mm (default: %(default)s)")
-    al.add_argument("--fit", action="store_true",
-                    help="first move the blank to the balanced envelope fit (every allowance ≥ the minimum)")
+    al.add_argument(
+        "--fit", action="store_true", help="first move the blank to the balanced envelope fit (every allowance ≥ the minimum)"
+    )
     al.add_argument("--k", type=int, default=ALLOWANCE_NEIGHBORS, help="blank points per local surface (default: %(default)s)")
-    al.add_argument("--surface", choices=get_args(BlankSurface), default=ALLOWANCE_SURFACE,
-                    help="the blank's local surface: quadric, or the paper's plane (default: %(default)s)")
+    al.add_argument(
+        "--surface",
+        choices=get_args(BlankSurface),
+        default=ALLOWANCE_SURFACE,
+        help="the blank's local surface: quadric, or the paper's plane (default: %(default)s)",
+    )
     al.set_defaults(run=_allowance)
+
+    from machscan.matching import Jacobian, isometric_match
+    from machscan.mesh import GeodesicMethod
+    from machscan.toolpath import Interpolation, SurfaceNormals, compensate_toolpath
+
+    matching = {k: v.default for k, v in inspect.signature(isometric_match).parameters.items()}
+    mapping = {k: v.default for k, v in inspect.signature(compensate_toolpath).parameters.items()}
+    co = sub.add_parser("compensate", help="mirror milling: carry a toolpath onto the scanned, bent skin")
+    co.add_argument("theoretical", nargs="?", type=Path, help="theoretical surface points (PLY/PCD/XYZ/CSV)")
+    co.add_argument("scan", nargs="?", type=Path, help="scan of the clamped skin (PLY/PCD/XYZ/CSV)")
+    co.add_argument("toolpath", nargs="?", type=Path, help="toolpath programmed on the theoretical surface (APT/CL)")
+    co.add_argument(
+        "--locating", type=Path, help="CSV, 2 rows: theoretical x, y, z and measured actual x, y, z of the locating points"
+    )
+    co.add_argument(
+        "--matching", type=Path, help="CSV: theoretical matching points x, y, z (and optionally starting actual x, y, z)"
+    )
+    co.add_argument(
+        "--out",
+        type=Path,
+        default=Path("compensation"),
+        help="output folder: compensated.cl, matched.csv, report.csv (default: %(default)s)",
+    )
+    co.add_argument(
+        "--jacobian", choices=get_args(Jacobian), default=matching["jacobian"], help="matching Jacobian (default: %(default)s)"
+    )
+    co.add_argument(
+        "--method", choices=get_args(GeodesicMethod), default=matching["method"], help="geodesic distances (default: %(default)s)"
+    )
+    co.add_argument(
+        "--interpolation",
+        choices=get_args(Interpolation),
+        default=mapping["interpolation"],
+        help="mapping between the matching points (default: %(default)s)",
+    )
+    co.add_argument(
+        "--normals",
+        choices=get_args(SurfaceNormals),
+        default=mapping["normals"],
+        help="actual surface point and normal (default: %(default)s)",
+    )
+    co.add_argument("--max-edge", type=float, default=None, help="trim mesh edges longer than this, mm")
+    co.add_argument("--simulate", action="store_true", help="run on the built-in bent skin and compare with its truth")
+    co.add_argument("--seed", type=int, default=0, help="seed of the simulated misplacement and noise (default: %(default)s)")
+    co.set_defaults(run=_compensate)
     return parser
 
 
