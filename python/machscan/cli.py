@@ -342,7 +342,7 @@ def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
 
 
 def _compensate(args: argparse.Namespace) -> int:
-    from machscan.io import Toolpath, read_points, read_toolpath, write_toolpath
+    from machscan.io import read_points, read_toolpath
 
     if args.simulate:
         return _compensate_simulated(args)
@@ -354,10 +354,13 @@ def _compensate(args: argparse.Namespace) -> int:
         raise ValueError(f"--locating: {args.locating} has {len(locating)} rows, expected the 2 locating points")
     matching = _read_rows(args.matching, "--matching", (3, 6))
     toolpath = read_toolpath(args.toolpath)
-    return _run_compensation(args, theoretical, scan, locating, matching, toolpath, Toolpath, write_toolpath)
+    return _run_compensation(args, theoretical, scan, locating, matching, toolpath)
 
 
-def _run_compensation(args, theoretical, scan, locating, matching, toolpath, toolpath_class, write_toolpath, truth=None) -> int:
+def _run_compensation(args, theoretical, scan, locating, matching, toolpath, truth=None) -> int:
+    """Match, compensate, write the CL file and the tables, print the report; compare with ``truth`` (points
+    and normals) when the part is simulated."""
+    from machscan.io import write_toolpath
     from machscan.matching import isometric_match
     from machscan.toolpath import compensate_toolpath
 
@@ -450,9 +453,7 @@ def _compensate_simulated(args: argparse.Namespace) -> int:
         "synthetic skin: 300 × 200 mm bent to R = 1000 mm, misplaced 1 mm / 0.5°, scanned at 1.3 mm with 5 µm "
         f"noise; inputs in {out}\n"
     )
-    return _run_compensation(
-        args, theoretical, scan, locating, matching, toolpath, Toolpath, write_toolpath, truth=skin.actual(tools)
-    )
+    return _run_compensation(args, theoretical, scan, locating, matching, toolpath, truth=skin.actual(tools))
 
 
 def _scan_arguments(p: argparse.ArgumentParser) -> None:
