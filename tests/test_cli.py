@@ -56,8 +56,24 @@ def test_grooves_command_equals_the_library(small):
 def test_grooves_command_fits_the_template_asked_for(small):
     d, scan, truth = small
     out = d / "out_tanh"
-    assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--template", "tanh", "--alpha", "25",
-                 "--max-se-ratio", "5", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "grooves",
+                str(d / "scan.npz"),
+                str(d / "cad.csv"),
+                "--template",
+                "tanh",
+                "--alpha",
+                "25",
+                "--max-se-ratio",
+                "5",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     ref = inspect_grooves(scan, truth.nominal_polylines, template="tanh", alpha=25.0, max_se_ratio=5.0)
     rows = np.genfromtxt(out / "frames.csv", delimiter=",", names=True)
     np.testing.assert_array_equal(rows["model"], ref.fits.model)
@@ -79,9 +95,25 @@ def test_grooves_command_on_a_csv_scan_and_apt_contours(small):
             for x, y, z in np.asarray(c):
                 fh.write(f"GOTO/{x:.6f},{y:.6f}, $\n  {z:.6f},0.0,0.0,1.0\n")
         fh.write("FINI\n")
-    args = ["grooves", str(d / "frames.csv"), str(apt), "--poses", str(d / "poses.csv"), "--pitch", str(scan.profiler.pitch),
-            "--c2-offset", *map(str, scan.c2_offset), "--mount", *map(str, scan.mount), "--sentinel", str(scan.profiler.sentinel),
-            "--valid-range", *map(str, scan.profiler.valid_range), "--out", str(d / "out2")]
+    args = [
+        "grooves",
+        str(d / "frames.csv"),
+        str(apt),
+        "--poses",
+        str(d / "poses.csv"),
+        "--pitch",
+        str(scan.profiler.pitch),
+        "--c2-offset",
+        *map(str, scan.c2_offset),
+        "--mount",
+        *map(str, scan.mount),
+        "--sentinel",
+        str(scan.profiler.sentinel),
+        "--valid-range",
+        *map(str, scan.profiler.valid_range),
+        "--out",
+        str(d / "out2"),
+    ]
     assert main(args) == 0
     rows = np.genfromtxt(d / "out2" / "widths.csv", delimiter=",", names=True)
     assert len(rows) == len(truth.nominal_polylines) + 1
@@ -159,9 +191,14 @@ def test_an_unknown_no_reading_code_is_warned_about(small, tmp_path, capsys):
     _d, scan, _truth = small
     frames = scan.frames.copy()
     frames[~scan.valid_mask()] = -9999.0  # another vendor's code, not the default sentinel
-    other = machscan.Scan(frames, scan.poses, scan.frame_times,
-                          machscan.Profiler(readings=scan.n_readings, pitch=scan.profiler.pitch),
-                          scan.c2_offset, scan.mount)
+    other = machscan.Scan(
+        frames,
+        scan.poses,
+        scan.frame_times,
+        machscan.Profiler(readings=scan.n_readings, pitch=scan.profiler.pitch),
+        scan.c2_offset,
+        scan.mount,
+    )
     frames[:, :100] = -9999.0  # and a stretch the sensor never saw
     other = machscan.Scan(frames, scan.poses, scan.frame_times, other.profiler, scan.c2_offset, scan.mount)
     other.save(tmp_path / "other.npz")
@@ -172,9 +209,14 @@ def test_an_unknown_no_reading_code_is_warned_about(small, tmp_path, capsys):
 
 def test_points_drop_the_vendor_sentinel_by_default(small, tmp_path, capsys):
     _d, scan, _ = small
-    bare = machscan.Scan(scan.frames, scan.poses, scan.frame_times,
-                         machscan.Profiler(readings=scan.n_readings, pitch=scan.profiler.pitch),
-                         scan.c2_offset, scan.mount)
+    bare = machscan.Scan(
+        scan.frames,
+        scan.poses,
+        scan.frame_times,
+        machscan.Profiler(readings=scan.n_readings, pitch=scan.profiler.pitch),
+        scan.c2_offset,
+        scan.mount,
+    )
     bare.save(tmp_path / "bare.npz")
     assert main(["points", str(tmp_path / "bare.npz"), "--out", str(tmp_path / "c.ply")]) == 0
     out = capsys.readouterr().out
@@ -210,8 +252,14 @@ def test_position_plan_then_fit_equals_the_library(tmp_path, capsys):
     assert main([*args, "--out", str(pose), "--next-plan", str(nxt)]) == 0
     assert "e_total" in capsys.readouterr().out
     stored = machscan.io.read(model)  # as the command reads it (float32 in a PLY)
-    expected = machscan.registration.probe_round(stored.points, stored.normals, rows[:, 0].astype(int), np.eye(4),
-                                                 np.loadtxt(measured, delimiter=",", skiprows=1), probe_radius=1.5)
+    expected = machscan.registration.probe_round(
+        stored.points,
+        stored.normals,
+        rows[:, 0].astype(int),
+        np.eye(4),
+        np.loadtxt(measured, delimiter=",", skiprows=1),
+        probe_radius=1.5,
+    )
     np.testing.assert_allclose(np.loadtxt(pose), expected.transformation, atol=1e-9)
     assert np.abs(np.loadtxt(pose) - truth).max() < 0.02  # one round from 0.5 mm / 0.5° off: µm left
     assert np.loadtxt(nxt, delimiter=",", skiprows=1).shape == rows.shape
@@ -251,8 +299,12 @@ def test_an_stl_model_is_read_with_outward_vertex_normals(tmp_path, capsys):
     points, normals = blade.sample(120, 30)
     idx = np.arange(120 * 30).reshape(120, 30)
     nxt = np.roll(idx, -1, axis=0)
-    tri = np.concatenate([np.stack([idx[:, :-1], idx[:, 1:], nxt[:, :-1]], -1).reshape(-1, 3),
-                          np.stack([idx[:, 1:], nxt[:, 1:], nxt[:, :-1]], -1).reshape(-1, 3)])
+    tri = np.concatenate(
+        [
+            np.stack([idx[:, :-1], idx[:, 1:], nxt[:, :-1]], -1).reshape(-1, 3),
+            np.stack([idx[:, 1:], nxt[:, 1:], nxt[:, :-1]], -1).reshape(-1, 3),
+        ]
+    )
     stl, blank_file, out = tmp_path / "blade.stl", tmp_path / "blank.xyz", tmp_path / "a.csv"
     machscan.write_mesh(stl, points.reshape(-1, 3), tri)
     u, v = np.meshgrid(np.arange(900) / 900, np.linspace(0, 1, 300), indexing="ij")
@@ -263,10 +315,68 @@ def test_an_stl_model_is_read_with_outward_vertex_normals(tmp_path, capsys):
 
     table = np.loadtxt(out, delimiter=",", skiprows=1)
     _, j = cKDTree(points.reshape(-1, 3)).query(table[:, :3])  # the mesh's vertex order is its own
-    cos = np.einsum("ij,ij->i", table[:, 3:6] / np.linalg.norm(table[:, 3:6], axis=1, keepdims=True),
-                    normals.reshape(-1, 3)[j])
+    cos = np.einsum("ij,ij->i", table[:, 3:6] / np.linalg.norm(table[:, 3:6], axis=1, keepdims=True), normals.reshape(-1, 3)[j])
     assert cos.min() > 0.99  # outward, as the true normals
     assert np.nanmedian(np.abs(table[:, 6] - 0.2)) < 1e-3
     plan = tmp_path / "plan.csv"
     assert main(["position", str(stl), "--plan", str(plan)]) == 0
     assert np.loadtxt(plan, delimiter=",", skiprows=1).shape == (160, 7)
+
+
+def test_compensate_simulate_then_from_its_files_equals_the_library(tmp_path, capsys):
+    # The simulated skin writes its inputs; the file-based command on them gives the same CL file, and both
+    # equal the library's match and compensation of the same data.
+    sim = tmp_path / "sim"
+    assert main(["compensate", "--simulate", "--out", str(sim)]) == 0
+    out = capsys.readouterr().out
+    assert "truth" in out and "less" in out
+    files = tmp_path / "files"
+    args = [
+        str(sim / "theoretical.ply"),
+        str(sim / "scan.ply"),
+        str(sim / "theoretical.cl"),
+        "--locating",
+        str(sim / "locating.csv"),
+        "--matching",
+        str(sim / "matching.csv"),
+        "--out",
+        str(files),
+    ]
+    assert main(["compensate", *args]) == 0
+    a = machscan.io.read_toolpath(sim / "compensated.cl")
+    b = machscan.io.read_toolpath(files / "compensated.cl")
+    # The PLY files hold float32 points, so the file run sees the data rounded to ~1 µm.
+    assert np.abs(a.points - b.points).max() < 0.005
+    np.testing.assert_array_equal(a.segments, b.segments)
+    np.testing.assert_array_equal(a.feeds, b.feeds)
+    theoretical = machscan.read_points(sim / "theoretical.ply")
+    scan = machscan.read_points(sim / "scan.ply")
+    loc = np.loadtxt(sim / "locating.csv", delimiter=",", skiprows=1)
+    grid = np.loadtxt(sim / "matching.csv", delimiter=",", skiprows=1)
+    m = machscan.isometric_match(theoretical, scan, loc[:, :3], loc[:, 3:], grid)
+    tp = machscan.io.read_toolpath(sim / "theoretical.cl")
+    p = machscan.compensate_toolpath(tp, grid, m.points, scan)
+    np.testing.assert_allclose(b.points, p.points, atol=1e-9)
+    report = np.loadtxt(files / "report.csv", delimiter=",", skiprows=1)
+    assert report.shape == (len(tp.points), 12) and report[:, -1].all()
+
+
+def test_compensate_names_a_missing_argument_and_a_bad_table(tmp_path, capsys):
+    assert main(["compensate", "a.ply"]) == 2
+    assert "--locating" in capsys.readouterr().err
+    grid = synth.BentSkin(length=40.0, width=30.0).grid(2.0)
+    machscan.write_points(tmp_path / "t.ply", grid)
+    machscan.io.write_toolpath(tmp_path / "t.cl", grid[:5])
+    bad = tmp_path / "loc.csv"
+    bad.write_text("x,y,z\n1,2,3\n4,5,6\n")
+    args = [
+        str(tmp_path / "t.ply"),
+        str(tmp_path / "t.ply"),
+        str(tmp_path / "t.cl"),
+        "--locating",
+        str(bad),
+        "--matching",
+        str(bad),
+    ]
+    assert main(["compensate", *args]) == 2
+    assert "--locating" in capsys.readouterr().err
