@@ -96,7 +96,7 @@ from machscan.registration import (
     positioning_errors,
 )
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
-from machscan.toolpath import CompensatedToolpath, compensate_toolpath
+from machscan.toolpath import CompensatedToolpath, compensate_toolpath, scallop_height, step_over
 
 __all__ = [
     "SENTINEL",
@@ -175,8 +175,10 @@ __all__ = [
     "remove_radius_outliers",
     "remove_statistical_outliers",
     "resample_polyline",
+    "scallop_height",
     "scan",
     "scan_to_wcs",
+    "step_over",
     "surface_variation",
     "synth",
     "toolpath",

@@ -39,6 +39,8 @@ __all__ = [
     "icp_defaults",
     "insert_points",
     "interpolate_poses",
+    "scallop_heights",
+    "step_overs",
     "isometric_match",
     "locating_points_cloud",
     "locating_points_grid",
@@ -515,6 +517,12 @@ def compensate_toolpath(
     """Toolpath compensation (SPEC S5); ``machscan.compensate_toolpath`` documents it and wraps the
     ``_CompensatedArrays`` this returns.
     """
+
+def scallop_heights(tool_radius: ArrayLike, curvature_radius: ArrayLike, step: ArrayLike) -> _F64:
+    """Scallop heights (SPEC P3); ``machscan.scallop_height`` documents it."""
+
+def step_overs(tool_radius: ArrayLike, curvature_radius: ArrayLike, scallop_height: ArrayLike) -> _F64:
+    """Step-overs (SPEC P3); ``machscan.step_over`` documents it."""
 
 def delaunay_xy(points: ArrayLike, max_edge: float | None = None) -> _I64:
     """Delaunay triangulation of a surface seen from above (SPEC S1; paper 002 §3.1): the points'

@@ -1,4 +1,6 @@
-"""Toolpath compensation for mirror milling (SPEC S5; paper 002 §4): the toolpath programmed on the theoretical
+"""Toolpaths: compensation for mirror milling, and the row spacing of grinding paths.
+
+Toolpath compensation for mirror milling (SPEC S5; paper 002 §4): the toolpath programmed on the theoretical
 skin, carried onto the skin as it lies bent on the machine, so that pockets and wall thickness land where the
 design wants them.
 
@@ -20,7 +22,7 @@ from machscan import _core
 from machscan.io import Toolpath
 from machscan.mesh import _surface
 
-__all__ = ["CompensatedToolpath", "Interpolation", "SurfaceNormals", "compensate_toolpath"]
+__all__ = ["CompensatedToolpath", "Interpolation", "SurfaceNormals", "compensate_toolpath", "scallop_height", "step_over"]
 
 #: How theoretical x, y map to the actual surface: ``"cubic"`` (default), polyharmonic splines through the
 #: matching pairs (cubic fields reproduced exactly); ``"linear"``, the paper's eq 17, the barycentric
@@ -121,3 +123,77 @@ def compensate_toolpath(
         max_edge=max_edge,
     )
     return CompensatedToolpath(**out)
+
+
+def _elementwise(kernel, names: tuple[str, str, str], a: ArrayLike, b: ArrayLike, c: ArrayLike) -> float | NDArray[np.float64]:
+    arrays = [np.asarray(x, dtype=np.float64) for x in (a, b, c)]
+    try:
+        shaped = np.broadcast_arrays(*arrays)
+    except ValueError:
+        shapes = ", ".join(f"{n} {x.shape}" for n, x in zip(names, arrays))
+        raise ValueError(f"{names[2]}: the shapes do not broadcast: {shapes}") from None
+    out = kernel(*(np.ascontiguousarray(x).ravel() for x in shaped)).reshape(shaped[0].shape)
+    return float(out) if out.ndim == 0 else out
+
+
+def scallop_height(tool_radius: ArrayLike, curvature_radius: ArrayLike, step: ArrayLike) -> float | NDArray[np.float64]:
+    """The cusp height left between two tool rows an arc ``step`` apart (SPEC P3; paper 004 §3), by exact circle
+    geometry in the plane across the rows: the surface a circle of radius ``curvature_radius``, the contact wheel a
+    circle of radius ``tool_radius`` touching it at each row. Vectorised (arguments broadcast); no digits lost on
+    nearly flat surfaces.
+
+    Parameters
+    ----------
+    tool_radius : float or array_like
+        Contact radius R, mm.
+    curvature_radius : float or array_like
+        Surface radius ρ across the rows, mm: > 0 convex, < 0 concave (|ρ| > R, or the tool does not fit), ``inf``
+        flat.
+    step : float or array_like
+        Row spacing, arc length on the surface, mm.
+
+    Returns
+    -------
+    float or ndarray
+        Scallop height, mm.
+
+    Raises
+    ------
+    ValueError
+        A radius ≤ 0 or NaN, a concave radius the tool does not fit, a step so wide that the rows leave a strip
+        unground; the message names the argument (and the element of an array).
+
+    Examples
+    --------
+    >>> machscan.scallop_height(10.0, float("inf"), 2.0)   # R − √(R² − 1)
+    0.050125628933...
+    """
+    return _elementwise(_core.scallop_heights, ("tool_radius", "curvature_radius", "step"), tool_radius, curvature_radius, step)
+
+
+def step_over(tool_radius: ArrayLike, curvature_radius: ArrayLike, scallop_height: ArrayLike) -> float | NDArray[np.float64]:
+    """The widest row spacing (arc length on the surface, mm) that leaves cusps no higher than ``scallop_height``:
+    the inverse of :func:`scallop_height`, in closed form (SPEC P3). Vectorised (arguments broadcast).
+
+    Parameters
+    ----------
+    tool_radius : float or array_like
+        Contact radius R, mm.
+    curvature_radius : float or array_like
+        Surface radius across the rows, mm: > 0 convex, < 0 concave, ``inf`` flat.
+    scallop_height : float or array_like
+        Allowed cusp height, 0 ≤ h < R, mm.
+
+    Returns
+    -------
+    float or ndarray
+        Step-over, mm.
+
+    Examples
+    --------
+    >>> machscan.step_over(10.0, [50.0, float("inf"), -50.0], 0.01)   # convex, flat, concave
+    array([0.8162..., 0.8942..., 0.9998...])
+    """
+    return _elementwise(
+        _core.step_overs, ("tool_radius", "curvature_radius", "scallop_height"), tool_radius, curvature_radius, scallop_height
+    )

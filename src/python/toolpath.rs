@@ -2,6 +2,7 @@
 use super::convert::{enter, points_to_numpy, to_numpy, Dim, F64Array};
 use super::mesh::surface;
 use crate::mesh::surface_faces;
+use crate::toolpath::scallop::{scallop_height, step_over};
 use crate::toolpath::{compensate_toolpath as run_compensate, CompensateOptions, Interpolation, Normals};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -61,7 +62,68 @@ fn compensate_toolpath<'py>(
     Ok(d)
 }
 
+/// One of the scallop relations over equally long flat arrays; an error names the element when
+/// there is more than one.
+fn elementwise<'py>(
+    py: Python<'py>,
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    c: &Bound<'py, PyAny>,
+    names: [&str; 3],
+    f: fn(f64, f64, f64) -> crate::Result<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let [a, b, c] = [(a, names[0]), (b, names[1]), (c, names[2])]
+        .map(|(x, name)| F64Array::extract(x, name, &[Dim::Any("N")], "(broadcast by machscan)"));
+    let (a, b, c) = (a?, b?, c?);
+    let (a, b, c) = (a.values()?, b.values()?, c.values()?);
+    let n = a.len();
+    let out = enter(py, || {
+        (0..n)
+            .map(|i| {
+                f(a[i], b[i], c[i]).map_err(|e| match e {
+                    crate::Error::Invalid { name, reason } if n > 1 => {
+                        crate::Error::invalid(&name, format!("element {i}: {reason}"))
+                    }
+                    other => other,
+                })
+            })
+            .collect::<crate::Result<Vec<f64>>>()
+    })?;
+    to_numpy(py, out, &[n])
+}
+
+/// Scallop heights (SPEC P3); ``machscan.scallop_height`` documents it.
+#[pyfunction]
+fn scallop_heights<'py>(
+    py: Python<'py>,
+    tool_radius: &Bound<'py, PyAny>,
+    curvature_radius: &Bound<'py, PyAny>,
+    step: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    elementwise(py, tool_radius, curvature_radius, step, ["tool_radius", "curvature_radius", "step"], scallop_height)
+}
+
+/// Step-overs (SPEC P3); ``machscan.step_over`` documents it.
+#[pyfunction]
+fn step_overs<'py>(
+    py: Python<'py>,
+    tool_radius: &Bound<'py, PyAny>,
+    curvature_radius: &Bound<'py, PyAny>,
+    scallop_height: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    elementwise(
+        py,
+        tool_radius,
+        curvature_radius,
+        scallop_height,
+        ["tool_radius", "curvature_radius", "scallop_height"],
+        step_over,
+    )
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(scallop_heights, m)?)?;
+    m.add_function(wrap_pyfunction!(step_overs, m)?)?;
     m.add_function(wrap_pyfunction!(compensate_toolpath, m)?)?;
     Ok(())
 }
