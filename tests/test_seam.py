@@ -133,6 +133,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
         "_CompensatedArrays": _core.compensate_toolpath(
             grid[:5], grid, grid, grid, None, interpolation="cubic", normals="smooth", radius=None, max_edge=None
         ),
+        "_BeadChainArrays": _core.bead_chain(grid, None, None, method="tree"),
         "_EnvelopeFitArrays": _core.envelope_fit(
             10 * unit, unit, 10.5 * unit, min_allowance=0.0, k=8, surface="quadric", init=None
         ),

@@ -96,10 +96,18 @@ from machscan.registration import (
     positioning_errors,
 )
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
-from machscan.toolpath import CompensatedToolpath, compensate_toolpath, scallop_height, step_over
+from machscan.toolpath import (
+    BeadChain,
+    CompensatedToolpath,
+    bead_chain,
+    compensate_toolpath,
+    scallop_height,
+    step_over,
+)
 
 __all__ = [
     "SENTINEL",
+    "BeadChain",
     "ClosestPoints",
     "CloudFile",
     "CompensatedToolpath",
@@ -129,6 +137,7 @@ __all__ = [
     "ac_head_transforms",
     "ac_table_rotate",
     "allowance",
+    "bead_chain",
     "cad",
     "calibrate_mount",
     "closest_points",

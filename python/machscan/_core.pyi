@@ -39,6 +39,7 @@ __all__ = [
     "icp_defaults",
     "insert_points",
     "interpolate_poses",
+    "bead_chain",
     "scallop_heights",
     "step_overs",
     "isometric_match",
@@ -132,6 +133,10 @@ class _CompensatedArrays(TypedDict):
     axes: _F64
     inside: NDArray[np.bool_]
     offsets: _F64
+
+class _BeadChainArrays(TypedDict):
+    order: _I64
+    closed: bool
 
 class _IcpDefaults(TypedDict):
     method: Literal["point_to_point", "point_to_plane"]
@@ -516,6 +521,13 @@ def compensate_toolpath(
 ) -> _CompensatedArrays:
     """Toolpath compensation (SPEC S5); ``machscan.compensate_toolpath`` documents it and wraps the
     ``_CompensatedArrays`` this returns.
+    """
+
+def bead_chain(
+    points: ArrayLike, start: ArrayLike | None, direction: ArrayLike | None, *, method: str
+) -> _BeadChainArrays:
+    """Bead-chain ordering (SPEC P2); ``machscan.bead_chain`` documents it and wraps the
+    ``_BeadChainArrays`` this returns.
     """
 
 def scallop_heights(tool_radius: ArrayLike, curvature_radius: ArrayLike, step: ArrayLike) -> _F64:

@@ -22,7 +22,17 @@ from machscan import _core
 from machscan.io import Toolpath
 from machscan.mesh import _surface
 
-__all__ = ["CompensatedToolpath", "Interpolation", "SurfaceNormals", "compensate_toolpath", "scallop_height", "step_over"]
+__all__ = [
+    "BeadChain",
+    "ChainMethod",
+    "CompensatedToolpath",
+    "Interpolation",
+    "SurfaceNormals",
+    "bead_chain",
+    "compensate_toolpath",
+    "scallop_height",
+    "step_over",
+]
 
 #: How theoretical x, y map to the actual surface: ``"cubic"`` (default), polyharmonic splines through the
 #: matching pairs (cubic fields reproduced exactly); ``"linear"``, the paper's eq 17, the barycentric
@@ -34,6 +44,11 @@ Interpolation = Literal["cubic", "linear"]
 #: ``radius``; ``"triangle"``, the paper's closest point on the scan mesh and its triangle's normal (which tilts
 #: with the scan's noise: ~0.2° at 5 µm noise and 1.3 mm spacing).
 SurfaceNormals = Literal["smooth", "triangle"]
+
+
+#: How :func:`bead_chain` orders a section: ``"tree"`` (default) along the diameter of the points' minimum
+#: spanning tree; ``"nearest"``, the paper's rule, always to the nearest unvisited point.
+ChainMethod = Literal["tree", "nearest"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -197,3 +212,65 @@ def step_over(tool_radius: ArrayLike, curvature_radius: ArrayLike, scallop_heigh
     return _elementwise(
         _core.step_overs, ("tool_radius", "curvature_radius", "scallop_height"), tool_radius, curvature_radius, scallop_height
     )
+
+
+@dataclass(frozen=True, eq=False)
+class BeadChain:
+    """Result of :func:`bead_chain`.
+
+    Attributes
+    ----------
+    order : ndarray of int64, shape (N,)
+        Every point once, in path order: ``points[order]`` is the polyline.
+    closed : bool
+        Whether the section closes up (the last point lies next to the first).
+    """
+
+    order: NDArray[np.int64]
+    closed: bool
+
+    def __repr__(self) -> str:
+        return f"BeadChain({len(self.order)} points, {'closed' if self.closed else 'open'})"
+
+
+def bead_chain(
+    points: ArrayLike,
+    start: ArrayLike | None = None,
+    direction: ArrayLike | None = None,
+    *,
+    method: ChainMethod = "tree",
+) -> BeadChain:
+    """Order the points of one section into a continuous polyline (SPEC P2; paper 004 §2.1, the "bead chain").
+
+    A section of a scan is a band of scattered points, not a thin curve, and a blade's trailing edge brings its
+    other side within tenths of a millimetre. The paper's rule (``method="nearest"``: step to the nearest unvisited
+    point) skips points on such a band and comes back for them by long jumps. The default orders the points along
+    the diameter of their minimum spanning tree: the tree follows the band, the two sides of a thin edge meet only
+    round its tip, and every point's place along the curve is where its branch meets the diameter plus its offset
+    along the tangent there.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        The points of one section, mm (e.g. those within ±h/2 of a plane).
+    start : array_like, shape (3,), optional
+        An open section starts at the end nearest to it; a closed one at the point nearest to it. By default the
+        point (end) lowest along the section's main axis.
+    direction : array_like, shape (3,), optional
+        The way a closed section is run (by default counter-clockwise seen from the +z side of its plane), or
+        which end an open one starts from when no ``start`` is given.
+    method : {"tree", "nearest"}
+        See :data:`ChainMethod`.
+
+    Returns
+    -------
+    BeadChain
+        ``.order`` and ``.closed``.
+
+    Examples
+    --------
+    >>> chain = machscan.bead_chain(section)
+    >>> polyline = section[chain.order]
+    """
+    out = _core.bead_chain(points, start, direction, method=method)
+    return BeadChain(out["order"], bool(out["closed"]))

@@ -1,7 +1,8 @@
 //! Bindings of `crate::toolpath`.
-use super::convert::{enter, points_to_numpy, to_numpy, Dim, F64Array};
+use super::convert::{enter, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array};
 use super::mesh::surface;
 use crate::mesh::surface_faces;
+use crate::toolpath::bead_chain::{bead_chain as run_bead_chain, Chain};
 use crate::toolpath::scallop::{scallop_height, step_over};
 use crate::toolpath::{compensate_toolpath as run_compensate, CompensateOptions, Interpolation, Normals};
 use pyo3::prelude::*;
@@ -121,7 +122,31 @@ fn step_overs<'py>(
     )
 }
 
+/// Bead-chain ordering (SPEC P2); ``machscan.bead_chain`` documents it and wraps the
+/// ``_BeadChainArrays`` this returns.
+#[pyfunction]
+#[pyo3(signature = (points, start, direction, *, method))]
+fn bead_chain<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    start: Option<&Bound<'py, PyAny>>,
+    direction: Option<&Bound<'py, PyAny>>,
+    method: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = F64Array::points(points, "points")?;
+    let start = f64_vector_opt::<3>(start, "start", "(a point x, y, z)")?;
+    let direction = f64_vector_opt::<3>(direction, "direction", "(a vector)")?;
+    let method = Chain::parse(method)?;
+    let pr = p.rows::<3>()?;
+    let r = enter(py, || run_bead_chain(pr, start, direction, method))?;
+    let d = PyDict::new(py);
+    d.set_item("order", indices_to_numpy(py, r.order)?)?;
+    d.set_item("closed", r.closed)?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(bead_chain, m)?)?;
     m.add_function(wrap_pyfunction!(scallop_heights, m)?)?;
     m.add_function(wrap_pyfunction!(step_overs, m)?)?;
     m.add_function(wrap_pyfunction!(compensate_toolpath, m)?)?;

@@ -23,6 +23,7 @@
 //! Tool points whose foot lies outside the xy hull of the theoretical matching points are
 //! extrapolated (by the spline, or by the plane of the nearest triangle) and flagged in
 //! `inside`.
+pub mod bead_chain;
 pub mod scallop;
 pub mod spline;
 
