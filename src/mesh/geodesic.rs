@@ -143,11 +143,7 @@ fn march(vertices: &[[f64; 3]], faces: &[[u32; 3]], around: &Around, source: u32
 /// source, sources in parallel. A vertex that no face uses, or that no face path reaches, is
 /// `inf`.
 pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<Vec<Vec<f64>>> {
-    check_finite_points("vertices", vertices)?;
-    super::check_faces(vertices.len(), faces)?;
-    if let Some(&s) = sources.iter().find(|&&s| s >= vertices.len()) {
-        return Err(Error::invalid("sources", format!("vertex {s} is beyond the {} given", vertices.len())));
-    }
+    check_input(vertices, faces, sources)?;
     let around = Around::new(vertices.len(), faces);
     Ok(sources
         .par_iter()
@@ -161,18 +157,33 @@ pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]
         .collect())
 }
 
+/// The checks shared by every geodesic method: finite vertices, faces naming them, sources
+/// among them.
+pub(super) fn check_input(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<()> {
+    check_finite_points("vertices", vertices)?;
+    super::check_faces(vertices.len(), faces)?;
+    if let Some(&s) = sources.iter().find(|&&s| s >= vertices.len()) {
+        return Err(Error::invalid("sources", format!("vertex {s} is beyond the {} given", vertices.len())));
+    }
+    Ok(())
+}
+
 /// How geodesic distances are computed (`method=` in Python).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum GeodesicMethod {
     /// Fast marching: first order, ~0.2 % on scanned meshes, the fastest.
     Fmm,
+    /// The heat method: two prefactored sparse solves per source, ~0.5 % on scanned meshes;
+    /// the fastest for many sources on one mesh.
+    Heat,
 }
 
 impl GeodesicMethod {
     pub fn parse(name: &str) -> Result<Self> {
         match name {
             "fmm" => Ok(GeodesicMethod::Fmm),
-            _ => Err(Error::invalid("method", format!("expected 'fmm', got {name:?}"))),
+            "heat" => Ok(GeodesicMethod::Heat),
+            _ => Err(Error::invalid("method", format!("expected 'fmm' or 'heat', got {name:?}"))),
         }
     }
 }
@@ -186,11 +197,12 @@ pub fn geodesic_distances(
 ) -> Result<Vec<Vec<f64>>> {
     match method {
         GeodesicMethod::Fmm => geodesic_fmm(vertices, faces, sources),
+        GeodesicMethod::Heat => super::geodesic_heat::geodesic_heat(vertices, faces, sources),
     }
 }
 
 /// A source that no face uses reaches only itself.
-fn unreached(n: usize, s: usize) -> Vec<f64> {
+pub(super) fn unreached(n: usize, s: usize) -> Vec<f64> {
     let mut t = vec![f64::INFINITY; n];
     t[s] = 0.0;
     t
