@@ -35,7 +35,7 @@ __all__ = [
     "fit_grooves",
     "groove_defaults",
     "icp",
-    "geodesic_distances_fmm",
+    "geodesic_distances",
     "icp_defaults",
     "insert_points",
     "interpolate_poses",
@@ -484,8 +484,8 @@ def insert_points(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, t
     and wraps the ``_InsertedArrays`` this returns.
     """
 
-def geodesic_distances_fmm(vertices: ArrayLike, faces: ArrayLike, sources: Sequence[int]) -> _F64:
-    """Geodesic distances by fast marching (SPEC S3); ``machscan.geodesic_distances`` documents it."""
+def geodesic_distances(vertices: ArrayLike, faces: ArrayLike, sources: Sequence[int], *, method: str) -> _F64:
+    """Geodesic distances (SPEC S3); ``machscan.geodesic_distances`` documents it."""
 
 def isometric_match(
     theoretical_points: ArrayLike,

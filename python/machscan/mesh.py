@@ -26,9 +26,9 @@ __all__ = [
     "insert_points",
 ]
 
-#: How :func:`geodesic_distances` measures (fast marching; the exact and heat methods of issue
-#: #10 §2 are not built yet).
-GeodesicMethod = Literal["fmm"]
+#: How :func:`geodesic_distances` measures: ``"fmm"``, fast marching (first order; ~0.2 % on a scanned
+#: mesh); ``"heat"``, the heat method (two prefactored sparse solves per source; ~0.5 %).
+GeodesicMethod = Literal["fmm", "heat"]
 
 #: Where an inserted point landed: on a vertex, on an edge (its triangles split in two each),
 #: or inside a triangle (split in three).
@@ -163,13 +163,21 @@ def geodesic_distances(
     plane at the two known distances; exact on flat parts of the mesh, so a flat plate measures
     Euclidean distances to 1e-9), the edge update where that point's line misses the triangle.
 
+    ``method="heat"``: the heat method (Crane, Weischedel & Wardetzky): heat flowed from the source
+    for a short time t = h² (h the mean edge), its normalised gradient, and the Poisson equation whose
+    solution has that gradient; on the intrinsic Delaunay triangulation of the mesh (edges flipped
+    along the surface, so that obtuse triangles do not spoil the Laplacian). Both sparse systems are
+    factored once (faer's Cholesky) and serve every source, which makes it the fastest for many
+    sources on one mesh. Beyond ~700 mean edges from a source the heat underflows and distances there
+    are not reliable.
+
     Parameters
     ----------
     vertices : array_like, shape (V, 3)
     faces : array_like of int, shape (M, 3)
     sources : array_like of int, shape (S,)
         Source vertices, e.g. ``insert_points(...).indices``.
-    method : {"fmm"}
+    method : {"fmm", "heat"}
 
     Returns
     -------
@@ -180,9 +188,7 @@ def geodesic_distances(
     --------
     >>> d = machscan.geodesic_distances(mesh.vertices, mesh.faces, mesh.indices)
     """
-    if method != "fmm":
-        raise ValueError(f"method: only 'fmm' is built so far, got {method!r}")
     src = np.atleast_1d(np.asarray(sources))
     if src.ndim != 1 or (src.size and not np.issubdtype(src.dtype, np.integer)):
         raise ValueError(f"sources: expected vertex indices (S,), got {src.dtype} of shape {src.shape}")
-    return _core.geodesic_distances_fmm(vertices, faces, [int(s) for s in src])
+    return _core.geodesic_distances(vertices, faces, [int(s) for s in src], method=method)

@@ -1,8 +1,8 @@
 //! Bindings of `crate::mesh`.
 use super::convert::{count, enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
 use crate::mesh::{
-    closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, geodesic_fmm,
-    insert_points as run_insert_points, Landing,
+    closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, geodesic_distances as run_geodesic_distances,
+    insert_points as run_insert_points, GeodesicMethod, Landing,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -127,25 +127,28 @@ fn insert_points<'py>(
     Ok(d)
 }
 
-/// Geodesic distances by fast marching (SPEC S3); ``machscan.geodesic_distances`` documents it.
+/// Geodesic distances (SPEC S3); ``machscan.geodesic_distances`` documents it.
 #[pyfunction]
-fn geodesic_distances_fmm<'py>(
+#[pyo3(signature = (vertices, faces, sources, *, method))]
+fn geodesic_distances<'py>(
     py: Python<'py>,
     vertices: &Bound<'py, PyAny>,
     faces: &Bound<'py, PyAny>,
     sources: Vec<i64>,
+    method: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (v, tri) = mesh(vertices, faces)?;
     let n = v.shape()[0];
     let src: Vec<usize> = sources.iter().map(|&s| count("sources", s)).collect::<PyResult<_>>()?;
+    let method = GeodesicMethod::parse(method)?;
     let vr = v.rows::<3>()?;
-    let d = enter(py, || geodesic_fmm(vr, &tri, &src))?;
+    let d = enter(py, || run_geodesic_distances(vr, &tri, &src, method))?;
     let k = d.len();
     to_numpy(py, d.into_iter().flatten().collect(), &[k, n])
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(geodesic_distances_fmm, m)?)?;
+    m.add_function(wrap_pyfunction!(geodesic_distances, m)?)?;
     m.add_function(wrap_pyfunction!(insert_points, m)?)?;
     m.add_function(wrap_pyfunction!(closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(delaunay_xy, m)?)?;
