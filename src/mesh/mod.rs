@@ -54,3 +54,25 @@ pub fn surface_faces(
     }
     Ok(faces)
 }
+
+/// Meshes with known geodesics, shared by the geodesic tests.
+#[cfg(test)]
+pub(crate) mod test_meshes {
+    /// A flat n × n grid of spacing h, split along alternating diagonals.
+    pub(crate) fn grid(n: usize, h: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let v = (0..n * n).map(|i| [(i % n) as f64 * h, (i / n) as f64 * h, 0.0]).collect();
+        let mut f = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = (j * n + i) as u32;
+                let (b, c, d) = (a + 1, a + n as u32, a + n as u32 + 1);
+                if (i + j) % 2 == 0 {
+                    f.extend([[a, b, d], [a, d, c]]);
+                } else {
+                    f.extend([[a, b, c], [b, d, c]]);
+                }
+            }
+        }
+        (v, f)
+    }
+}
