@@ -34,13 +34,13 @@ impl PartialOrd for Front {
 
 /// The faces around each vertex, as one flat list with offsets (vertex v's faces are
 /// `faces[start[v]..start[v + 1]]`): one allocation instead of one per vertex.
-struct Around {
+pub(super) struct Around {
     start: Vec<u32>,
     faces: Vec<u32>,
 }
 
 impl Around {
-    fn new(vertices: usize, faces: &[[u32; 3]]) -> Self {
+    pub(super) fn new(vertices: usize, faces: &[[u32; 3]]) -> Self {
         let mut start = vec![0u32; vertices + 1];
         for f in faces {
             for &v in f {
@@ -61,7 +61,7 @@ impl Around {
         Around { start, faces: list }
     }
 
-    fn of(&self, v: usize) -> &[u32] {
+    pub(super) fn of(&self, v: usize) -> &[u32] {
         &self.faces[self.start[v] as usize..self.start[v + 1] as usize]
     }
 }
@@ -143,11 +143,7 @@ fn march(vertices: &[[f64; 3]], faces: &[[u32; 3]], around: &Around, source: u32
 /// source, sources in parallel. A vertex that no face uses, or that no face path reaches, is
 /// `inf`.
 pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<Vec<Vec<f64>>> {
-    check_finite_points("vertices", vertices)?;
-    super::check_faces(vertices.len(), faces)?;
-    if let Some(&s) = sources.iter().find(|&&s| s >= vertices.len()) {
-        return Err(Error::invalid("sources", format!("vertex {s} is beyond the {} given", vertices.len())));
-    }
+    check_geodesic_input(vertices, faces, sources)?;
     let around = Around::new(vertices.len(), faces);
     Ok(sources
         .par_iter()
@@ -161,8 +157,19 @@ pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]
         .collect())
 }
 
+/// The checks shared by the geodesic kernels: finite vertices, faces naming given vertices,
+/// sources naming given vertices.
+pub(super) fn check_geodesic_input(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<()> {
+    check_finite_points("vertices", vertices)?;
+    super::check_faces(vertices.len(), faces)?;
+    if let Some(&s) = sources.iter().find(|&&s| s >= vertices.len()) {
+        return Err(Error::invalid("sources", format!("vertex {s} is beyond the {} given", vertices.len())));
+    }
+    Ok(())
+}
+
 /// A source that no face uses reaches only itself.
-fn unreached(n: usize, s: usize) -> Vec<f64> {
+pub(super) fn unreached(n: usize, s: usize) -> Vec<f64> {
     let mut t = vec![f64::INFINITY; n];
     t[s] = 0.0;
     t

@@ -4,11 +4,13 @@
 pub mod closest;
 pub mod delaunay;
 pub mod geodesic;
+pub mod geodesic_exact;
 pub mod insert;
 
 pub use closest::{closest_points, Closest, TriangleBvh};
 pub use delaunay::delaunay_xy;
 pub use geodesic::geodesic_fmm;
+pub use geodesic_exact::geodesic_exact;
 pub use insert::{insert_points, Inserted, Landing};
 
 use crate::error::{Error, Result};
