@@ -4,6 +4,7 @@
 pub mod closest;
 pub mod delaunay;
 pub mod geodesic;
+pub mod geodesic_exact;
 pub mod geodesic_heat;
 pub mod insert;
 pub mod locate;
@@ -11,6 +12,7 @@ pub mod locate;
 pub use closest::{closest_points, Closest, TriangleBvh};
 pub use delaunay::delaunay_xy;
 pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod};
+pub use geodesic_exact::geodesic_exact;
 pub use geodesic_heat::{geodesic_heat, HeatSolver};
 pub use insert::{insert_points, Inserted, Landing};
 pub use locate::{XyLanding, XyLocator};

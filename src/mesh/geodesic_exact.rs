@@ -1,0 +1,1478 @@
+//! Exact geodesic distances on a triangle mesh (SPEC S3; paper 002 §3.2): the length of the
+//! shortest path along the polyhedral surface from a source vertex to every vertex.
+//!
+//! # The maths
+//!
+//! On a polyhedral surface a shortest path is straight inside every face it crosses: laid flat
+//! ("unfolded") into one plane, the faces it crosses show it as a straight segment. It bends only
+//! at vertices where the surface is not locally convex: saddle vertices (total angle ≥ 2π) and
+//! boundary vertices [MMP87]. So with the *pseudo-sources* (the source, saddle and boundary
+//! vertices) d(p) = min over pseudo-sources v of d(v) + |v p|, |v p| the length of a straight
+//! segment from v to p in an unfolding in which the segment stays on the surface.
+//!
+//! A *window* is a bundle of such straight segments from one pseudo-source, across one sequence
+//! of faces, that reach an interval [b0, b1] of an edge. In the frame of the edge (its start at
+//! the origin, the edge along +x, the face the window enters on +y) it is (b0, b1, s, σ): s =
+//! (sx, sy), sy < 0, is the unfolded pseudo-source and σ its distance, and the distance it
+//! carries to the point x of the edge is f(x) = σ + |s − (x, 0)|. Crossing the face ABC it enters
+//! (A = (0, 0), B = (L, 0), C = (cx, cy), cy ≥ 0), the rays from s through [b0, b1] left of the
+//! ray s→C leave through AC and those right of it through CB; the ray s→C crosses the x axis at
+//!
+//! ```text
+//!     xc = sx + (cx − sx)·(−sy)/(cy − sy)
+//! ```
+//!
+//! and where xc ∈ [b0, b1] C is reached at σ + |sC| [CH90]. The ray through (b, 0) meets AC at
+//! A + μ(C − A) and CB at B + ν(C − B) with
+//!
+//! ```text
+//!     μ = sy·b / (cx·sy + cy·(b − sx)),      ν = sy·(b − L) / ((cx − L)·sy + cy·(b − sx)),
+//! ```
+//!
+//! which stay finite on zero-area faces (cy = 0: μ = b/cx, ν = (b − L)/(cx − L)), so a path can
+//! cross a sliver.
+//!
+//! # The algorithm
+//!
+//! A window-propagation method of the MMP family [MMP87, SSK05] with the pruning of the
+//! Improved Chen–Han algorithm [XW09] and the triangle-oriented batching of VTP [QHY16]. One
+//! radix queue holds the pseudo-sources (by distance) and the sides of edges where windows wait
+//! (by the smallest distance a waiting window carries). A pseudo-source's turn comes after
+//! everything nearer, so its distance is final and it emits once: to its neighbours along the
+//! edges, and one window over each edge opposite it. A side's turn sends all its waiting
+//! windows across its face together (they share the face's data in cache; their order among
+//! themselves does not matter), each making at most two children on the face's other edges.
+//!
+//! Windows lose the parts that another known path beats at every point. Each rule compares
+//! with a real path (a vertex distance is always the length of some path), strictly and with a
+//! margin for rounding, so no part of a shortest path is ever dropped and the distances stay
+//! exact:
+//!
+//! 1. *Edge ends* [XW09]: vertex A reaches the point x of its edge at d(A) + x. Since f(x) − x
+//!    does not increase, the points where A wins form a prefix of the window, cut off by solving
+//!    f(x) − x = d(A): x = (sx² + sy² − k²) / (2(k + sx)), k = d(A) − σ. B cuts a suffix alike.
+//!    Applied when the window crosses its face, with the latest distances; it is what stops
+//!    windows that come round again far behind the front.
+//! 2. *One angle, one split* [XW09, QHY16]: per face and entering edge, the best path so far from
+//!    that edge to the apex C, of length D* crossing the edge at q*. A window that reaches C
+//!    longer than D* is beaten by that path wherever its rays cross the segment q*C, so its rays
+//!    left of q* only go on through AC and those right of q* only through CB.
+//! 3. *Windows against windows* [MMP87, SSK05]: the windows waiting on one side of an edge are
+//!    kept cut to a disjoint list in order along the edge, each piece where its window is best
+//!    (the earlier where two tie); a new window also loses what a window waiting on another side
+//!    of the edge beats. f_w − f_o vanishes where a hyperbola meets the edge, at most twice:
+//!    squaring σ_w + r_w = σ_o + r_o twice leaves a quadratic, whose roots Newton steps on
+//!    f_w − f_o polish. Windows that have crossed are not kept: on the bunny they would cut
+//!    almost nothing more.
+//!
+//! Vertex distances come from the rays that reach the apex (or the shortest path through a
+//! window end, also a real path) and from a pseudo-source to its neighbours along the edges.
+//!
+//! The work: on the Stanford bunny (69 451 faces, about half its vertices saddles) the distance
+//! field along the edges has some 14 pieces per edge (Kirsanov's MMP ends with 1.455 million
+//! intervals), and every one has to cross its face once; the cost is per window, mostly memory
+//! traffic. So the faces are renumbered along a Morton curve of their centroids, a half-edge's
+//! data sits together, the queue is a radix heap (distances only grow), and the buffers are
+//! kept from one source to the next.
+//!
+//! Degenerate input: a non-manifold edge passes each window on to every other face on it. A
+//! vertex on a boundary or non-manifold edge, where the faces around it are not one fan, or on a
+//! face of near-zero area is a pseudo-source (a pseudo-source too many costs time, never
+//! accuracy). A pseudo-source lying on the line of the edge it emits across (a zero-area face
+//! closing a T-junction) emits into the face beyond as if it were its vertex. A face naming a
+//! vertex twice is only a segment: distances pass along its edges, no window enters it.
+//!
+//! [MMP87] J. Mitchell, D. Mount, C. Papadimitriou, "The discrete geodesic problem", SIAM J.
+//! Comput. 16(4), 1987. [CH90] J. Chen, Y. Han, "Shortest paths on a polyhedron", Proc. SoCG
+//! 1990. [SSK05] V. Surazhsky, T. Surazhsky, D. Kirsanov, S. Gortler, H. Hoppe, "Fast exact and
+//! approximate geodesics on meshes", ACM TOG 24(3), 2005. [XW09] S.-Q. Xin, G.-J. Wang,
+//! "Improving Chen and Han's algorithm on the discrete geodesic problem", ACM TOG 28(4), 2009.
+//! [QHY16] Y. Qin, X. Han, H. Yu, Y. Yu, J. Zhang, "Fast and exact discrete geodesic computation
+//! based on triangle-oriented wavefront propagation", ACM TOG 35(4), 2016.
+use super::geodesic::{check_input, unreached, Around};
+use crate::error::{Error, Result};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Relative margin by which another path must beat a window before the window loses a part:
+/// far above rounding (1e-16), far below any tolerance a user sees.
+const MARGIN: f64 = 1e-12;
+/// A window narrower than this fraction of its edge carries rays that its neighbours' ends
+/// also carry (up to rounding); dropping it keeps rounding noise from multiplying windows.
+const MIN_WIDTH: f64 = 1e-13;
+/// A face whose height is below this fraction of its longest edge counts as zero-area: its
+/// vertices become pseudo-sources.
+const SLIVER: f64 = 1e-10;
+/// A work budget per face (sides processed); real meshes use a few tens. It only guards
+/// against a pathological input looping for ever: past it the call fails rather than hang.
+const WORK_PER_FACE: usize = 100_000;
+/// "No index".
+const NONE: u32 = u32::MAX;
+/// `Half::mate` of a half-edge on an edge of more than two faces.
+const MANY: u32 = u32::MAX - 1;
+/// `Half::mate` flag: the mate runs the same way (faces oriented inconsistently).
+const SAME: u32 = 1 << 31;
+
+/// A half-edge `3 f + i` runs from `faces[f][i]` to `faces[f][(i + 1) % 3]`; in its frame (start
+/// at the origin, along +x) the face's third vertex is at (cx, cy), cy ≥ 0. `mate` is the other
+/// half-edge of its edge (with `SAME` when it runs the same way), `NONE` on a boundary, `MANY` on
+/// an edge of more than two faces.
+#[derive(Clone, Copy)]
+struct Half {
+    len: f64,
+    cx: f64,
+    cy: f64,
+    mate: u32,
+}
+
+impl Default for Half {
+    fn default() -> Self {
+        Half { len: 0.0, cx: 0.0, cy: 0.0, mate: NONE }
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+fn hyp(x: f64, y: f64) -> f64 {
+    (x * x + y * y).sqrt()
+}
+
+fn distinct(f: &[u32; 3]) -> bool {
+    f[0] != f[1] && f[1] != f[2] && f[0] != f[2]
+}
+
+/// 21 bits of `x` spread to every third bit.
+fn spread(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f00000000ffff;
+    x = (x | x << 16) & 0x1f0000ff0000ff;
+    x = (x | x << 8) & 0x100f00f00f00f00f;
+    x = (x | x << 4) & 0x10c30c30c30c30c3;
+    (x | x << 2) & 0x1249249249249249
+}
+
+/// The mesh as the propagation sees it, built once for all sources.
+struct Layout {
+    /// Vertices and faces renumbered: faces along a Morton curve of their centroids, vertices in
+    /// the order the faces first use them (the unused ones last).
+    points: Vec<[f64; 3]>,
+    faces: Vec<[u32; 3]>,
+    /// The new number of each given vertex.
+    inner: Vec<u32>,
+    half: Vec<Half>,
+    /// Half-edges on one undirected edge: `edge_half[edge_start[e]..edge_start[e + 1]]` for
+    /// `e = edge_of[h]`; `NONE` for the half-edges of a face that names a vertex twice.
+    edge_of: Vec<u32>,
+    edge_start: Vec<u32>,
+    edge_half: Vec<u32>,
+    pseudo: Vec<bool>,
+    around: Around,
+    /// Absolute rounding scale of the mesh: 1e-15 of its extent.
+    tiny: f64,
+}
+
+impl Layout {
+    fn new(given_points: &[[f64; 3]], given_faces: &[[u32; 3]]) -> Self {
+        let n = given_points.len();
+        // Morton order of the face centroids.
+        let centroid = |f: &[u32; 3]| {
+            let p = f.map(|v| given_points[v as usize]);
+            [0, 1, 2].map(|k| p[0][k] / 3.0 + p[1][k] / 3.0 + p[2][k] / 3.0)
+        };
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for f in given_faces {
+            let c = centroid(f);
+            for k in 0..3 {
+                lo[k] = lo[k].min(c[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
+        }
+        let scale = [0, 1, 2].map(|k| if hi[k] > lo[k] { 2097151.0 / (hi[k] - lo[k]) } else { 0.0 });
+        let mut order: Vec<(u64, u32)> = given_faces
+            .iter()
+            .enumerate()
+            .map(|(i, f)| {
+                let c = centroid(f);
+                let q = [0, 1, 2].map(|k| ((c[k] - lo[k]) * scale[k]).clamp(0.0, 2097151.0) as u64);
+                (spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2, i as u32)
+            })
+            .collect();
+        order.sort_unstable();
+        let mut inner = vec![NONE; n];
+        let mut outer = Vec::with_capacity(n);
+        let mut faces = Vec::with_capacity(given_faces.len());
+        for &(_, i) in &order {
+            faces.push(given_faces[i as usize].map(|v| {
+                if inner[v as usize] == NONE {
+                    inner[v as usize] = outer.len() as u32;
+                    outer.push(v);
+                }
+                inner[v as usize]
+            }));
+        }
+        for (v, slot) in inner.iter_mut().enumerate() {
+            if *slot == NONE {
+                *slot = outer.len() as u32;
+                outer.push(v as u32);
+            }
+        }
+        let points: Vec<[f64; 3]> = outer.iter().map(|&v| given_points[v as usize]).collect();
+
+        let p = |v: u32| points[v as usize];
+        let mut half = vec![Half::default(); 3 * faces.len()];
+        let mut angle = vec![0.0; n];
+        let mut pseudo = vec![false; n];
+        for (f, face) in faces.iter().enumerate() {
+            if !distinct(face) {
+                face.iter().for_each(|&v| pseudo[v as usize] = true);
+                continue;
+            }
+            let mut longest: f64 = 0.0;
+            for i in 0..3 {
+                let (a, b, c) = (p(face[i]), p(face[(i + 1) % 3]), p(face[(i + 2) % 3]));
+                let (ab, ac) = (sub(b, a), sub(c, a));
+                let len = norm(ab);
+                longest = longest.max(len);
+                half[3 * f + i] = if len > 0.0 {
+                    Half { len, cx: dot(ac, ab) / len, cy: norm(cross(ab, ac)) / len, mate: NONE }
+                } else {
+                    Half::default()
+                };
+                angle[face[i] as usize] += norm(cross(ab, ac)).atan2(dot(ab, ac));
+            }
+            let height = (0..3).map(|i| half[3 * f + i].cy).fold(f64::INFINITY, f64::min);
+            if !(height > SLIVER * longest) {
+                face.iter().for_each(|&v| pseudo[v as usize] = true);
+            }
+        }
+
+        // Undirected edges: the half-edges sorted by their vertex pair.
+        let mut keyed: Vec<(u32, u32, u32)> = (0..faces.len())
+            .filter(|&f| distinct(&faces[f]))
+            .flat_map(|f| {
+                let face = faces[f];
+                (0..3).map(move |i| {
+                    let (a, b) = (face[i], face[(i + 1) % 3]);
+                    (a.min(b), a.max(b), (3 * f + i) as u32)
+                })
+            })
+            .collect();
+        keyed.sort_unstable();
+        let mut edge_of = vec![NONE; 3 * faces.len()];
+        let mut edge_start = Vec::new();
+        let mut edge_half = Vec::with_capacity(keyed.len());
+        for (k, &(a, b, h)) in keyed.iter().enumerate() {
+            if k == 0 || (keyed[k - 1].0, keyed[k - 1].1) != (a, b) {
+                edge_start.push(edge_half.len() as u32);
+            }
+            edge_of[h as usize] = (edge_start.len() - 1) as u32;
+            edge_half.push(h);
+        }
+        edge_start.push(edge_half.len() as u32);
+        let start = |h: u32| faces[h as usize / 3][h as usize % 3];
+        for e in 0..edge_start.len() - 1 {
+            let group = &edge_half[edge_start[e] as usize..edge_start[e + 1] as usize];
+            if let &[g, h] = group {
+                let same = if start(g) == start(h) { SAME } else { 0 };
+                half[g as usize].mate = h | same;
+                half[h as usize].mate = g | same;
+            } else if group.len() > 2 {
+                group.iter().for_each(|&h| half[h as usize].mate = MANY);
+            }
+            if group.len() != 2 {
+                let (a, b) = (start(group[0]), faces[group[0] as usize / 3][(group[0] as usize + 1) % 3]);
+                pseudo[a as usize] = true;
+                pseudo[b as usize] = true;
+            }
+        }
+
+        let around = Around::new(n, &faces);
+        let extent = points.iter().flat_map(|q| q.iter()).fold(0.0f64, |m, c| m.max(c.abs()));
+        let mut layout =
+            Layout { points, faces, inner, half, edge_of, edge_start, edge_half, pseudo, around, tiny: 1e-15 * extent };
+        for (v, &total) in angle.iter().enumerate() {
+            if total > 2.0 * PI - 1e-5 || !layout.one_fan(v) {
+                layout.pseudo[v] = true;
+            }
+        }
+        layout
+    }
+
+    /// The vertex half-edge `h` starts at.
+    fn start(&self, h: usize) -> u32 {
+        self.faces[h / 3][h % 3]
+    }
+
+    /// The other half-edges of `h`'s edge, each with whether it runs the same way as `h`.
+    fn others(&self, h: usize) -> impl Iterator<Item = (usize, bool)> + '_ {
+        let (one, many): (Option<u32>, &[u32]) = match self.half[h].mate {
+            NONE => (None, &[]),
+            MANY => {
+                let e = self.edge_of[h] as usize;
+                (None, &self.edge_half[self.edge_start[e] as usize..self.edge_start[e + 1] as usize])
+            }
+            t => (Some(t), &[]),
+        };
+        let one = one.map(|t| ((t & !SAME) as usize, t & SAME != 0));
+        let many = many.iter().map(|&t| t as usize).filter(move |&t| t != h);
+        one.into_iter().chain(many.map(move |t| (t, self.start(t) == self.start(h))))
+    }
+
+    /// Whether the faces around an interior vertex `v` (every edge at it shared by two faces)
+    /// form one closed fan; two fans meeting at a vertex let paths bend there.
+    fn one_fan(&self, v: usize) -> bool {
+        if self.pseudo[v] {
+            return true; // already a pseudo-source, nothing to decide
+        }
+        let around = self.around.of(v);
+        let Some(&first) = around.first() else {
+            return true;
+        };
+        // The half-edge of face f that touches v and is not `not`: (v → next) or (prev → v).
+        let other_side = |f: usize, not: usize| -> Option<usize> {
+            let k = self.faces[f].iter().position(|&u| u as usize == v)?;
+            let (out, inn) = (3 * f + k, 3 * f + (k + 2) % 3);
+            Some(if out == not { inn } else { out })
+        };
+        let (mut f, mut h) = (first as usize, usize::MAX);
+        for step in 1..=around.len() {
+            let Some(exit) = other_side(f, h) else {
+                return false;
+            };
+            let Some((next, _)) = self.others(exit).next() else {
+                return false;
+            };
+            f = next / 3;
+            h = next;
+            if f == first as usize {
+                return step == around.len();
+            }
+        }
+        false
+    }
+}
+
+/// A piece of a window waiting on one side of an edge, in the frame of that side's half-edge
+/// (see the module notes): [b0, b1], source (x, y) with y < 0, σ. A window that later windows
+/// cut keeps its `id` on every piece left.
+#[derive(Clone, Copy)]
+struct Seg {
+    b0: f64,
+    b1: f64,
+    x: f64,
+    y: f64,
+    sigma: f64,
+    id: u64,
+}
+
+impl Seg {
+    /// The distance it carries to (t, 0) of its edge.
+    fn at(&self, t: f64) -> f64 {
+        self.sigma + hyp(t - self.x, self.y)
+    }
+
+    /// Its least distance on [lo, hi] (lo ≤ hi); `at` is convex.
+    fn least(&self, lo: f64, hi: f64) -> f64 {
+        self.at(self.x.max(lo).min(hi))
+    }
+
+    fn most(&self, lo: f64, hi: f64) -> f64 {
+        self.at(lo).max(self.at(hi))
+    }
+
+    /// The same piece in the frame of the edge's other direction.
+    fn mirrored(&self, l: f64) -> Seg {
+        Seg { b0: l - self.b1, b1: l - self.b0, x: l - self.x, ..*self }
+    }
+}
+
+/// A monotone priority queue (a radix heap): the propagation only ever queues distances at
+/// least the one it last took out (a window's children carry more than it, a vertex reached
+/// from it too), so entries are binned by the highest bit in which their key differs from the
+/// last key taken, and each is moved at most once per bit: a few cheap moves instead of a
+/// binary heap's cache misses. Keys are distances ≥ 0, whose f64 bits order like the numbers.
+/// Equal keys come out last in, first out, the same on every run.
+struct Radix {
+    last: u64,
+    bins: Vec<Vec<(u64, u64)>>,
+    /// Bit b set when bin b holds entries.
+    full: u128,
+}
+
+impl Radix {
+    fn new() -> Self {
+        Radix { last: 0, bins: (0..65).map(|_| Vec::new()).collect(), full: 0 }
+    }
+
+    fn clear(&mut self) {
+        self.bins.iter_mut().for_each(Vec::clear);
+        self.last = 0;
+        self.full = 0;
+    }
+
+    fn bin(&self, key: u64) -> usize {
+        (64 - (key ^ self.last).leading_zeros()) as usize
+    }
+
+    fn push(&mut self, key: f64, item: u64) {
+        // Rounding may put a child a hair below its parent; it is due now.
+        let key = if key > 0.0 { key.to_bits() } else { 0 }.max(self.last);
+        let b = self.bin(key);
+        self.bins[b].push((key, item));
+        self.full |= 1 << b;
+    }
+
+    fn pop(&mut self) -> Option<(f64, u64)> {
+        if self.full & 1 == 0 {
+            if self.full == 0 {
+                return None;
+            }
+            let b = self.full.trailing_zeros() as usize;
+            let mut moving = std::mem::take(&mut self.bins[b]);
+            self.full &= !(1 << b);
+            self.last = moving.iter().map(|e| e.0).min()?;
+            for e in moving.drain(..) {
+                let to = self.bin(e.0);
+                self.bins[to].push(e);
+                self.full |= 1 << to;
+            }
+            self.bins[b] = moving;
+        }
+        let (key, item) = self.bins[0].pop()?;
+        if self.bins[0].is_empty() {
+            self.full &= !1;
+        }
+        Some((f64::from_bits(key), item))
+    }
+}
+
+/// Queue items: the windows waiting on a side (its half-edge), or a vertex to emit.
+const EVENT: u64 = 1 << 63;
+
+/// Smallest distance a window carries: σ plus the distance from s to the segment.
+fn smallest(sigma: f64, sx: f64, sy: f64, b0: f64, b1: f64) -> f64 {
+    let dx = if sx < b0 {
+        b0 - sx
+    } else if sx > b1 {
+        sx - b1
+    } else {
+        0.0
+    };
+    sigma + hyp(dx, sy)
+}
+
+/// Rule 1 for the vertex at x = 0 known at `dv`: the new start of [b0, b1], None when the vertex
+/// beats the whole window.
+fn cut_front(sx: f64, sy: f64, sigma: f64, dv: f64, b0: f64, b1: f64, slack: f64) -> Option<f64> {
+    if !dv.is_finite() {
+        return Some(b0);
+    }
+    let dv = dv + slack;
+    // f(x) − x falls with x: the vertex wins on a prefix.
+    if sigma + hyp(b1 - sx, sy) - b1 > dv {
+        return None;
+    }
+    if sigma + hyp(b0 - sx, sy) - b0 <= dv {
+        return Some(b0);
+    }
+    let k = dv - sigma;
+    let x = (sx * sx + sy * sy - k * k) / (2.0 * (k + sx));
+    Some(if x.is_finite() { x.clamp(b0, b1) } else { b0 })
+}
+
+/// μ or ν of the module notes, kept on the edge; None when rounding made it meaningless.
+fn on_edge(num: f64, den: f64) -> Option<f64> {
+    let t = num / den;
+    if t.is_nan() {
+        None
+    } else {
+        Some(t.clamp(0.0, 1.0))
+    }
+}
+
+/// Where f_w = f_o on (lo, hi), sorted; a spare point does no harm (the caller only splits
+/// there), a missed one would. Squaring f_w − f_o = 0 twice gives a quadratic (a double root
+/// when the σ are equal, which rounding can push to a negative discriminant: it is clamped at
+/// 0); each root is polished by Newton steps on f_w − f_o itself, since squaring loses
+/// precision near the roots and the cut is made there.
+fn crossings(w: &Seg, o: &Seg, lo: f64, hi: f64) -> ([f64; 2], usize) {
+    let (a1, a2, delta) = (w.x, o.x, o.sigma - w.sigma);
+    let (h1, h2) = (w.y * w.y, o.y * o.y);
+    let alpha = 2.0 * (a2 - a1);
+    let beta = a1 * a1 - a2 * a2 + h1 - h2 - delta * delta;
+    let qa = alpha * alpha - 4.0 * delta * delta;
+    let qb = 2.0 * alpha * beta + 8.0 * delta * delta * a2;
+    let qc = beta * beta - 4.0 * delta * delta * (a2 * a2 + h2);
+    let candidates = if qa != 0.0 {
+        let q = -0.5 * (qb + qb.signum() * (qb * qb - 4.0 * qa * qc).max(0.0).sqrt());
+        [q / qa, qc / q]
+    } else {
+        [-qc / qb, f64::NAN]
+    };
+    let mut found = [0.0; 2];
+    let mut n = 0;
+    let reach = hi - lo;
+    for mut t in candidates {
+        // Far outside, no polish brings it in.
+        if !(t > lo - reach && t < hi + reach) {
+            continue;
+        }
+        for _ in 0..3 {
+            let (rw, ro) = (hyp(t - w.x, w.y), hyp(t - o.x, o.y));
+            let step = (w.sigma + rw - o.sigma - ro) / ((t - w.x) / rw - (t - o.x) / ro);
+            if !step.is_finite() {
+                break;
+            }
+            t -= step;
+            if step.abs() <= 1e-15 * reach {
+                break;
+            }
+        }
+        if t > lo && t < hi && !found[..n].contains(&t) {
+            found[n] = t;
+            n += 1;
+        }
+    }
+    if n == 2 && found[0] > found[1] {
+        found.swap(0, 1);
+    }
+    (found, n)
+}
+
+/// How `w` and `o` share (lo, hi): the sub-intervals, in order, each with whether `w` keeps it,
+/// which it does where w − o ≤ `bar`; passed to `take` as (from, to, w keeps).
+fn share(w: &Seg, o: &Seg, lo: f64, hi: f64, bar: f64, mut take: impl FnMut(f64, f64, bool)) {
+    if w.most(lo, hi) - o.least(lo, hi) <= bar {
+        return take(lo, hi, true);
+    }
+    if w.least(lo, hi) - o.most(lo, hi) > bar {
+        return take(lo, hi, false);
+    }
+    let (roots, n) = crossings(w, o, lo, hi);
+    let mut from = lo;
+    for &to in roots[..n].iter().chain(std::iter::once(&hi)) {
+        let mid = 0.5 * (from + to);
+        take(from, to, w.at(mid) - o.at(mid) <= bar);
+        from = to;
+    }
+}
+
+/// Appends [a, b] of `seg` to `out`, joined to the last piece when that is the same window and
+/// ends at `a`; pieces of at most `narrow` are dropped.
+fn append(out: &mut Vec<Seg>, seg: &Seg, a: f64, b: f64, narrow: f64) {
+    if !(b - a > narrow) {
+        return;
+    }
+    match out.last_mut() {
+        Some(last) if last.id == seg.id && last.b1 == a => last.b1 = b,
+        _ => out.push(Seg { b0: a, b1: b, ..*seg }),
+    }
+}
+
+/// A half-edge as the propagation knows it: rule 2's best path through it (length to the apex,
+/// where it crosses the edge), and the pieces of the windows waiting there, in order along the
+/// edge and disjoint (rule 3). Together, since they are used together.
+struct Side {
+    best: (f64, f64),
+    env: Vec<Seg>,
+}
+
+/// The buffers of a propagation, kept from one source to the next.
+#[derive(Default)]
+struct Work {
+    d: Vec<f64>,
+    /// Per half-edge, what the propagation knows of it.
+    side: Vec<Side>,
+    queue: Option<Radix>,
+    ids: u64,
+    out: Vec<Seg>,
+    mine: Vec<Seg>,
+    pieces: Vec<(f64, f64)>,
+    kept: Vec<(f64, f64)>,
+}
+
+/// The propagation from one source.
+struct Run<'a> {
+    m: &'a Layout,
+    w: &'a mut Work,
+    queue: Radix,
+}
+
+impl<'a> Run<'a> {
+    fn new(m: &'a Layout, w: &'a mut Work) -> Self {
+        let (nv, nh) = (m.points.len(), m.half.len());
+        w.d.clear();
+        w.d.resize(nv, f64::INFINITY);
+        w.side.truncate(nh);
+        for side in &mut w.side {
+            side.best = (f64::INFINITY, 0.0);
+            side.env.clear();
+        }
+        w.side.resize_with(nh, || Side { best: (f64::INFINITY, 0.0), env: Vec::new() });
+        w.ids = 0;
+        let mut queue = w.queue.take().unwrap_or_else(Radix::new);
+        queue.clear();
+        Run { m, w, queue }
+    }
+
+    fn slack(&self, d: f64) -> f64 {
+        MARGIN * d.abs() + self.m.tiny
+    }
+
+    fn relax(&mut self, v: usize, dist: f64) {
+        if dist < self.w.d[v] {
+            self.w.d[v] = dist;
+            if self.m.pseudo[v] {
+                self.queue.push(dist, EVENT | v as u64);
+            }
+        }
+    }
+
+    /// The distances from inner vertex `source`, in the inner numbering, into `self.w.d`; false
+    /// when the work budget ran out.
+    fn run(mut self, source: usize) -> bool {
+        self.w.d[source] = 0.0;
+        self.queue.push(0.0, EVENT | source as u64);
+        let mut budget = WORK_PER_FACE.saturating_mul(self.m.faces.len()).max(1_000_000);
+        while let Some((key, item)) = self.queue.pop() {
+            if item & EVENT != 0 {
+                let v = (item & !EVENT) as usize;
+                // A later, shorter distance has its own event.
+                if key == self.w.d[v] {
+                    self.emit(v, key);
+                }
+            } else {
+                if budget == 0 {
+                    self.w.queue = Some(self.queue);
+                    return false;
+                }
+                budget -= 1;
+                self.propagate(key, item as usize);
+            }
+        }
+        self.w.queue = Some(self.queue);
+        true
+    }
+
+    /// A pseudo-source `v` at its final distance: its neighbours along the edges, and one window
+    /// over each edge opposite it, into the faces beyond.
+    fn emit(&mut self, v: usize, dv: f64) {
+        let m = self.m;
+        for &f in m.around.of(v) {
+            let f = f as usize;
+            let face = m.faces[f];
+            for &u in &face {
+                let length = norm(sub(m.points[u as usize], m.points[v]));
+                self.relax(u as usize, dv + length);
+            }
+            let Some(k) = face.iter().position(|&u| u as usize == v) else {
+                continue;
+            };
+            if !distinct(&face) {
+                continue;
+            }
+            let opposite = 3 * f + (k + 1) % 3;
+            let Half { len, cx, cy, .. } = m.half[opposite];
+            if cy > SLIVER * len {
+                self.spawn(opposite, 0.0, len, cx, -cy, dv);
+            } else if cx > 0.0 && cx < len {
+                // v lies on the edge: it sees the faces beyond directly.
+                for (t, same) in m.others(opposite) {
+                    self.emit_from_edge(t, if same { cx } else { len - cx }, dv);
+                }
+            }
+        }
+    }
+
+    /// A pseudo-source at (x, 0) on half-edge `h`, reaching h's face directly.
+    fn emit_from_edge(&mut self, h: usize, x: f64, dv: f64) {
+        let m = self.m;
+        let (f, i) = (h / 3, h % 3);
+        let Half { len, cx, cy, .. } = m.half[h];
+        let apex = m.faces[f][(i + 2) % 3] as usize;
+        self.relax(apex, dv + hyp(cx - x, cy));
+        let (left, right) = (3 * f + (i + 2) % 3, 3 * f + (i + 1) % 3);
+        if let Some((sx, sy)) = self.source_on_left(left, cx, cy, x, 0.0) {
+            self.spawn(left, 0.0, m.half[left].len, sx, sy, dv);
+        }
+        if let Some((sx, sy)) = self.source_on_right(right, len, cx, cy, x, 0.0) {
+            self.spawn(right, 0.0, m.half[right].len, sx, sy, dv);
+        }
+    }
+
+    /// The source (sx, sy) of a window on half-edge A→B, in the frame of the face's edge C→A
+    /// (`left`), with the face on −y.
+    fn source_on_left(&self, left: usize, cx: f64, cy: f64, sx: f64, sy: f64) -> Option<(f64, f64)> {
+        let l = self.m.half[left].len;
+        (l > 0.0).then(|| (((cx - sx) * cx + (cy - sy) * cy) / l, -(cy * sx - cx * sy).abs() / l))
+    }
+
+    /// The same in the frame of the face's edge B→C (`right`).
+    fn source_on_right(&self, right: usize, len: f64, cx: f64, cy: f64, sx: f64, sy: f64) -> Option<(f64, f64)> {
+        let l = self.m.half[right].len;
+        (l > 0.0).then(|| (((sx - len) * (cx - len) + sy * cy) / l, -((cx - len) * sy - cy * (sx - len)).abs() / l))
+    }
+
+    /// Processes the windows waiting on side `h`: cut by the edge's ends (rule 1), they cross the
+    /// face. They go together, the first of them due: they share the face's data in cache, and
+    /// their order among themselves does not matter.
+    fn propagate(&mut self, key: f64, h: usize) {
+        let m = self.m;
+        let waiting = &self.w.side[h].env;
+        if waiting.is_empty() {
+            return; // gone with an earlier entry of this side
+        }
+        // Cut since queued: back in the queue at its true rank.
+        let least = waiting.iter().map(|s| s.least(s.b0, s.b1)).fold(f64::INFINITY, f64::min);
+        if least > key + self.slack(key) {
+            self.queue.push(least, h as u64);
+            return;
+        }
+        let mut mine = std::mem::take(&mut self.w.mine);
+        mine.clear();
+        std::mem::swap(&mut mine, &mut self.w.side[h].env);
+        let face = m.faces[h / 3];
+        let (a, b) = (face[h % 3] as usize, face[(h + 1) % 3] as usize);
+        let l = m.half[h].len;
+        let slack = self.slack(least + l);
+        let (da, db) = (self.w.d[a], self.w.d[b]);
+        for s in &mine {
+            let Some(b0) = cut_front(s.x, s.y, s.sigma, da, s.b0, s.b1, slack) else {
+                continue;
+            };
+            let Some(back) = cut_front(l - s.x, s.y, s.sigma, db, l - s.b1, l - b0, slack) else {
+                continue;
+            };
+            let b1 = l - back;
+            if b1 - b0 > MIN_WIDTH * l {
+                self.cross(h, b0, b1, s.x, s.y, s.sigma);
+            }
+        }
+        self.w.mine = mine;
+    }
+
+    /// Sends the part [b0, b1] of a window on `h` (in h's frame) across h's face: reaches the
+    /// apex, splits by rule 2 and makes the children on the face's other two edges.
+    fn cross(&mut self, h: usize, b0: f64, b1: f64, sx: f64, sy: f64, sigma: f64) {
+        let m = self.m;
+        let (f, i) = (h / 3, h % 3);
+        let face = m.faces[f];
+        let c = face[(i + 2) % 3] as usize;
+        let Half { len: l, cx, cy, .. } = m.half[h];
+
+        // The apex: straight when its ray crosses the window, else through the nearer end.
+        let xc = sx + (cx - sx) * (-sy) / (cy - sy);
+        let q = if xc.is_nan() { b0 } else { xc.clamp(b0, b1) };
+        let dc = if q == xc { sigma + hyp(cx - sx, cy - sy) } else { sigma + hyp(q - sx, sy) + hyp(cx - q, cy) };
+        self.relax(c, dc);
+
+        // Rule 2.
+        let (mut left_end, mut right_start) = (b1.min(xc), b0.max(xc));
+        let best = self.w.side[h].best;
+        if dc > best.0 + self.slack(best.0) {
+            left_end = left_end.min(best.1);
+            right_start = right_start.max(best.1);
+        } else if dc < best.0 {
+            self.w.side[h].best = (dc, q);
+        }
+
+        if left_end > b0 {
+            // Through C→A, measured from C.
+            let left = 3 * f + (i + 2) % 3;
+            let lca = m.half[left].len;
+            let mu = |x: f64| on_edge(sy * x, cx * sy + cy * (x - sx));
+            let far = if left_end == xc { Some(1.0) } else { mu(left_end) };
+            if let (Some(near), Some(far), Some((tx, ty))) = (mu(b0), far, self.source_on_left(left, cx, cy, sx, sy)) {
+                self.spawn(left, (1.0 - far) * lca, (1.0 - near) * lca, tx, ty, sigma);
+            }
+        }
+        if right_start < b1 {
+            // Through B→C, measured from B.
+            let right = 3 * f + (i + 1) % 3;
+            let lbc = m.half[right].len;
+            let nu = |x: f64| on_edge(sy * (x - l), (cx - l) * sy + cy * (x - sx));
+            let far = if right_start == xc { Some(1.0) } else { nu(right_start) };
+            if let (Some(near), Some(far), Some((tx, ty))) =
+                (nu(b1), far, self.source_on_right(right, l, cx, cy, sx, sy))
+            {
+                self.spawn(right, near * lbc, far * lbc, tx, ty, sigma);
+            }
+        }
+    }
+
+    /// A window leaving its face through half-edge `h` on [t0, t1] of h's frame, source (sx, sy)
+    /// with the face on −y: for each face beyond, rule 3 and the queue.
+    fn spawn(&mut self, h: usize, t0: f64, t1: f64, sx: f64, sy: f64, sigma: f64) {
+        let m = self.m;
+        let l = m.half[h].len;
+        if !(sy < 0.0 && l > 0.0 && sx.is_finite()) {
+            return; // rays along the edge never enter the face beyond
+        }
+        let (t0, t1) = (t0.max(0.0), t1.min(l));
+        if !(t1 - t0 > MIN_WIDTH * l) {
+            return;
+        }
+        let least = smallest(sigma, sx, sy, t0, t1);
+        let slack = self.slack(least + l);
+        for (t, same) in m.others(h) {
+            self.w.ids += 1;
+            let mut w = Seg { b0: t0, b1: t1, x: sx, y: sy, sigma, id: self.w.ids };
+            if !same {
+                w = w.mirrored(l);
+            }
+            self.w.pieces.clear();
+            self.w.pieces.push((w.b0, w.b1));
+            self.cut_by_other_sides(t, &w, slack);
+            if self.merge(t, &w, slack) {
+                self.queue.push(least, t as u64);
+            }
+        }
+    }
+
+    /// Rule 3 across the edge: cuts `self.w.pieces` (of `w`, on side `h`) where a window waiting
+    /// on another side of the edge beats `w` by more than `slack`.
+    fn cut_by_other_sides(&mut self, h: usize, w: &Seg, slack: f64) {
+        let m = self.m;
+        let l = m.half[h].len;
+        for (u, same) in m.others(h) {
+            let ww = &mut *self.w;
+            let list = &ww.side[u].env;
+            if list.is_empty() || ww.pieces.is_empty() {
+                continue;
+            }
+            let (lo, hi) = (ww.pieces[0].0, ww.pieces[ww.pieces.len() - 1].1);
+            let range = if same { overlapping(list, lo, hi) } else { overlapping(list, l - hi, l - lo) };
+            for o in &list[range] {
+                let o = if same { *o } else { o.mirrored(l) };
+                ww.kept.clear();
+                for &(p0, p1) in &ww.pieces {
+                    let (a, b) = (p0.max(o.b0), p1.min(o.b1));
+                    if !(a < b) {
+                        ww.kept.push((p0, p1));
+                        continue;
+                    }
+                    let kept = &mut ww.kept;
+                    let mut keep = |u: f64, v: f64| match kept.last_mut() {
+                        Some(last) if last.1 == u => last.1 = v,
+                        _ => kept.push((u, v)),
+                    };
+                    if p0 < a {
+                        keep(p0, a);
+                    }
+                    share(w, &o, a, b, slack, |u, v, mine| {
+                        if mine {
+                            keep(u, v)
+                        }
+                    });
+                    if b < p1 {
+                        keep(b, p1);
+                    }
+                }
+                ww.kept.retain(|&(p0, p1)| p1 - p0 > MIN_WIDTH * l);
+                std::mem::swap(&mut ww.pieces, &mut ww.kept);
+            }
+        }
+    }
+
+    /// Rule 3 on the window's own side: `w`'s pieces take over the parts of the list waiting on
+    /// side `h` where they beat what is there by more than `slack`. Returns whether `w` took any.
+    fn merge(&mut self, h: usize, w: &Seg, slack: f64) -> bool {
+        let narrow = MIN_WIDTH * self.m.half[h].len;
+        let ww = &mut *self.w;
+        let mut took = false;
+        for &(b0, b1) in &ww.pieces {
+            let w = Seg { b0, b1, ..*w };
+            let list = &mut ww.side[h].env;
+            let range = overlapping(list, b0, b1);
+            let out = &mut ww.out;
+            out.clear();
+            // [cursor, b1] of w is still to place.
+            let mut cursor = b0;
+            for o in &list[range.clone()] {
+                let (lo, hi) = (o.b0.max(b0), o.b1.min(b1));
+                if o.b0 < lo {
+                    append(out, o, o.b0, lo, narrow);
+                }
+                if cursor < lo {
+                    append(out, &w, cursor, lo, narrow);
+                }
+                share(&w, o, lo, hi, -slack, |u, v, mine| append(out, if mine { &w } else { o }, u, v, narrow));
+                cursor = cursor.max(hi);
+                if hi < o.b1 {
+                    append(out, o, hi, o.b1, narrow);
+                }
+            }
+            if cursor < b1 {
+                append(out, &w, cursor, b1, narrow);
+            }
+            took |= out.iter().any(|s| s.id == w.id);
+            list.splice(range, out.drain(..));
+        }
+        took
+    }
+}
+
+/// The pieces of `list` (in order, disjoint) that overlap (b0, b1).
+fn overlapping(list: &[Seg], b0: f64, b1: f64) -> std::ops::Range<usize> {
+    let i = list.partition_point(|s| s.b1 <= b0);
+    let j = i + list[i..].partition_point(|s| s.b0 < b1);
+    i..j
+}
+
+/// Exact geodesic distances along the mesh surface from each source vertex to every vertex,
+/// one row per source, sources in parallel. A vertex that no face uses, or that no face path
+/// reaches, is `inf`. Degenerate and non-manifold meshes are accepted (see the module notes).
+pub fn geodesic_exact(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<Vec<Vec<f64>>> {
+    check_input(vertices, faces, sources)?;
+    let layout = Layout::new(vertices, faces);
+    sources.par_iter().map_init(Work::default, |work, &s| distances_from(&layout, work, vertices.len(), s)).collect()
+}
+
+/// One row of `geodesic_exact`, in the given numbering.
+fn distances_from(layout: &Layout, work: &mut Work, n: usize, s: usize) -> Result<Vec<f64>> {
+    let inner = layout.inner[s] as usize;
+    if layout.around.of(inner).is_empty() {
+        return Ok(unreached(n, s));
+    }
+    if !Run::new(layout, work).run(inner) {
+        return Err(Error::invalid(
+            "faces",
+            format!("the exact propagation from vertex {s} did not settle within its work budget"),
+        ));
+    }
+    Ok(layout.inner.iter().map(|&i| work.d[i as usize]).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+        norm(sub(a, b))
+    }
+
+    /// An n × m flat grid of spacing h, split along alternating diagonals.
+    fn grid(n: usize, m: usize, h: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let v = (0..n * m).map(|i| [(i % n) as f64 * h, (i / n) as f64 * h, 0.0]).collect();
+        let mut f = Vec::new();
+        for j in 0..m - 1 {
+            for i in 0..n - 1 {
+                let a = (j * n + i) as u32;
+                let (b, c, d) = (a + 1, a + n as u32, a + n as u32 + 1);
+                if (i + j) % 2 == 0 {
+                    f.extend([[a, b, d], [a, d, c]]);
+                } else {
+                    f.extend([[a, b, c], [b, d, c]]);
+                }
+            }
+        }
+        (v, f)
+    }
+
+    /// The largest |row − truth|; inf where one is inf and the other not.
+    fn worst(row: &[f64], truth: impl Fn(usize) -> f64) -> f64 {
+        row.iter()
+            .enumerate()
+            .map(|(i, &d)| {
+                let t = truth(i);
+                match (d.is_finite(), t.is_finite()) {
+                    (true, true) => (d - t).abs(),
+                    (false, false) if d == t => 0.0,
+                    _ => f64::INFINITY,
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn distances_on_a_flat_grid_are_euclidean() {
+        let (v, mut f) = grid(21, 17, 0.5);
+        // Faces wound either way: the unfolding does not rely on orientation.
+        f.iter_mut().step_by(3).for_each(|t| t.swap(0, 1));
+        let sources = [0, 10, 178, 356];
+        let d = geodesic_exact(&v, &f, &sources).unwrap();
+        for (row, &s) in d.iter().zip(&sources) {
+            let e = worst(row, |i| dist(v[i], v[s]));
+            assert!(e < 1e-12, "source {s}: worst {e}");
+        }
+    }
+
+    /// A planar grid folded along its grid lines onto a prism (a polygonal half-cylinder): an
+    /// isometry of the plane strip, so the distances are the planar ones.
+    #[test]
+    fn a_folded_strip_keeps_planar_distances() {
+        let (n, m, h) = (13, 9, 0.3);
+        let (flat, f) = grid(n, m, h);
+        let turn = PI / (n - 1) as f64; // half a turn over the strip
+        let radius = h / (2.0 * (turn / 2.0).sin());
+        let v: Vec<[f64; 3]> = (0..n * m)
+            .map(|k| {
+                let (i, j) = (k % n, k / n);
+                let t = i as f64 * turn;
+                [radius * t.cos(), radius * t.sin(), j as f64 * h]
+            })
+            .collect();
+        let sources = [0, 6, 50, n * m - 1];
+        let d = geodesic_exact(&v, &f, &sources).unwrap();
+        for (row, &s) in d.iter().zip(&sources) {
+            let e = worst(row, |i| dist(flat[i], flat[s]));
+            assert!(e < 1e-12, "source {s}: worst {e}");
+        }
+    }
+
+    /// The unit cube's surface, each face an n × n grid; from the corner at the origin a point
+    /// of a face through it is straight, a point (1, y, z) of a face away from it is
+    /// min(√((1 + y)² + z²), √((1 + z)² + y²)) by unfolding either neighbour, and alike for the
+    /// other far faces.
+    #[test]
+    fn cube_distances_from_a_corner_unfold_in_closed_form() {
+        let n = 4;
+        let mut v: Vec<[f64; 3]> = Vec::new();
+        let mut f = Vec::new();
+        let mut index = std::collections::HashMap::new();
+        let mut id = |p: [f64; 3], v: &mut Vec<[f64; 3]>| -> u32 {
+            let key = p.map(|c| (c * n as f64).round() as i64);
+            *index.entry(key).or_insert_with(|| {
+                v.push(p);
+                (v.len() - 1) as u32
+            })
+        };
+        for axis in 0..3 {
+            for side in [0.0, 1.0] {
+                let at = |i: usize, j: usize| {
+                    let mut p = [0.0; 3];
+                    p[axis] = side;
+                    p[(axis + 1) % 3] = i as f64 / n as f64;
+                    p[(axis + 2) % 3] = j as f64 / n as f64;
+                    p
+                };
+                for i in 0..n {
+                    for j in 0..n {
+                        let a = id(at(i, j), &mut v);
+                        let b = id(at(i + 1, j), &mut v);
+                        let c = id(at(i, j + 1), &mut v);
+                        let dd = id(at(i + 1, j + 1), &mut v);
+                        f.extend([[a, b, dd], [a, dd, c]]);
+                    }
+                }
+            }
+        }
+        let origin = v.iter().position(|p| *p == [0.0; 3]).unwrap();
+        let d = geodesic_exact(&v, &f, &[origin]).unwrap();
+        let truth = |p: [f64; 3]| {
+            match (0..3).find(|&k| p[k] == 0.0) {
+                Some(_) => norm(p),
+                None => {
+                    // On the face where coordinate k is 1; the others are y, z.
+                    let k = (0..3).find(|&k| p[k] == 1.0).unwrap();
+                    let (y, z) = (p[(k + 1) % 3], p[(k + 2) % 3]);
+                    hyp(1.0 + y, z).min(hyp(1.0 + z, y))
+                }
+            }
+        };
+        let e = worst(&d[0], |i| truth(v[i]));
+        assert!(e < 1e-12, "worst {e}");
+        let far = v.iter().position(|p| *p == [1.0; 3]).unwrap();
+        assert!((d[0][far] - 5f64.sqrt()).abs() < 1e-12);
+    }
+
+    /// Shortest path in a rectangle around an axis-aligned rectangular hole: straight when the
+    /// segment misses the hole's inside, else around its corners (a visibility graph).
+    fn around_hole(p: [f64; 2], q: [f64; 2], lo: [f64; 2], hi: [f64; 2]) -> f64 {
+        let clear = |a: [f64; 2], b: [f64; 2]| {
+            // Liang–Barsky against the open rectangle.
+            let (mut t0, mut t1) = (0.0f64, 1.0f64);
+            let dir = [b[0] - a[0], b[1] - a[1]];
+            for k in 0..2 {
+                for (bound, sign) in [(lo[k], -1.0), (hi[k], 1.0)] {
+                    let (num, den) = (sign * (bound - a[k]), sign * dir[k]);
+                    if den == 0.0 {
+                        if num <= 0.0 {
+                            return true;
+                        }
+                    } else if den > 0.0 {
+                        t1 = t1.min(num / den);
+                    } else {
+                        t0 = t0.max(num / den);
+                    }
+                }
+            }
+            t1 - t0 <= 1e-12
+        };
+        let nodes = [p, q, lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]];
+        let mut best = [f64::INFINITY; 6];
+        best[0] = 0.0;
+        let mut done = [false; 6];
+        for _ in 0..6 {
+            let Some(u) = (0..6).filter(|&k| !done[k]).min_by(|&x, &y| best[x].total_cmp(&best[y])) else { break };
+            done[u] = true;
+            for w in 0..6 {
+                if !done[w] && clear(nodes[u], nodes[w]) {
+                    best[w] = best[w].min(best[u] + hyp(nodes[w][0] - nodes[u][0], nodes[w][1] - nodes[u][1]));
+                }
+            }
+        }
+        best[1]
+    }
+
+    #[test]
+    fn paths_go_around_a_hole() {
+        let (v, f) = grid(16, 16, 1.0);
+        // The hole: the squares in [5, 10] × [6, 9].
+        let (lo, hi) = ([5.0, 6.0], [10.0, 9.0]);
+        let f: Vec<[u32; 3]> = f
+            .into_iter()
+            .filter(|t| {
+                let c = t.iter().fold([0.0; 2], |c, &k| [c[0] + v[k as usize][0] / 3.0, c[1] + v[k as usize][1] / 3.0]);
+                !(c[0] > lo[0] && c[0] < hi[0] && c[1] > lo[1] && c[1] < hi[1])
+            })
+            .collect();
+        let sources = [7 * 16 + 2, 16 * 4 + 7, 255];
+        let d = geodesic_exact(&v, &f, &sources).unwrap();
+        for (row, &s) in d.iter().zip(&sources) {
+            let inside = |i: usize| v[i][0] > lo[0] && v[i][0] < hi[0] && v[i][1] > lo[1] && v[i][1] < hi[1];
+            let e = worst(row, |i| if inside(i) { f64::INFINITY } else { around_hole(p2(&v, s), p2(&v, i), lo, hi) });
+            assert!(e < 1e-12, "source {s}: worst {e}");
+        }
+        // Straight across the hole is 10; around its corners longer.
+        let (a, b) = (7 * 16 + 2, 7 * 16 + 12);
+        assert!(d[0][b] > 10.0 + 0.1 && (d[0][b] - around_hole(p2(&v, a), p2(&v, b), lo, hi)).abs() < 1e-12);
+    }
+
+    fn p2(v: &[[f64; 3]], i: usize) -> [f64; 2] {
+        [v[i][0], v[i][1]]
+    }
+
+    /// Lengths of shortest paths along the edges: real paths on the surface, so no shorter
+    /// than the geodesics.
+    fn along_edges(v: &[[f64; 3]], f: &[[u32; 3]], s: usize) -> Vec<f64> {
+        let mut d = vec![f64::INFINITY; v.len()];
+        let mut done = vec![false; v.len()];
+        d[s] = 0.0;
+        for _ in 0..v.len() {
+            let Some(u) = (0..v.len()).filter(|&k| !done[k]).min_by(|&a, &b| d[a].total_cmp(&d[b])) else { break };
+            done[u] = true;
+            for t in f.iter().filter(|t| t.contains(&(u as u32))) {
+                for &w in t {
+                    d[w as usize] = d[w as usize].min(d[u] + dist(v[u], v[w as usize]));
+                }
+            }
+        }
+        d
+    }
+
+    /// A bumpy grid (saddles everywhere): between the straight line and the path along the
+    /// edges, and the same whatever the order of the faces and of their corners.
+    #[test]
+    fn a_bumpy_surface_is_bounded_and_order_free() {
+        let (mut v, f) = grid(15, 13, 0.4);
+        v.iter_mut().for_each(|p| p[2] = 0.3 * (1.7 * p[0]).sin() * (1.3 * p[1]).cos());
+        let sources = [0, 97, 194];
+        let d = geodesic_exact(&v, &f, &sources).unwrap();
+        let mut g: Vec<[u32; 3]> = f.iter().rev().map(|t| [t[1], t[2], t[0]]).collect();
+        g.swap(3, 40);
+        let e = geodesic_exact(&v, &g, &sources).unwrap();
+        for (k, &s) in sources.iter().enumerate() {
+            let edges = along_edges(&v, &f, s);
+            for i in 0..v.len() {
+                assert!(d[k][i] >= dist(v[i], v[s]) - 1e-12 && d[k][i] <= edges[i] + 1e-12, "source {s} vertex {i}");
+                assert!((d[k][i] - e[k][i]).abs() < 1e-12, "source {s} vertex {i}: {} vs {}", d[k][i], e[k][i]);
+            }
+        }
+    }
+
+    #[test]
+    fn unreached_and_unused_vertices_are_inf() {
+        let (mut v, mut f) = grid(4, 4, 1.0);
+        let (w, g) = grid(3, 3, 1.0);
+        let shift = v.len() as u32;
+        v.extend(w.iter().map(|p| [p[0] + 10.0, p[1], p[2]]));
+        f.extend(g.iter().map(|t| t.map(|k| k + shift)));
+        v.push([5.0, 5.0, 5.0]); // used by no face
+        let lone = v.len() - 1;
+        let d = geodesic_exact(&v, &f, &[0, 16, lone]).unwrap();
+        assert!(d[0][..16].iter().all(|x| x.is_finite()));
+        assert!(d[0][16..].iter().all(|x| x.is_infinite()));
+        assert!(d[1][..16].iter().all(|x| x.is_infinite()) && d[1][lone].is_infinite());
+        assert!((d[1][16 + 8] - 8f64.sqrt()).abs() < 1e-12);
+        assert!(d[2].iter().enumerate().all(|(i, &x)| if i == lone { x == 0.0 } else { x.is_infinite() }));
+    }
+
+    /// Three unit-square fins on the z axis, 120° apart: two fins unfold into one plane across
+    /// the shared edge, so from fin 1 at (r1, z1) to fin 2 at (r2, z2) it is √((r1 + r2)² + Δz²).
+    #[test]
+    fn a_non_manifold_edge_passes_paths_to_every_fin() {
+        let n = 4;
+        let mut v: Vec<[f64; 3]> = (0..=n).map(|j| [0.0, 0.0, j as f64 / n as f64]).collect();
+        let mut f = Vec::new();
+        let mut fin_of = vec![(0usize, 0.0, 0.0); v.len()];
+        for k in 0..v.len() {
+            fin_of[k] = (usize::MAX, 0.0, v[k][2]);
+        }
+        for fin in 0..3 {
+            let a = 2.0 * PI * fin as f64 / 3.0;
+            let base = v.len();
+            let id = |i: usize, j: usize| if i == 0 { j as u32 } else { (base + (i - 1) * (n + 1) + j) as u32 };
+            for i in 1..=n {
+                for j in 0..=n {
+                    let r = i as f64 / n as f64;
+                    v.push([r * a.cos(), r * a.sin(), j as f64 / n as f64]);
+                    fin_of.push((fin, r, j as f64 / n as f64));
+                }
+            }
+            for i in 0..n {
+                for j in 0..n {
+                    f.extend([[id(i, j), id(i + 1, j), id(i + 1, j + 1)], [id(i, j), id(i + 1, j + 1), id(i, j + 1)]]);
+                }
+            }
+        }
+        let s = n + 1 + 2 * (n + 1) + 1; // fin 0, r = 3/4, z = 1/4
+        let d = geodesic_exact(&v, &f, &[s]).unwrap();
+        let (_, rs, zs) = fin_of[s];
+        let e = worst(&d[0], |i| {
+            let (fin, r, z) = fin_of[i];
+            if fin == 0 {
+                hyp(r - rs, z - zs)
+            } else {
+                hyp(r + rs, z - zs)
+            }
+        });
+        assert!(e < 1e-12, "worst {e}");
+    }
+
+    /// A flat grid where one edge (a, d) is split at its midpoint m on one side only, the crack
+    /// closed by the zero-area face (a, d, m): paths cross the sliver, distances stay Euclidean.
+    /// With m moved 1e-9 or 1e-6 off the edge into its side's triangle, (a, d, m) is a
+    /// near-zero-area needle of a planar triangulation instead.
+    #[test]
+    fn paths_cross_zero_and_near_zero_area_slivers() {
+        for off in [0.0, 1e-9, 1e-6] {
+            let (mut v, mut f) = grid(9, 9, 1.0);
+            // Square (3, 3)-(4, 4), (i + j) even: faces [a, b, d], [a, d, c] share the diagonal a-d.
+            let (a, d) = (3 * 9 + 3, 4 * 9 + 4);
+            let c = a + 9;
+            let k = f.iter().position(|t| *t == [a as u32, d as u32, c as u32]).unwrap();
+            let shift = off / 2f64.sqrt();
+            v.push([3.5 - shift, 3.5 + shift, 0.0]);
+            let mid = (v.len() - 1) as u32;
+            f[k] = [a as u32, mid, c as u32];
+            f.push([mid, d as u32, c as u32]);
+            f.push([a as u32, d as u32, mid]);
+            let sources = [0, 80, 4, 36, mid as usize];
+            let dd = geodesic_exact(&v, &f, &sources).unwrap();
+            for (row, &s) in dd.iter().zip(&sources) {
+                let e = worst(row, |i| dist(v[i], v[s]));
+                assert!(e < 1e-12, "offset {off}, source {s}: worst {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_faces_give_no_nan_and_no_panic() {
+        let (mut v, mut f) = grid(6, 6, 1.0);
+        v.push(v[14]); // a copy of vertex 14
+        let copy = (v.len() - 1) as u32;
+        f.push([14, copy, 15]); // zero-length edge
+        f.push([7, 7, 8]); // a vertex named twice
+        f.push([20, 21, 22]); // collinear
+        f.push([copy, 30, 31]);
+        f.push([3, 3, 3]);
+        v.push([f64::MAX / 4.0, 0.0, 0.0]);
+        let far = (v.len() - 1) as u32;
+        f.push([0, 1, far]);
+        let sources: Vec<usize> = (0..v.len()).step_by(5).collect();
+        let d = geodesic_exact(&v, &f, &sources).unwrap();
+        for (row, &s) in d.iter().zip(&sources) {
+            assert!(row.iter().all(|x| !x.is_nan()), "source {s}");
+            assert_eq!(row[s], 0.0);
+            for (i, &x) in row.iter().enumerate() {
+                // No path on the surface is shorter than the straight line.
+                assert!(x >= dist(v[i], v[s]) * (1.0 - 1e-12), "source {s} vertex {i}: {x}");
+            }
+        }
+    }
+
+    #[test]
+    fn bad_input_is_refused_by_name_and_threads_do_not_change_results() {
+        let (v, f) = grid(8, 8, 1.0);
+        assert!(geodesic_exact(&v, &f, &[64]).unwrap_err().to_string().contains("sources"));
+        assert!(geodesic_exact(&v, &[[0, 1, 64]], &[0]).unwrap_err().to_string().contains("faces"));
+        let mut bad = v.clone();
+        bad[3][1] = f64::NAN;
+        assert!(geodesic_exact(&bad, &f, &[0]).unwrap_err().to_string().contains("vertices"));
+        let sources: Vec<usize> = (0..64).collect();
+        let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+        let one = pool(1).install(|| geodesic_exact(&v, &f, &sources).unwrap());
+        let three = pool(3).install(|| geodesic_exact(&v, &f, &sources).unwrap());
+        assert!(one.iter().flatten().zip(three.iter().flatten()).all(|(x, y)| x.to_bits() == y.to_bits()));
+    }
+
+    /// Reference distances written by pygeodesic (Kirsanov's exact MMP), see `reference_dir`.
+    struct Reference {
+        vertices: Vec<[f64; 3]>,
+        faces: Vec<[u32; 3]>,
+        /// (source, pygeodesic's seconds, distances)
+        runs: Vec<(usize, f64, Vec<f64>)>,
+    }
+
+    /// `$GEOREF_DIR`, else `target/georef`: text files "nv nf ns", the vertices, the faces, then
+    /// per source "source s seconds" and its nv distances, made by
+    /// `scripts/geodesic_reference.py` (the data are not in the repository).
+    fn reference(name: &str) -> Option<Reference> {
+        let dir = std::env::var("GEOREF_DIR").unwrap_or_else(|_| {
+            let target =
+                std::env::var("CARGO_TARGET_DIR").unwrap_or_else(|_| format!("{}/target", env!("CARGO_MANIFEST_DIR")));
+            format!("{target}/georef")
+        });
+        let text = std::fs::read_to_string(format!("{dir}/{name}.txt")).ok()?;
+        let mut t = text.split_whitespace();
+        let mut next = || t.next().expect("a complete reference file");
+        let (nv, nf, ns): (usize, usize, usize) =
+            (next().parse().unwrap(), next().parse().unwrap(), next().parse().unwrap());
+        let vertices = (0..nv).map(|_| [0; 3].map(|_| next().parse().unwrap())).collect();
+        let faces = (0..nf).map(|_| [0; 3].map(|_| next().parse().unwrap())).collect();
+        let runs = (0..ns)
+            .map(|_| {
+                assert_eq!(next(), "source");
+                let (s, secs) = (next().parse().unwrap(), next().parse().unwrap());
+                (s, secs, (0..nv).map(|_| next().parse().unwrap()).collect())
+            })
+            .collect();
+        Some(Reference { vertices, faces, runs })
+    }
+
+    /// Worst |ours − pygeodesic's| over every vertex of every reference source, and each
+    /// source's time (one thread) next to pygeodesic's.
+    fn compare(name: &str, r: &Reference) -> f64 {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let mut worst_all: f64 = 0.0;
+        for (s, secs, truth) in &r.runs {
+            let start = std::time::Instant::now();
+            let d = pool.install(|| geodesic_exact(&r.vertices, &r.faces, &[*s]).unwrap());
+            let ours = start.elapsed().as_secs_f64();
+            let e = worst(&d[0], |i| truth[i]);
+            if e > 1e-9 {
+                let bad: Vec<_> = (0..truth.len()).filter(|&i| (d[0][i] - truth[i]).abs() > 1e-9).collect();
+                eprintln!(
+                    "  {} bad, e.g. {:?}",
+                    bad.len(),
+                    bad.iter().take(5).map(|&i| (i, d[0][i], truth[i])).collect::<Vec<_>>()
+                );
+            }
+            eprintln!(
+                "{name} source {s}: worst |diff| {e:.3e}, {ours:.4} s here, {secs:.4} s pygeodesic ({:.1}x)",
+                secs / ours
+            );
+            worst_all = worst_all.max(e);
+        }
+        eprintln!("{name}: worst |diff| over {} sources {worst_all:.3e}", r.runs.len());
+        worst_all
+    }
+
+    #[test]
+    fn small_meshes_match_pygeodesic_when_the_reference_is_there() {
+        for name in ["flat", "hedgehog"] {
+            match reference(name) {
+                Some(r) => assert!(compare(name, &r) < 1e-9, "{name}"),
+                None => eprintln!("{name}: no reference file, skipped (see `reference`)"),
+            }
+        }
+    }
+
+    /// The Stanford bunny of `$BUNNY_PLY` (default /work/shared/data/stanford-bunny-mesh/):
+    /// 35947 vertices, holes at its base, 1113 vertices no face uses. Published check:
+    /// d(14558 → 13039) = 0.22686869313968416 (pygeodesic's notebook); with
+    /// `target/georef/bunny.txt` every vertex of every reference source as well.
+    /// `cargo test --release --lib mesh::geodesic_exact -- --ignored --nocapture`
+    /// One source on the bunny, timed: `cargo test --release --lib geodesic_exact::tests::bunny_time
+    /// -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "reads the bunny from the shared data directory"]
+    fn bunny_time() {
+        let Ok(text) = std::fs::read_to_string("/work/shared/data/stanford-bunny-mesh/stanford_bunny.ply") else {
+            return;
+        };
+        let (v, f) = read_ascii_ply(&text);
+        let t = std::time::Instant::now();
+        let layout = Layout::new(&v, &f);
+        let mut work = Work::default();
+        eprintln!("layout {:?}, pseudo-sources {}", t.elapsed(), layout.pseudo.iter().filter(|&&p| p).count());
+        for s in [0, 14558] {
+            let mut best = f64::INFINITY;
+            let mut d = Vec::new();
+            for _ in 0..4 {
+                let t = std::time::Instant::now();
+                d = distances_from(&layout, &mut work, v.len(), s).unwrap();
+                best = best.min(t.elapsed().as_secs_f64());
+            }
+            eprintln!("source {s}: best of 4 {best:.4} s, d[13039] = {}", d[13039]);
+        }
+    }
+
+    #[test]
+    #[ignore = "reads the bunny from the shared data directory; slow in debug builds"]
+    fn bunny_matches_pygeodesic() {
+        let path = std::env::var("BUNNY_PLY")
+            .unwrap_or_else(|_| "/work/shared/data/stanford-bunny-mesh/stanford_bunny.ply".to_string());
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            eprintln!("{path}: not readable, skipped");
+            return;
+        };
+        let (vertices, faces) = read_ascii_ply(&text);
+        assert_eq!((vertices.len(), faces.len()), (35947, 69451));
+        let d = geodesic_exact(&vertices, &faces, &[14558]).unwrap();
+        let published = 0.22686869313968416;
+        eprintln!("bunny d(14558 -> 13039) = {:.17} (published {published})", d[0][13039]);
+        assert!((d[0][13039] - published).abs() < 1e-9);
+        match reference("bunny") {
+            Some(r) => {
+                assert!(r.vertices == vertices && r.faces == faces, "the reference is of another bunny");
+                assert!(compare("bunny", &r) < 1e-9);
+            }
+            None => eprintln!("bunny: no reference file, only the published value checked"),
+        }
+    }
+
+    /// The vertices (x y z first, single precision as the file declares) and triangles of an
+    /// ASCII PLY.
+    fn read_ascii_ply(text: &str) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let (header, body) = text.split_once("end_header").expect("a PLY header");
+        let count = |what: &str| -> usize {
+            header
+                .lines()
+                .find_map(|l| l.strip_prefix(&format!("element {what} ")))
+                .and_then(|n| n.trim().parse().ok())
+                .expect("an element count")
+        };
+        let (nv, nf) = (count("vertex"), count("face"));
+        let mut lines = body.lines().filter(|l| !l.trim().is_empty());
+        let vertices = (0..nv)
+            .map(|_| {
+                let mut t = lines.next().expect("a vertex line").split_whitespace();
+                [0; 3].map(|_| t.next().and_then(|x| x.parse::<f32>().ok()).expect("a coordinate") as f64)
+            })
+            .collect();
+        let faces = (0..nf)
+            .map(|_| {
+                let mut t = lines.next().expect("a face line").split_whitespace();
+                assert_eq!(t.next(), Some("3"), "triangles only");
+                [0; 3].map(|_| t.next().and_then(|x| x.parse().ok()).expect("an index"))
+            })
+            .collect();
+        (vertices, faces)
+    }
+}
