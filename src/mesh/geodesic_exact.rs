@@ -428,12 +428,18 @@ impl Radix {
         (64 - (key ^ self.last).leading_zeros()) as usize
     }
 
-    fn push(&mut self, key: f64, item: u64) {
-        // Rounding may put a child a hair below its parent; it is due now.
-        let key = if key > 0.0 { key.to_bits() } else { 0 }.max(self.last);
+    /// The key as queued: rounding may put a child a hair below its parent; it is due now.
+    fn due(&self, key: f64) -> u64 {
+        if key > 0.0 { key.to_bits() } else { 0 }.max(self.last)
+    }
+
+    /// Queues `item` at `key`; returns the key as queued (`due`).
+    fn push(&mut self, key: f64, item: u64) -> u64 {
+        let key = self.due(key);
         let b = self.bin(key);
         self.bins[b].push((key, item));
         self.full |= 1 << b;
+        key
     }
 
     fn pop(&mut self) -> Option<(f64, u64)> {
@@ -589,6 +595,9 @@ fn append(out: &mut Vec<Seg>, seg: &Seg, a: f64, b: f64, narrow: f64) {
 struct Side {
     best: (f64, f64),
     env: Vec<Seg>,
+    /// The key (as queued) of the side's one live queue entry, `u64::MAX` for none: a side is
+    /// queued once, at its earliest window, not once per window.
+    queued: u64,
 }
 
 /// The buffers of a propagation, kept from one source to the next.
@@ -621,8 +630,9 @@ impl<'a> Run<'a> {
         for side in &mut w.side {
             side.best = (f64::INFINITY, 0.0);
             side.env.clear();
+            side.queued = u64::MAX;
         }
-        w.side.resize_with(nh, || Side { best: (f64::INFINITY, 0.0), env: Vec::new() });
+        w.side.resize_with(nh, || Side { best: (f64::INFINITY, 0.0), env: Vec::new(), queued: u64::MAX });
         w.ids = 0;
         let mut queue = w.queue.take().unwrap_or_else(Radix::new);
         queue.clear();
@@ -732,16 +742,17 @@ impl<'a> Run<'a> {
     /// their order among themselves does not matter.
     fn propagate(&mut self, key: f64, h: usize) {
         let m = self.m;
-        let waiting = &self.w.side[h].env;
-        if waiting.is_empty() {
-            return; // gone with an earlier entry of this side
+        let side = &self.w.side[h];
+        if side.queued != key.to_bits() {
+            return; // a later entry of this side stands for it
         }
         // Cut since queued: back in the queue at its true rank.
-        let least = waiting.iter().map(|s| s.least(s.b0, s.b1)).fold(f64::INFINITY, f64::min);
+        let least = side.env.iter().map(|s| s.least(s.b0, s.b1)).fold(f64::INFINITY, f64::min);
         if least > key + self.slack(key) {
-            self.queue.push(least, h as u64);
+            self.w.side[h].queued = self.queue.push(least, h as u64);
             return;
         }
+        self.w.side[h].queued = u64::MAX;
         let mut mine = std::mem::take(&mut self.w.mine);
         mine.clear();
         std::mem::swap(&mut mine, &mut self.w.side[h].env);
@@ -837,8 +848,8 @@ impl<'a> Run<'a> {
             self.w.pieces.clear();
             self.w.pieces.push((w.b0, w.b1));
             self.cut_by_other_sides(t, &w, slack);
-            if self.merge(t, &w, slack) {
-                self.queue.push(least, t as u64);
+            if self.merge(t, &w, slack) && self.queue.due(least) < self.w.side[t].queued {
+                self.w.side[t].queued = self.queue.push(least, t as u64);
             }
         }
     }
