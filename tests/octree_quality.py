@@ -100,16 +100,20 @@ def main() -> None:
         for d_min in (1.0, 2.0, 4.0):
             for name, options in RULES.items():
                 o, v = compare(points, d_min, **options)
-                print(f"wall {wall:4.0f}°  {d_min:4.1f}   {name:<14} {o.count:7d}   {o.max:7.3f} / {v.max:.3f}"
-                      f"      {o.rms:7.4f} / {v.rms:.4f}     {o.outside:6.2%} / {v.outside:.2%}")
+                print(
+                    f"wall {wall:4.0f}°  {d_min:4.1f}   {name:<14} {o.count:7d}   {o.max:7.3f} / {v.max:.3f}"
+                    f"      {o.rms:7.4f} / {v.rms:.4f}     {o.outside:6.2%} / {v.outside:.2%}"
+                )
     print("Held out (half simplified, the other half measured; floor = the whole half kept):")
     print("part         d_min  rule            points   max octree / voxel / floor   RMS octree / voxel / floor")
     for wall, points in parts.items():
         for d_min in (1.0, 2.0, 4.0):
             for name, options in RULES.items():
                 o, v, f = compare_held_out(points, d_min, **options)
-                print(f"wall {wall:4.0f}°  {d_min:4.1f}   {name:<14} {o.count:7d}   {o.max:7.3f} / {v.max:.3f} / {f.max:.3f}"
-                      f"      {o.rms:7.4f} / {v.rms:.4f} / {f.rms:.4f}")
+                print(
+                    f"wall {wall:4.0f}°  {d_min:4.1f}   {name:<14} {o.count:7d}   {o.max:7.3f} / {v.max:.3f} / {f.max:.3f}"
+                    f"      {o.rms:7.4f} / {v.rms:.4f} / {f.rms:.4f}"
+                )
 
 
 if __name__ == "__main__":

@@ -14,13 +14,46 @@ SUBMODULES = ["io", "cloud", "kinematics", "scan", "grooves", "contours", "inspe
 
 # Names the README and the issues use at the top level: they stay importable there.
 TOP_LEVEL = [
-    "KinematicChain", "Profiler", "Scan", "ab_mirror_support_points", "ac_head_transforms", "ac_table_rotate",
-    "calibrate_mount", "contour_error", "crop_box", "estimate_normals", "euclidean_clusters", "fit_grooves",
-    "inspect_grooves", "interpolate_poses", "knn_graph", "level_groove_frame", "match_contours", "nearest_neighbors",
-    "octree_simplify", "principal_curvatures", "profile_to_points", "random_downsample", "read_points", "read_scan_csv",
-    "remove_duplicates", "resample_polyline", "scan_to_wcs", "surface_variation", "uniform_downsample",
-    "voxel_downsample", "write_points", "write_scan_csv", "io", "synth", "plot", "cad",
-    "remove_statistical_outliers", "remove_radius_outliers", "read_mesh", "write_mesh",
+    "KinematicChain",
+    "Profiler",
+    "Scan",
+    "ab_mirror_support_points",
+    "ac_head_transforms",
+    "ac_table_rotate",
+    "calibrate_mount",
+    "contour_error",
+    "crop_box",
+    "estimate_normals",
+    "euclidean_clusters",
+    "fit_grooves",
+    "inspect_grooves",
+    "interpolate_poses",
+    "knn_graph",
+    "level_groove_frame",
+    "match_contours",
+    "nearest_neighbors",
+    "octree_simplify",
+    "principal_curvatures",
+    "profile_to_points",
+    "random_downsample",
+    "read_points",
+    "read_scan_csv",
+    "remove_duplicates",
+    "resample_polyline",
+    "scan_to_wcs",
+    "surface_variation",
+    "uniform_downsample",
+    "voxel_downsample",
+    "write_points",
+    "write_scan_csv",
+    "io",
+    "synth",
+    "plot",
+    "cad",
+    "remove_statistical_outliers",
+    "remove_radius_outliers",
+    "read_mesh",
+    "write_mesh",
 ]
 
 
@@ -41,14 +74,18 @@ def test_submodules_and_top_level_names():
 
 def test_older_names_still_work_and_say_the_new_one():
     p = np.random.default_rng(0).random((50, 3))
-    for old, new in [("statistical_outlier_removal", "remove_statistical_outliers"),
-                     ("radius_outlier_removal", "remove_radius_outliers"), ("ContourError", "ContourErrorResult")]:
+    for old, new in [
+        ("statistical_outlier_removal", "remove_statistical_outliers"),
+        ("radius_outlier_removal", "remove_radius_outliers"),
+        ("ContourError", "ContourErrorResult"),
+    ]:
         with pytest.warns(DeprecationWarning, match=new):
             assert getattr(machscan, old) is getattr(machscan, new)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
-        np.testing.assert_array_equal(machscan.statistical_outlier_removal(p, 5, 2.0),
-                                      machscan.remove_statistical_outliers(p, 5, 2.0))
+        np.testing.assert_array_equal(
+            machscan.statistical_outlier_removal(p, 5, 2.0), machscan.remove_statistical_outliers(p, 5, 2.0)
+        )
 
 
 def _names_and_parameters():
@@ -70,23 +107,40 @@ def test_one_spelling_the_ecosystems():
     british = re.compile(r"neighbour|centre|colour|normalis|serialis", re.IGNORECASE)
     bad = [n for n in _names_and_parameters() if british.search(n)]
     assert not bad, bad
-    assert not any(isinstance(v, type) and issubclass(v, Exception) and not k.endswith("Error")
-                   for k, v in vars(machscan).items())
+    assert not any(
+        isinstance(v, type) and issubclass(v, Exception) and not k.endswith("Error") for k, v in vars(machscan).items()
+    )
     # A result is not named like an exception.
     assert not [n for n in machscan.__all__ if n.endswith("Error") and not issubclass(getattr(machscan, n), Exception)]
 
 
-FILTERS = ["voxel_downsample", "remove_statistical_outliers", "remove_radius_outliers", "remove_duplicates", "crop_box",
-           "random_downsample", "uniform_downsample", "octree_simplify", "estimate_normals", "surface_variation",
-           "principal_curvatures", "knn_graph", "euclidean_clusters"]
+FILTERS = [
+    "voxel_downsample",
+    "remove_statistical_outliers",
+    "remove_radius_outliers",
+    "remove_duplicates",
+    "crop_box",
+    "random_downsample",
+    "uniform_downsample",
+    "octree_simplify",
+    "estimate_normals",
+    "surface_variation",
+    "principal_curvatures",
+    "knn_graph",
+    "euclidean_clusters",
+]
 
 
 def test_every_filter_takes_the_cloud_first_and_returns_indices_into_it():
     p = np.random.default_rng(1).random((300, 3)) * 10
     for name in FILTERS:
         assert next(iter(inspect.signature(getattr(machscan, name)).parameters)) == "points", name
-    for keep in (machscan.random_downsample(p, 40, seed=2), machscan.uniform_downsample(p, 7),
-                 machscan.remove_duplicates(p, 0.01), machscan.crop_box(p, (0, 0, 0), (5, 5, 5))):
+    for keep in (
+        machscan.random_downsample(p, 40, seed=2),
+        machscan.uniform_downsample(p, 7),
+        machscan.remove_duplicates(p, 0.01),
+        machscan.crop_box(p, (0, 0, 0), (5, 5, 5)),
+    ):
         assert keep.dtype == np.int64 and (np.diff(keep) > 0).all() and keep.max() < len(p)
     assert len(machscan.random_downsample(p, 1000)) == 300
 

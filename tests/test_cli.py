@@ -327,7 +327,7 @@ def test_compensate_simulate_then_from_its_files_equals_the_library(tmp_path, ca
     # The simulated skin writes its inputs; the file-based command on them gives the same CL file, and both
     # equal the library's match and compensation of the same data.
     sim = tmp_path / "sim"
-    assert main(["compensate", "--simulate", "--out", str(sim)]) == 0
+    assert main(["compensate", "--simulate", "--out", str(sim), "--spacing", "6", "--jacobian", "gradient"]) == 0
     out = capsys.readouterr().out
     assert "truth" in out and "less" in out
     files = tmp_path / "files"
@@ -341,6 +341,8 @@ def test_compensate_simulate_then_from_its_files_equals_the_library(tmp_path, ca
         str(sim / "matching.csv"),
         "--out",
         str(files),
+        "--jacobian",
+        "gradient",
     ]
     assert main(["compensate", *args]) == 0
     a = machscan.io.read_toolpath(sim / "compensated.cl")
@@ -353,7 +355,7 @@ def test_compensate_simulate_then_from_its_files_equals_the_library(tmp_path, ca
     scan = machscan.read_points(sim / "scan.ply")
     loc = np.loadtxt(sim / "locating.csv", delimiter=",", skiprows=1)
     grid = np.loadtxt(sim / "matching.csv", delimiter=",", skiprows=1)
-    m = machscan.isometric_match(theoretical, scan, loc[:, :3], loc[:, 3:], grid)
+    m = machscan.isometric_match(theoretical, scan, loc[:, :3], loc[:, 3:], grid, jacobian="gradient")
     tp = machscan.io.read_toolpath(sim / "theoretical.cl")
     p = machscan.compensate_toolpath(tp, grid, m.points, scan)
     np.testing.assert_allclose(b.points, p.points, atol=1e-9)

@@ -1,7 +1,6 @@
 """Clustering against Open3D, contour error against a brute-force transcription of paper 000
 eq (21)–(23), matching against scipy's assignment."""
 
-
 import numpy as np
 import open3d
 import pytest

@@ -1,7 +1,6 @@
 """Filters against Open3D's definitions on the same input: identical index sets (voxel
 centroids compared as sets, Open3D returns them in hash-map order)."""
 
-
 import numpy as np
 import open3d
 import pytest
@@ -34,6 +33,7 @@ def test_voxel_downsample_equals_open3d(name, p):
     got = machscan.voxel_downsample(p, size)
     ref = np.asarray(o3d_cloud(p).voxel_down_sample(size).points)
     assert got.shape == ref.shape
+
     def key(a):
         return a[np.lexsort(a.T[::-1])]
 

@@ -63,8 +63,12 @@ def test_default_call_measures_every_groove_shape_to_the_targets(shapes, shape):
     else:
         assert np.median(d) <= 0.015, np.median(d)
     # The shape is recognised: most frames are fitted by the model of their kind.
-    expected = {"v": {GrooveModel.V, GrooveModel.ROUND}, "u": {GrooveModel.U, GrooveModel.ROUND},
-                "u_walls": {GrooveModel.U, GrooveModel.ROUND}, "trapezoid": {GrooveModel.TRAPEZOID}}[shape]
+    expected = {
+        "v": {GrooveModel.V, GrooveModel.ROUND},
+        "u": {GrooveModel.U, GrooveModel.ROUND},
+        "u_walls": {GrooveModel.U, GrooveModel.ROUND},
+        "trapezoid": {GrooveModel.TRAPEZOID},
+    }[shape]
     assert np.isin(f.model[ok], list(expected)).mean() > 0.85
 
 
@@ -91,7 +95,7 @@ def test_a_groove_cut_by_the_window_edge_is_clipped():
     statuses = []
     for k in range(200):
         end = int(np.searchsorted(g.x, g.center[k, 0] + 0.25 * g.width[k]))
-        statuses.append(machscan.fit_grooves(g.x[:end], g.z[k:k + 1, :end]).status[0])
+        statuses.append(machscan.fit_grooves(g.x[:end], g.z[k : k + 1, :end]).status[0])
     statuses = np.array(statuses)
     assert not np.isin(statuses, (GrooveStatus.CONVERGED, GrooveStatus.MAX_ITERATIONS)).any()
     assert (statuses == GrooveStatus.CLIPPED).mean() > 0.9, np.bincount(statuses)
@@ -142,16 +146,16 @@ def test_paper_template_agrees_with_scipy_lm_on_the_same_levelled_frames():
             x0, _z0, d, w = p
             a, b = np.tanh(20 * (xs - x0 - w / 4)), np.tanh(20 * (xs - x0 + w / 4))
             sa, sb = 1 - a * a, 1 - b * b
-            return -np.column_stack([0.5 * d * 20 * (sb - sa), np.ones_like(xs), 0.5 * (a - b),
-                                     -0.25 * 0.5 * d * 20 * (sa + sb)])
+            return -np.column_stack([0.5 * d * 20 * (sb - sa), np.ones_like(xs), 0.5 * (a - b), -0.25 * 0.5 * d * 20 * (sa + sb)])
 
         start = [xs[np.argmin(zs)], np.median(zs), np.median(zs) - zs.min(), 0.5]
         ref = least_squares(resid, start, jac=jac, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15)
         if not (ref.success and fits.status[k] == GrooveStatus.CONVERGED):
             continue
         x0, z0 = lf.to_frame(ref.x[0], ref.x[1])
-        np.testing.assert_allclose([fits.x0[k], fits.z0[k], fits.depth[k], fits.width[k]],
-                                   [x0, z0, ref.x[2], ref.x[3]], rtol=0, atol=1e-6)
+        np.testing.assert_allclose(
+            [fits.x0[k], fits.z0[k], fits.depth[k], fits.width[k]], [x0, z0, ref.x[2], ref.x[3]], rtol=0, atol=1e-6
+        )
         compared += 1
     assert compared >= 195
 
@@ -210,8 +214,11 @@ def test_every_failed_frame_says_why_and_no_nan_hides(method):
     edge = template(X, -2.45, 0.0, 0.31, 0.48)
     fits = machscan.fit_grooves(X, np.vstack([good, flat, nan, sparse, edge]), template=method)
     assert list(fits.status) == [
-        GrooveStatus.CONVERGED, GrooveStatus.NO_GROOVE, GrooveStatus.TOO_FEW_VALID,
-        GrooveStatus.TOO_FEW_VALID, GrooveStatus.CLIPPED,
+        GrooveStatus.CONVERGED,
+        GrooveStatus.NO_GROOVE,
+        GrooveStatus.TOO_FEW_VALID,
+        GrooveStatus.TOO_FEW_VALID,
+        GrooveStatus.CLIPPED,
     ]
     # NaN only where the status says the frame was not fitted.
     assert np.isfinite(fits.depth[fits.ok]).all()
@@ -243,8 +250,7 @@ def test_spikes_do_not_move_the_fit(method):
         (lambda: machscan.fit_grooves(X, np.zeros((3, 200)), nominal_width=0), "nominal_width"),
         (lambda: machscan.fit_grooves(np.where(X > 0, np.nan, X), np.zeros((3, 200))), "x"),
         (lambda: machscan.fit_grooves(X, np.zeros((1, 200)), template="w"), "template"),
-        (lambda: machscan.fit_grooves(X, np.zeros((1, 200)), criteria=machscan.FitCriteria(step_tolerance=-1)),
-         "step_tolerance"),
+        (lambda: machscan.fit_grooves(X, np.zeros((1, 200)), criteria=machscan.FitCriteria(step_tolerance=-1)), "step_tolerance"),
         (lambda: machscan.fit_grooves(X, np.zeros((1, 200)), criteria={"max_iterations": 3}), "criteria"),
     ],
 )
@@ -265,8 +271,9 @@ def test_parallel_equals_sequential():
         """
     )
     digests = {
-        subprocess.run([sys.executable, "-c", script], env=dict(os.environ, RAYON_NUM_THREADS=t),
-                       capture_output=True, text=True, check=True).stdout
+        subprocess.run(
+            [sys.executable, "-c", script], env=dict(os.environ, RAYON_NUM_THREADS=t), capture_output=True, text=True, check=True
+        ).stdout
         for t in ("1", "2")
     }
     assert len(digests) == 1

@@ -57,8 +57,13 @@ def test_ply_float64_round_trip_is_exact(tmp_path, binary):
     np.testing.assert_array_equal(np.asarray(ref.points), p)
 
 
-WRITES = [("ply", dict(binary=True)), ("ply", dict(binary=False)), ("pcd", dict(binary=True)),
-          ("pcd", dict(binary=False)), ("pcd", dict(compressed=True))]
+WRITES = [
+    ("ply", dict(binary=True)),
+    ("ply", dict(binary=False)),
+    ("pcd", dict(binary=True)),
+    ("pcd", dict(binary=False)),
+    ("pcd", dict(compressed=True)),
+]
 
 
 @pytest.mark.parametrize("ext, kw", WRITES)
@@ -77,8 +82,9 @@ def test_default_files_open_in_open3d_legacy_and_tensor_readers(tmp_path, ext, k
     expect = f32.astype(str).astype(np.float64) if text else f32.astype(np.float64)
     legacy = open3d.io.read_point_cloud(str(path))
     np.testing.assert_array_equal(np.asarray(legacy.points), expect)
-    np.testing.assert_array_equal(np.asarray(legacy.normals), n.astype(np.float32).astype(str).astype(np.float64)
-                                  if text else n.astype(np.float32))
+    np.testing.assert_array_equal(
+        np.asarray(legacy.normals), n.astype(np.float32).astype(str).astype(np.float64) if text else n.astype(np.float32)
+    )
     tensor = open3d.t.io.read_point_cloud(str(path))
     np.testing.assert_array_equal(tensor.point.positions.numpy(), f32)
     np.testing.assert_array_equal(tensor.point.frame.numpy().ravel(), np.arange(400.0))
@@ -134,7 +140,7 @@ def _pcd_header(fields, sizes, types, n, data):
 def _lzf_literal(raw: bytes) -> bytes:
     out = bytearray()
     for k in range(0, len(raw), 32):
-        chunk = raw[k:k + 32]
+        chunk = raw[k : k + 32]
         out.append(len(chunk) - 1)
         out += chunk
     return bytes(out)
@@ -180,17 +186,28 @@ def _write(path, content):
 
 
 def bad_files(tmp_path):
-    hdr = (b"ply\nformat binary_little_endian 1.0\nelement vertex 10\nproperty float x\nproperty float y\n"
-           b"property float z\nend_header\n")
+    hdr = (
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 10\nproperty float x\nproperty float y\n"
+        b"property float z\nend_header\n"
+    )
     yield "truncated.ply", hdr + b"\0" * 50, "truncated"
-    yield "liar.ply", (b"ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
-                       b"end_header\n1 2 3\n"), "declares 5 vertices"
+    yield (
+        "liar.ply",
+        (b"ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n"),
+        "declares 5 vertices",
+    )
     yield "type.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n1\n", "unknown property type"
     yield "noend.ply", b"ply\nformat ascii 1.0\nelement vertex 1\n", "end_header"
     yield "noxyz.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float a\nend_header\n1\n", "x, y and z"
-    yield "face.ply", (b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                       b"element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                       b"0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "vertex 7"
+    yield (
+        "face.ply",
+        (
+            b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            b"element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            b"0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"
+        ),
+        "vertex 7",
+    )
     yield "notnum.pcd", _pcd_header(["x", "y", "z"], [4, 4, 4], ["F", "F", "F"], 2, "ascii") + b"1 2 3\n4 x 6\n", "not a number"
     yield "short.pcd", _pcd_header(["x", "y", "z"], [4, 4, 4], ["F", "F", "F"], 9, "binary") + b"\0" * 20, "truncated"
     raw = np.zeros(12, "<f4").tobytes()
@@ -238,19 +255,22 @@ def test_unknown_extensions_list_every_format():
     assert all(f".{ext}" in listed for ext in io.WRITE_FORMATS) and ".las" not in listed
 
 
-@pytest.mark.parametrize("call, arg", [
-    (lambda p: machscan.write_points(p / "a.ply", np.zeros((2, 3)), compressed=True), "compressed"),
-    (lambda p: machscan.write_points(p / "a.pcd", np.zeros((2, 3)), binary=False, compressed=True), "compressed"),
-    (lambda p: machscan.write_points(p / "a.ply", np.zeros((2, 3)), scalars={"x": [1, 2]}), "scalars"),
-    (lambda p: machscan.write_points(p / "a.pcd", np.zeros((2, 3)), scalars={"normal_x": [1, 2]}), "scalars"),
-    (lambda p: machscan.write_points(p / "a.ply", np.zeros((2, 3)), scalars={"a b": [1, 2]}), "scalars"),
-    (lambda p: machscan.write_points(p / "a.xyz", np.zeros((2, 3)), binary=True), "binary"),
-    (lambda p: machscan.write_points(p / "a.ply", np.zeros((2, 3)), dtype="float16"), "dtype"),
-    (lambda p: machscan.write_mesh(p / "a.stl", np.zeros((3, 3)), [[0, 1, 2]], dtype="float64"), "dtype"),
-    (lambda p: machscan.write_mesh(p / "a.pcd", np.zeros((3, 3)), [[0, 1, 2]]), "triangles"),
-    (lambda p: machscan.write_mesh(p / "a.ply", np.zeros((3, 3)), [[0, 1, 3]]), "triangles"),
-    (lambda p: machscan.write_mesh(p / "a.ply", np.zeros((3, 3)), [[0, 1, 1.5]]), "triangles"),
-])
+@pytest.mark.parametrize(
+    "call, arg",
+    [
+        (lambda p: machscan.write_points(p / "a.ply", np.zeros((2, 3)), compressed=True), "compressed"),
+        (lambda p: machscan.write_points(p / "a.pcd", np.zeros((2, 3)), binary=False, compressed=True), "compressed"),
+        (lambda p: machscan.write_points(p / "a.ply", np.zeros((2, 3)), scalars={"x": [1, 2]}), "scalars"),
+        (lambda p: machscan.write_points(p / "a.pcd", np.zeros((2, 3)), scalars={"normal_x": [1, 2]}), "scalars"),
+        (lambda p: machscan.write_points(p / "a.ply", np.zeros((2, 3)), scalars={"a b": [1, 2]}), "scalars"),
+        (lambda p: machscan.write_points(p / "a.xyz", np.zeros((2, 3)), binary=True), "binary"),
+        (lambda p: machscan.write_points(p / "a.ply", np.zeros((2, 3)), dtype="float16"), "dtype"),
+        (lambda p: machscan.write_mesh(p / "a.stl", np.zeros((3, 3)), [[0, 1, 2]], dtype="float64"), "dtype"),
+        (lambda p: machscan.write_mesh(p / "a.pcd", np.zeros((3, 3)), [[0, 1, 2]]), "triangles"),
+        (lambda p: machscan.write_mesh(p / "a.ply", np.zeros((3, 3)), [[0, 1, 3]]), "triangles"),
+        (lambda p: machscan.write_mesh(p / "a.ply", np.zeros((3, 3)), [[0, 1, 1.5]]), "triangles"),
+    ],
+)
 def test_contradictory_options_and_reserved_names_raise(tmp_path, call, arg):
     with pytest.raises(ValueError) as e:
         call(tmp_path)
@@ -274,8 +294,17 @@ def test_select_carries_normals_scalars_and_triangles(tmp_path):
         c.select(np.ones(5, bool))
 
 
-@pytest.mark.parametrize("ext, kw", [("pcd", dict(binary=True)), ("pcd", dict(binary=False)), ("pcd", dict(compressed=True)),
-                                      ("xyz", {}), ("csv", {}), ("ply", dict(binary=False))])
+@pytest.mark.parametrize(
+    "ext, kw",
+    [
+        ("pcd", dict(binary=True)),
+        ("pcd", dict(binary=False)),
+        ("pcd", dict(compressed=True)),
+        ("xyz", {}),
+        ("csv", {}),
+        ("ply", dict(binary=False)),
+    ],
+)
 def test_every_writer_round_trips_in_float64(tmp_path, ext, kw):
     rng = np.random.default_rng(5)
     p = rng.normal(0, 1500, (300, 3))
@@ -301,6 +330,7 @@ def test_text_files_refuse_normals(tmp_path):
 
 def test_las_round_trip_through_laspy(tmp_path):
     import laspy  # a test dependency (extras "test")
+
     p = np.array([[1000.125, 2000.25, 30.5], [1001.0, 2001.5, 31.0], [999.875, 1999.0, 29.75]])
     header = laspy.LasHeader(point_format=3, version="1.2")
     header.scales = [0.001, 0.001, 0.001]
@@ -368,8 +398,9 @@ def _corners(vertices, triangles):
     return np.asarray(vertices)[np.asarray(triangles)]
 
 
-@pytest.mark.parametrize("name, kw", [("b.stl", {}), ("b.stl", dict(binary=False)), ("b.obj", {}), ("b.ply", {}),
-                                      ("b.ply", dict(binary=False))])
+@pytest.mark.parametrize(
+    "name, kw", [("b.stl", {}), ("b.stl", dict(binary=False)), ("b.obj", {}), ("b.ply", {}), ("b.ply", dict(binary=False))]
+)
 def test_meshes_machscan_writes_read_equal_in_trimesh_open3d_and_machscan(tmp_path, name, kw):
     import trimesh
 

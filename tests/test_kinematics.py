@@ -93,7 +93,6 @@ def test_scan_to_wcs_matches_numpy_reference():
     np.testing.assert_array_equal(i2, gidx)
 
 
-
 def _eq6(p, ax, lat, lba):
     """Paper 002 eq (6), the printed closed form."""
     xl, yl, zl = p.T
@@ -114,9 +113,7 @@ def test_ab_mirror_support_matches_paper_002_eq6(seed):
     rng = np.random.default_rng(seed)
     n = 2000
     p = rng.uniform(-30, 30, (n, 3))
-    ax = np.column_stack(
-        [rng.uniform(-1500, 1500, (n, 3)), rng.uniform(-np.pi / 2, np.pi / 2, (n, 2))]
-    )
+    ax = np.column_stack([rng.uniform(-1500, 1500, (n, 3)), rng.uniform(-np.pi / 2, np.pi / 2, (n, 2))])
     lat = rng.uniform(-50, 50, 3) + [0, 0, 250]
     lba = rng.uniform(-50, 50, 3) + [0, 0, 150]
     got = machscan.ab_mirror_support_points(p, ax, lat, lba)
@@ -182,8 +179,14 @@ def _calibration_data(rng, mount, n_poses=8, per_pose=3200, noise=0.005):
     scs, wcs, axes = [], [], []
     for _ in range(n_poses):
         pose = np.array(
-            [rng.uniform(-200, 200), rng.uniform(-200, 200), rng.uniform(0, 100),
-             rng.uniform(-0.5, 0.5), rng.uniform(-np.pi, np.pi), rng.uniform(-np.pi, np.pi)]
+            [
+                rng.uniform(-200, 200),
+                rng.uniform(-200, 200),
+                rng.uniform(0, 100),
+                rng.uniform(-0.5, 0.5),
+                rng.uniform(-np.pi, np.pi),
+                rng.uniform(-np.pi, np.pi),
+            ]
         )
         x = np.linspace(-40, 40, per_pose)
         z = np.round(x / 10) * 2.0 + rng.uniform(-4, 4, per_pose)  # steps and a slope
@@ -246,6 +249,7 @@ def test_parallel_equals_sequential_in_python():
 
 
 # ---- bad input: a ValueError naming the argument, never a panic --------------------------------
+
 
 @pytest.mark.parametrize(
     "call, name",

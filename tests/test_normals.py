@@ -1,7 +1,6 @@
 """Normals against Open3D's estimate_normals on the same neighborhoods; curvature against
 spheres and cylinders of known radius."""
 
-
 import numpy as np
 import open3d
 import pytest
@@ -28,8 +27,12 @@ def o3d_normals(p, param):
     return np.asarray(pc.normals)
 
 
-CLOUDS = [("sphere", sphere()), ("cylinder", cylinder()), ("bun0", machscan.read_points(DATA / "pcl-bunny-icp" / "bun0.pcd")),
-          ("bunny mesh vertices", machscan.read_points(DATA / "stanford-bunny-mesh" / "stanford_bunny.ply"))]
+CLOUDS = [
+    ("sphere", sphere()),
+    ("cylinder", cylinder()),
+    ("bun0", machscan.read_points(DATA / "pcl-bunny-icp" / "bun0.pcd")),
+    ("bunny mesh vertices", machscan.read_points(DATA / "stanford-bunny-mesh" / "stanford_bunny.ply")),
+]
 
 
 @pytest.mark.parametrize("name, p", CLOUDS, ids=[c[0] for c in CLOUDS])

@@ -109,8 +109,9 @@ def test_contour_error_map_has_one_collection_per_contour(run):
     assert len(centers.get_offsets()) == np.isfinite(report.center_wcs).all(axis=1).sum()
     worst = max(report.contours, key=lambda c: c.error.max)
     (marker,) = [ln for ln in ax.get_lines() if ln.get_marker() == "x"]
-    np.testing.assert_allclose([marker.get_xdata()[0], marker.get_ydata()[0]],
-                               worst.theoretical[np.argmax(worst.error.errors), :2])
+    np.testing.assert_allclose(
+        [marker.get_xdata()[0], marker.get_ydata()[0]], worst.theoretical[np.argmax(worst.error.errors), :2]
+    )
 
 
 def test_error_decomposition_bars(run):
@@ -130,8 +131,7 @@ def test_error_decomposition_bars(run):
     for b, want in zip(bars, expected):
         np.testing.assert_allclose([p.get_height() for p in b], want)
     # Stacked: each part starts where the previous ends.
-    np.testing.assert_allclose([p.get_y() for p in bars[2]],
-                               np.array(expected[0]) + np.array(expected[1]))
+    np.testing.assert_allclose([p.get_y() for p in bars[2]], np.array(expected[0]) + np.array(expected[1]))
     assert f"bending {100 * d.bending_share:.1f} %" in ax.get_title()
     assert "mm" in ax.get_ylabel()
 

@@ -177,8 +177,11 @@ def test_slsqp_finds_no_more_even_pose_than_the_envelope_fit(notched_blank):
         return a[np.isfinite(a)]
 
     ref = scipy_optimize.minimize(
-        lambda x: np.var(allowance(x)), np.zeros(6), method="SLSQP",
-        constraints=[{"type": "ineq", "fun": allowance}], options=dict(eps=1e-4, maxiter=20, ftol=1e-12),
+        lambda x: np.var(allowance(x)),
+        np.zeros(6),
+        method="SLSQP",
+        constraints=[{"type": "ineq", "fun": allowance}],
+        options=dict(eps=1e-4, maxiter=20, ftol=1e-12),
     )
     a_ref, a = allowance(ref.x), ours.allowance[np.isfinite(ours.allowance)]
     assert a.min() >= -1e-9

@@ -72,7 +72,11 @@ def test_point_to_point_with_30_fixed_iterations_equals_open3d(bunny):
     src, tgt = bunny
     r = machscan.icp(src, tgt, 0.05, max_iterations=30, relative_fitness=0, relative_rmse=0)
     o3 = reg.registration_icp(
-        o3d_cloud(src), o3d_cloud(tgt), 0.05, np.eye(4), reg.TransformationEstimationPointToPoint(),
+        o3d_cloud(src),
+        o3d_cloud(tgt),
+        0.05,
+        np.eye(4),
+        reg.TransformationEstimationPointToPoint(),
         reg.ICPConvergenceCriteria(relative_fitness=0, relative_rmse=0, max_iteration=30),
     )
     assert r.iterations == 30 and len(r.history) == 30
@@ -87,8 +91,7 @@ def test_default_thresholds_give_open3ds_result(part, method):
     init = rigid((0.002, 0.001, -0.002), (0.05, 0.02, 0.0))
     r = machscan.icp(source, target, 1.0, init, method=method, target_normals=normals)
     estimation = (
-        reg.TransformationEstimationPointToPlane() if method == "point_to_plane"
-        else reg.TransformationEstimationPointToPoint()
+        reg.TransformationEstimationPointToPlane() if method == "point_to_plane" else reg.TransformationEstimationPointToPoint()
     )
     o3 = reg.registration_icp(o3d_cloud(source), o3d_cloud(target, normals), 1.0, init, estimation)
     assert np.abs(r.transformation - o3.transformation).max() < 1e-6
@@ -100,7 +103,11 @@ def test_point_to_plane_to_convergence_equals_open3d_and_recovers_the_truth(part
     crit = {"relative_fitness": 1e-12, "relative_rmse": 1e-12, "max_iterations": 100}
     r = machscan.icp(source, target, 2.0, method="point_to_plane", target_normals=normals, **crit)
     o3 = reg.registration_icp(
-        o3d_cloud(source), o3d_cloud(target, normals), 2.0, np.eye(4), reg.TransformationEstimationPointToPlane(),
+        o3d_cloud(source),
+        o3d_cloud(target, normals),
+        2.0,
+        np.eye(4),
+        reg.TransformationEstimationPointToPlane(),
         reg.ICPConvergenceCriteria(relative_fitness=1e-12, relative_rmse=1e-12, max_iteration=100),
     )
     assert r.converged

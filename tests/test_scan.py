@@ -48,30 +48,40 @@ def _random_scan(rng, f=12, n=16, axes=True, profiler=None):
     frames = rng.normal(0.0, 0.3, (f, n))
     frames[rng.random((f, n)) < 0.1] = SENTINEL
     frames[0, 3] = np.nan
-    poses = np.column_stack([
-        rng.uniform(-100, 100, (f, 3)),
-        rng.uniform(-0.5, 0.5, f),
-        rng.uniform(-3, 3, f),
-        rng.uniform(-6, 6, f),
-    ])
+    poses = np.column_stack(
+        [
+            rng.uniform(-100, 100, (f, 3)),
+            rng.uniform(-0.5, 0.5, f),
+            rng.uniform(-3, 3, f),
+            rng.uniform(-6, 6, f),
+        ]
+    )
     times = 0.25 + np.arange(f) / 2500.0
     kw = {}
     if axes:
         kw["axis_times"] = np.linspace(0.2, 0.3, 101)
         kw["axis_samples"] = rng.normal(size=(101, 6))
-    return Scan(frames, poses, times, prof, (-120.0, 35.0, 115.0),
-                (0.003, -0.002, 0.004, 0.6, -0.4, -140.0),
-                metadata={"operator": "test", "part": {"id": 7, "tags": ["a", "b"]},
-                          "gain": 1.5}, **kw)
+    return Scan(
+        frames,
+        poses,
+        times,
+        prof,
+        (-120.0, 35.0, 115.0),
+        (0.003, -0.002, 0.004, 0.6, -0.4, -140.0),
+        metadata={"operator": "test", "part": {"id": 7, "tags": ["a", "b"]}, "gain": 1.5},
+        **kw,
+    )
 
 
 def _random_axes(rng, f):
-    return np.column_stack([
-        rng.uniform(-500, 500, (f, 3)),
-        rng.uniform(-1.2, 1.2, f),
-        rng.uniform(-7, 7, f),
-        rng.uniform(-7, 7, f),
-    ])
+    return np.column_stack(
+        [
+            rng.uniform(-500, 500, (f, 3)),
+            rng.uniform(-1.2, 1.2, f),
+            rng.uniform(-7, 7, f),
+            rng.uniform(-7, 7, f),
+        ]
+    )
 
 
 def _assert_scans_equal(a: Scan, b: Scan):
@@ -106,13 +116,14 @@ def test_reference_rotations_are_right_handed():
 
 def test_reference_mount_rotation_matches_spec_k3_matrix():
     th, ps, ph = 0.31, -0.47, 1.13
-    ct, st, cs, ss, cf, sf = (math.cos(th), math.sin(th), math.cos(ps), math.sin(ps),
-                              math.cos(ph), math.sin(ph))
-    spec = np.array([
-        [ct * cf, ss * st * cf - cs * sf, cs * st * cf + ss * sf],
-        [ct * sf, ss * st * sf + cs * cf, cs * st * sf - ss * cf],
-        [-st, ss * ct, cs * ct],
-    ])
+    ct, st, cs, ss, cf, sf = (math.cos(th), math.sin(th), math.cos(ps), math.sin(ps), math.cos(ph), math.sin(ph))
+    spec = np.array(
+        [
+            [ct * cf, ss * st * cf - cs * sf, cs * st * cf + ss * sf],
+            [ct * sf, ss * st * sf + cs * cf, cs * st * sf - ss * cf],
+            [-st, ss * ct, cs * ct],
+        ]
+    )
     np.testing.assert_allclose(mount_rotation(th, ps, ph), spec, atol=1e-15)
 
 
@@ -125,17 +136,19 @@ def test_reference_chain_matches_spec_k2_k3_closed_form():
     assert T.shape == (50, 4, 4)
     for f in range(50):
         X, Y, Z, a, c, c2 = axes[f]
-        rt = np.array([
-            [math.cos(c), -math.sin(c) * math.cos(a), math.sin(c) * math.sin(a)],
-            [math.sin(c), math.cos(c) * math.cos(a), -math.cos(c) * math.sin(a)],
-            [0.0, math.sin(a), math.cos(a)],
-        ])
+        rt = np.array(
+            [
+                [math.cos(c), -math.sin(c) * math.cos(a), math.sin(c) * math.sin(a)],
+                [math.sin(c), math.cos(c) * math.cos(a), -math.cos(c) * math.sin(a)],
+                [0.0, math.sin(a), math.cos(a)],
+            ]
+        )
         wt = np.eye(4)
         wt[:3, :3] = rt
         wt[:3, 3] = (X, Y, Z)
-        tc2 = np.array([[math.cos(c2), -math.sin(c2), 0, L[0]],
-                        [math.sin(c2), math.cos(c2), 0, L[1]],
-                        [0, 0, 1, L[2]], [0, 0, 0, 1]])
+        tc2 = np.array(
+            [[math.cos(c2), -math.sin(c2), 0, L[0]], [math.sin(c2), math.cos(c2), 0, L[1]], [0, 0, 1, L[2]], [0, 0, 0, 1]]
+        )
         tm = np.eye(4)
         tm[:3, :3] = mount_rotation(*mount[:3])
         tm[:3, 3] = mount[3:]
@@ -188,8 +201,7 @@ def test_reference_interpolation_unwraps_rotary_axes():
 
 def test_profiler_sr7140_facts():
     p = Profiler.sr7140()
-    assert (p.readings, p.pitch, p.noise, p.frame_rate, p.name) == (3200, 0.025, 0.008, 2500.0,
-                                                                     "SR7140")
+    assert (p.readings, p.pitch, p.noise, p.frame_rate, p.name) == (3200, 0.025, 0.008, 2500.0, "SR7140")
     assert p.i0 == 1600.0 and p.center is None
     assert p.x[1600] == 0.0 and p.x[0] == -40.0
     assert p.line_direction == "x" and p.measuring_direction == "z"
@@ -236,9 +248,14 @@ def test_profiler_dict_round_trip():
 
 
 def _scan_args(f=5, n=16):
-    return dict(frames=np.zeros((f, n)), poses=np.zeros((f, 6)),
-                frame_times=np.arange(f) / 2500.0, profiler=_profiler(n),
-                c2_offset=(0.0, 0.0, 100.0), mount=np.zeros(6))
+    return dict(
+        frames=np.zeros((f, n)),
+        poses=np.zeros((f, 6)),
+        frame_times=np.arange(f) / 2500.0,
+        profiler=_profiler(n),
+        c2_offset=(0.0, 0.0, 100.0),
+        mount=np.zeros(6),
+    )
 
 
 def test_scan_converts_and_reports_sizes():
@@ -298,8 +315,7 @@ def test_scan_axis_samples_validation():
     with pytest.raises(ValueError, match=r"axis_times: .*sample 2"):
         Scan(**args, axis_times=[0.0, 1.0, 1.0], axis_samples=np.zeros((3, 6)))
     with pytest.raises(ValueError, match=r"axis_samples: row 1"):
-        Scan(**args, axis_times=[0.0, 1.0, 2.0],
-             axis_samples=[[0] * 6, [0, 0, np.nan, 0, 0, 0], [0] * 6])
+        Scan(**args, axis_times=[0.0, 1.0, 2.0], axis_samples=[[0] * 6, [0, 0, np.nan, 0, 0, 0], [0] * 6])
 
 
 def test_scan_select():
@@ -331,8 +347,9 @@ def test_save_load_round_trip_is_exact(tmp_path):
 
 
 def test_save_load_without_axis_samples_and_custom_profiler(tmp_path):
-    prof = Profiler(readings=16, pitch=0.1, center=7.25, valid_range=None, sentinel=None,
-                    name="custom", noise=None, frame_rate=None)
+    prof = Profiler(
+        readings=16, pitch=0.1, center=7.25, valid_range=None, sentinel=None, name="custom", noise=None, frame_rate=None
+    )
     s = _random_scan(np.random.default_rng(5), axes=False, profiler=prof)
     p = tmp_path / "scan_without_extension"
     s.save(p)
@@ -361,8 +378,7 @@ def test_load_rejects_foreign_npz(tmp_path):
 def test_csv_round_trip_is_exact(tmp_path, timestamps, header, delimiter):
     s = _random_scan(np.random.default_rng(6), axes=False)
     if not timestamps:  # without a time column the frame times come from the frame rate
-        s = Scan(s.frames, s.poses, np.arange(s.n_frames) / 2500.0, s.profiler, s.c2_offset,
-                 s.mount)
+        s = Scan(s.frames, s.poses, np.arange(s.n_frames) / 2500.0, s.profiler, s.c2_offset, s.mount)
     fp, pp = tmp_path / "frames.csv", tmp_path / "poses.csv"
     write_scan_csv(s, fp, pp, delimiter=delimiter, timestamps=timestamps, header=header)
     back = read_scan_csv(fp, pp, s.profiler, s.c2_offset, s.mount, delimiter=delimiter)
@@ -402,24 +418,43 @@ def test_csv_reads_small_files(csv_pair):
 @pytest.mark.parametrize(
     "which, lines, pattern",
     [
-        ("frames", ["t,r0,r1,r2", "0.0,1,2,3", "0.1,4,5", "0.2,7,8,9"],
-         r"frames_csv: '.*frames.csv', line 3: ragged row, expected 4 cells"),
-        ("frames", ["t,r0,r1,r2", "0.0,1,2,3", "0.1,4,5,6", "0.2,7,x8,9"],
-         r"frames_csv: '.*frames.csv', line 4, column 3: cannot read 'x8'"),
-        ("frames", ["0.0,1,2,3", "0.1,4,,6", "0.2,7,8,9"],
-         r"frames_csv: '.*', line 2, column 3: empty cell"),
-        ("frames", ["t,r0,r1,r2", "0.0,1,2,3,4,5", "0.1,4,5,6,7,8", "0.2,7,8,9,1,2"],
-         r"frames_csv: '.*', line 2: expected 3 cells .* or 4 cells .* got 6"),
-        ("frames", ["t,r0,r1,r2", "0.0,1,2,3", "0.1,4,5,6"],
-         r"poses_csv: '.*poses.csv' has 3 data rows but frames_csv '.*frames.csv' has 2"),
-        ("poses", ["t,X,Y,Z,A,C,C2", "0.0,1,2,3,0,0,0", "0.1,1,2,3,0,0", "0.2,1,2,3,0,0,0"],
-         r"poses_csv: '.*poses.csv', line 3: ragged row"),
-        ("poses", ["0.0,1,2,3,0,0,0", "0.15,1,2,3,0,0,0", "0.2,1,2,3,0,0,0"],
-         r"poses_csv: '.*', line 2: time 0.15 s differs from the frame time 0.1 s"),
-        ("poses", ["t,X,Y,Z,A,C,C2", "0.0,1,2,3,0,0,0", "0.1,1,nan,3,0,0,0", "0.2,1,2,3,0,0,0"],
-         r"poses_csv: '.*', line 3: pose is not finite"),
-        ("poses", ["0,1,2,3,0", "0,1,2,3,0", "0,1,2,3,0"],
-         r"poses_csv: '.*', line 1: expected 6 cells"),
+        (
+            "frames",
+            ["t,r0,r1,r2", "0.0,1,2,3", "0.1,4,5", "0.2,7,8,9"],
+            r"frames_csv: '.*frames.csv', line 3: ragged row, expected 4 cells",
+        ),
+        (
+            "frames",
+            ["t,r0,r1,r2", "0.0,1,2,3", "0.1,4,5,6", "0.2,7,x8,9"],
+            r"frames_csv: '.*frames.csv', line 4, column 3: cannot read 'x8'",
+        ),
+        ("frames", ["0.0,1,2,3", "0.1,4,,6", "0.2,7,8,9"], r"frames_csv: '.*', line 2, column 3: empty cell"),
+        (
+            "frames",
+            ["t,r0,r1,r2", "0.0,1,2,3,4,5", "0.1,4,5,6,7,8", "0.2,7,8,9,1,2"],
+            r"frames_csv: '.*', line 2: expected 3 cells .* or 4 cells .* got 6",
+        ),
+        (
+            "frames",
+            ["t,r0,r1,r2", "0.0,1,2,3", "0.1,4,5,6"],
+            r"poses_csv: '.*poses.csv' has 3 data rows but frames_csv '.*frames.csv' has 2",
+        ),
+        (
+            "poses",
+            ["t,X,Y,Z,A,C,C2", "0.0,1,2,3,0,0,0", "0.1,1,2,3,0,0", "0.2,1,2,3,0,0,0"],
+            r"poses_csv: '.*poses.csv', line 3: ragged row",
+        ),
+        (
+            "poses",
+            ["0.0,1,2,3,0,0,0", "0.15,1,2,3,0,0,0", "0.2,1,2,3,0,0,0"],
+            r"poses_csv: '.*', line 2: time 0.15 s differs from the frame time 0.1 s",
+        ),
+        (
+            "poses",
+            ["t,X,Y,Z,A,C,C2", "0.0,1,2,3,0,0,0", "0.1,1,nan,3,0,0,0", "0.2,1,2,3,0,0,0"],
+            r"poses_csv: '.*', line 3: pose is not finite",
+        ),
+        ("poses", ["0,1,2,3,0", "0,1,2,3,0", "0,1,2,3,0"], r"poses_csv: '.*', line 1: expected 6 cells"),
     ],
 )
 def test_csv_errors_name_file_and_line(csv_pair, which, lines, pattern):
@@ -488,10 +523,8 @@ def test_rust_scan_to_wcs_matches_reference():
     L = (-120.0, 35.0, 115.0)
     mount = (0.003, -0.002, 0.004, 0.6, -0.4, -140.0)
     for center in (None, 317.25):
-        got, gfi = machscan.scan_to_wcs(frames, axes, 0.025, L, mount, center=center,
-                                        valid_range=(-20.0, 20.0))
-        exp, efi = scan_to_wcs_np(frames, axes, 0.025, L, mount, center=center,
-                                  valid_range=(-20.0, 20.0))
+        got, gfi = machscan.scan_to_wcs(frames, axes, 0.025, L, mount, center=center, valid_range=(-20.0, 20.0))
+        exp, efi = scan_to_wcs_np(frames, axes, 0.025, L, mount, center=center, valid_range=(-20.0, 20.0))
         np.testing.assert_array_equal(gfi, efi)
         np.testing.assert_allclose(got, exp, rtol=0, atol=1e-9)
 
@@ -513,16 +546,13 @@ def test_rust_scan_methods_match_reference():
     s = _random_scan(rng, f=30, n=64)
     p = s.profiler
     pts, fi = s.wcs_points()
-    exp, efi = scan_to_wcs_np(s.frames, s.poses, p.pitch, s.c2_offset, s.mount,
-                              valid_range=p.valid_range)
+    exp, efi = scan_to_wcs_np(s.frames, s.poses, p.pitch, s.c2_offset, s.mount, valid_range=p.valid_range)
     np.testing.assert_array_equal(fi, efi)
     np.testing.assert_allclose(pts, exp, rtol=0, atol=1e-9)
     assert fi.size == int(s.valid_mask().sum())
     spts, _sfi = s.scs_points()
-    np.testing.assert_allclose(spts, profile_to_points_np(s.frames, p.pitch,
-                                                          valid_range=p.valid_range)[0], atol=1e-12)
-    np.testing.assert_allclose(s.transforms(), ac_head_transforms_np(s.poses, s.c2_offset, s.mount),
-                               atol=1e-10)
+    np.testing.assert_allclose(spts, profile_to_points_np(s.frames, p.pitch, valid_range=p.valid_range)[0], atol=1e-12)
+    np.testing.assert_allclose(s.transforms(), ac_head_transforms_np(s.poses, s.c2_offset, s.mount), atol=1e-10)
     # sentinel without a valid range: the Scan turns it into NaN before calling the core
     prof = Profiler(readings=64, pitch=0.025, sentinel=SENTINEL)
     s2 = Scan(s.frames, s.poses, s.frame_times, prof, s.c2_offset, s.mount)

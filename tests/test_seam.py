@@ -47,14 +47,18 @@ def forms(a):
 P = np.random.default_rng(0).normal(0, 10, (2000, 3)).round(3)
 
 
-@pytest.mark.parametrize("call", [
-    lambda p: machscan.voxel_downsample(p, 2.0),
-    lambda p: machscan.remove_statistical_outliers(p, 10, 2.0),
-    lambda p: machscan.estimate_normals(p, 10),
-    lambda p: machscan.knn_graph(p, 5)[0],
-    lambda p: machscan.crop_box(p, (-5, -5, -5), (5, 5, 5)),
-    lambda p: machscan.euclidean_clusters(p, 1.5),
-], ids=["voxel", "sor", "normals", "knn", "crop", "clusters"])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda p: machscan.voxel_downsample(p, 2.0),
+        lambda p: machscan.remove_statistical_outliers(p, 10, 2.0),
+        lambda p: machscan.estimate_normals(p, 10),
+        lambda p: machscan.knn_graph(p, 5)[0],
+        lambda p: machscan.crop_box(p, (-5, -5, -5), (5, 5, 5)),
+        lambda p: machscan.euclidean_clusters(p, 1.5),
+    ],
+    ids=["voxel", "sor", "normals", "knn", "crop", "clusters"],
+)
 def test_every_array_form_gives_the_same_answer(call):
     ref = call(P)
     for name, p in forms(P):
@@ -70,13 +74,16 @@ def test_groove_fit_takes_a_misaligned_frame_block():
     np.testing.assert_array_equal(got.status, ref.status)
 
 
-@pytest.mark.parametrize("bad, says", [
-    ([["a", "b", "c"]], "dtype <U1"),
-    ([[1 + 2j, 0, 0]], "dtype complex128"),
-    ([[1, 2, 3], [4, 5]], "cannot be converted"),
-    (np.zeros((4, 2)), r"expected shape \(N, 3\), got \(4, 2\)"),
-    (None, "got None"),
-])
+@pytest.mark.parametrize(
+    "bad, says",
+    [
+        ([["a", "b", "c"]], "dtype <U1"),
+        ([[1 + 2j, 0, 0]], "dtype complex128"),
+        ([[1, 2, 3], [4, 5]], "cannot be converted"),
+        (np.zeros((4, 2)), r"expected shape \(N, 3\), got \(4, 2\)"),
+        (None, "got None"),
+    ],
+)
 def test_what_is_not_points_is_refused_naming_the_argument(bad, says):
     with pytest.raises(ValueError, match=r"^points: .*" + says):
         machscan.voxel_downsample(bad, 1.0)
@@ -117,8 +124,19 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
         "_ToolpathArrays": _core.read_toolpath(path),
         "_MountCalibrationArrays": _core.calibrate_mount(scs, scs + 1.0),
         "_IcpArrays": _core.icp(
-            P[:50], P[:60], 1.0, init=None, target_normals=None, method="point_to_point", max_iterations=3,
-            relative_fitness=0.0, relative_rmse=0.0, robust=None, robust_scale=None, trim=0.0, mse_threshold=None,
+            P[:50],
+            P[:60],
+            1.0,
+            init=None,
+            target_normals=None,
+            method="point_to_point",
+            max_iterations=3,
+            relative_fitness=0.0,
+            relative_rmse=0.0,
+            robust=None,
+            robust_scale=None,
+            trim=0.0,
+            mse_threshold=None,
         ),
         "_IcpDefaults": _core.icp_defaults(),
         "_ProbeFitArrays": _core.probe_fit(
@@ -127,8 +145,19 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
         "_ClosestArrays": _core.closest_points(scs[:3], [[0, 1, 2]], scs),
         "_InsertedArrays": _core.insert_points(scs[:3], [[0, 1, 2]], scs[:1], tolerance=1e-6),
         "_IsometricMatchArrays": _core.isometric_match(
-            grid, None, grid, None, grid[[0, -1]], grid[[0, -1]], grid[[11, 13, 15, 25, 27, 29, 38, 40]], None,
-            jacobian="gradient", method="fmm", max_edge=None, max_iterations=1, tolerance=1e-3,
+            grid,
+            None,
+            grid,
+            None,
+            grid[[0, -1]],
+            grid[[0, -1]],
+            grid[[11, 13, 15, 25, 27, 29, 38, 40]],
+            None,
+            jacobian="gradient",
+            method="fmm",
+            max_edge=None,
+            max_iterations=1,
+            tolerance=1e-3,
         ),
         "_CompensatedArrays": _core.compensate_toolpath(
             grid[:5], grid, grid, grid, None, interpolation="cubic", normals="smooth", radius=None, max_edge=None
@@ -144,9 +173,20 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
 
 
 def _public_callables():
-    modules = [machscan, machscan.io, machscan.cloud, machscan.kinematics, machscan.grooves, machscan.contours,
-               machscan.inspection, machscan.scan, machscan.registration, machscan.mesh, machscan.matching,
-               machscan.toolpath]
+    modules = [
+        machscan,
+        machscan.io,
+        machscan.cloud,
+        machscan.kinematics,
+        machscan.grooves,
+        machscan.contours,
+        machscan.inspection,
+        machscan.scan,
+        machscan.registration,
+        machscan.mesh,
+        machscan.matching,
+        machscan.toolpath,
+    ]
     seen = {}
     for m in modules:
         for name in getattr(m, "__all__", []):
@@ -182,7 +222,8 @@ def test_defaults_shown_are_the_defaults_used():
             assert sig[k].default == v, k
     c = machscan.FitCriteria()
     assert (c.max_iterations, c.step_tolerance, c.gradient_tolerance, c.cost_tolerance) == tuple(
-        machscan.grooves.DEFAULTS[k] for k in ("max_iterations", "step_tolerance", "gradient_tolerance", "cost_tolerance"))
+        machscan.grooves.DEFAULTS[k] for k in ("max_iterations", "step_tolerance", "gradient_tolerance", "cost_tolerance")
+    )
 
 
 def test_the_gil_is_released_while_kernels_run():

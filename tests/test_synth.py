@@ -42,8 +42,9 @@ def clean():
 
 def _wcs(scan: Scan, mount=None):
     p = scan.profiler
-    return scan_to_wcs_np(scan.frames, scan.poses, p.pitch, scan.c2_offset,
-                          scan.mount if mount is None else mount, valid_range=p.valid_range)
+    return scan_to_wcs_np(
+        scan.frames, scan.poses, p.pitch, scan.c2_offset, scan.mount if mount is None else mount, valid_range=p.valid_range
+    )
 
 
 def _inside_plate(x, y, margin):
@@ -96,19 +97,20 @@ def test_layout_is_a_paper_like_template():
     polys = [s.polyline(0.05) for s in shapes]
     for p in polys:
         assert _inside_plate(p[:, 0], p[:, 1], 12.0 - 1e-6).all()
-    clearance = min(
-        cKDTree(polys[j]).query(polys[i])[0].min()
-        for i in range(11) for j in range(i + 1, 11)
-    )
+    clearance = min(cKDTree(polys[j]).query(polys[i])[0].min() for i in range(11) for j in range(i + 1, 11))
     assert clearance >= 8.0
     lengths = [s.length for s in shapes]
     assert len(set(np.round(lengths, 3))) == 11  # different sizes
 
 
-@pytest.mark.parametrize("shape", list(default_contours()) + [
-    ContourShape("rounded_rectangle", (50.0, 60.0), (20.0, 8.0), 3.0, angle=-0.7),
-    ContourShape("slot", (50.0, 60.0), (5.0, 15.0), 5.0, angle=2.5),
-])
+@pytest.mark.parametrize(
+    "shape",
+    list(default_contours())
+    + [
+        ContourShape("rounded_rectangle", (50.0, 60.0), (20.0, 8.0), 3.0, angle=-0.7),
+        ContourShape("slot", (50.0, 60.0), (5.0, 15.0), 5.0, angle=2.5),
+    ],
+)
 def test_contour_shape_closed_forms(shape):
     L = shape.length
     u = np.linspace(0.0, L, 2001)[:-1]
@@ -239,16 +241,14 @@ def test_true_center_is_the_frame_transform_of_its_scs_coordinates(noisy):
     # the center is on the engraved line, on the bent surface
     for k in range(truth.n_contours):
         sel = truth.frame_contour == k
-        np.testing.assert_allclose(truth.engraved_point(k, truth.center_u[sel]),
-                                   truth.center_wcs[sel], atol=1e-12)
+        np.testing.assert_allclose(truth.engraved_point(k, truth.center_u[sel]), truth.center_wcs[sel], atol=1e-12)
     c = truth.center_wcs
     np.testing.assert_allclose(c[:, 2], truth.deflection(c[:, 0], c[:, 1]), atol=1e-15)
     s, k, _ = truth.groove_signed_distance(c[:, 0], c[:, 1])
     np.testing.assert_allclose(s, 0.0, atol=1e-9)
     np.testing.assert_array_equal(k, truth.frame_contour)
     # the decomposition offset + local + bending is exact
-    recon = (truth.center_nominal + truth.center_offset
-             + truth.center_local[:, None] * truth.center_normal)
+    recon = truth.center_nominal + truth.center_offset + truth.center_local[:, None] * truth.center_normal
     recon[:, 2] += truth.center_bend
     np.testing.assert_allclose(recon, truth.center_wcs, atol=1e-12)
     # the groove appears near the middle of the line
@@ -313,8 +313,7 @@ def test_dropouts_runs_sentinel_and_flanks(noisy, clean):
     assert pairs.sum() > 0.4 * lost.sum()
     # the shadow next to the plate edge is lost, the table further out is measured
     x0, y0, x1, y1 = PLATE
-    dout = np.maximum(np.maximum(x0 - pts[:, 0], pts[:, 0] - x1),
-                      np.maximum(y0 - pts[:, 1], pts[:, 1] - y1))
+    dout = np.maximum(np.maximum(x0 - pts[:, 0], pts[:, 0] - x1), np.maximum(y0 - pts[:, 1], pts[:, 1] - y1))
     assert not (valid_clean[valid_clean] & ((dout > 0) & (dout < 0.8))).any()
     assert (dout > 0.8).sum() > 0
 
@@ -341,8 +340,7 @@ def test_poses_follow_the_closed_form(noisy):
     # P_t = p - (R_C2 d + L) with A = C = 0
     c2 = scan.poses[:, 5]
     d = scan.mount[3:]
-    rd = np.column_stack([np.cos(c2) * d[0] - np.sin(c2) * d[1],
-                          np.sin(c2) * d[0] + np.cos(c2) * d[1], np.full_like(c2, d[2])])
+    rd = np.column_stack([np.cos(c2) * d[0] - np.sin(c2) * d[1], np.sin(c2) * d[0] + np.cos(c2) * d[1], np.full_like(c2, d[2])])
     np.testing.assert_allclose(scan.poses[:, :3] + rd + scan.c2_offset, T[:, :3, 3], atol=1e-9)
 
 
@@ -380,8 +378,7 @@ def test_mount_error_is_in_the_truth_not_in_the_scan():
     np.testing.assert_array_equal(scan.mount, DEFAULT_MOUNT)
     np.testing.assert_allclose(truth.mount_true, np.asarray(DEFAULT_MOUNT) + err)
     pts_true, _ = _wcs(scan, truth.mount_true)
-    np.testing.assert_allclose(pts_true[:, 2], truth.height(pts_true[:, 0], pts_true[:, 1]),
-                               atol=1e-8)
+    np.testing.assert_allclose(pts_true[:, 2], truth.height(pts_true[:, 0], pts_true[:, 1]), atol=1e-8)
     pts_cal, _ = _wcs(scan)
     assert np.abs(pts_cal - pts_true).max() > 0.02
 
@@ -402,8 +399,10 @@ def test_groove_scan_rejects_bad_arguments(kwargs, name):
 
 
 def test_custom_contours_and_save_round_trip(tmp_path):
-    shapes = [ContourShape("circle", (100.0, 100.0), (30.0, 30.0), 30.0),
-              ContourShape("slot", (100.0, 30.0), (40.0, 8.0), 8.0, angle=0.1)]
+    shapes = [
+        ContourShape("circle", (100.0, 100.0), (30.0, 30.0), 30.0),
+        ContourShape("slot", (100.0, 30.0), (40.0, 8.0), 8.0, angle=0.1),
+    ]
     scan, truth = groove_scan(1, readings=200, keep_every=100, contours=shapes)
     assert truth.n_contours == 2 and set(truth.frame_contour) == {0, 1}
     p = tmp_path / "synth.npz"
@@ -430,8 +429,7 @@ def test_rust_wcs_points_of_synthetic_scan_match_reference(noisy):
 
 def test_rust_interpolated_poses_of_synthetic_scan(noisy):
     scan, _ = noisy
-    got = machscan.interpolate_poses(scan.axis_times, scan.axis_samples, scan.frame_times,
-                                     rotary=(3, 4, 5))
+    got = machscan.interpolate_poses(scan.axis_times, scan.axis_samples, scan.frame_times, rotary=(3, 4, 5))
     exp = interpolate_poses_np(scan.axis_times, scan.axis_samples, scan.frame_times)
     np.testing.assert_allclose(got, exp, rtol=0, atol=1e-9)
     np.testing.assert_allclose(got[:, 5], scan.poses[:, 5], atol=2e-3)

@@ -74,8 +74,9 @@ def _foot_point(part, q, u, v, h=1e-6):
 
     k = 1e-5
     for _ in range(20):
-        hess = np.stack([(gradient(u + k, v) - gradient(u - k, v)) / (2 * k),
-                         (gradient(u, v + k) - gradient(u, v - k)) / (2 * k)], axis=-1)
+        hess = np.stack(
+            [(gradient(u + k, v) - gradient(u - k, v)) / (2 * k), (gradient(u, v + k) - gradient(u, v - k)) / (2 * k)], axis=-1
+        )
         step = np.linalg.solve(hess, -gradient(u, v)[..., None])[..., 0]
         u, v = u + step[:, 0], v + step[:, 1]
     return part.surface(u, v)
@@ -131,8 +132,7 @@ def test_blade_normals_are_unit_and_perpendicular_to_tangents(blade):
     h = 1e-8
     u, v = np.repeat(JOINTS, 3), np.tile([0.0, 0.5, 1.0], 4)
     _, n = blade.surface(u, v)
-    for tangent in (blade.surface(u + h, v)[0] - blade.surface(u, v)[0],
-                    blade.surface(u, v)[0] - blade.surface(u - h, v)[0]):
+    for tangent in (blade.surface(u + h, v)[0] - blade.surface(u, v)[0], blade.surface(u, v)[0] - blade.surface(u - h, v)[0]):
         rel = np.abs(np.einsum("ij,ij->i", n, tangent)) / np.linalg.norm(tangent, axis=1)
         assert rel.max() < 1e-5
 

@@ -50,8 +50,10 @@ class ContourErrorResult:
     max: float
 
     def __repr__(self) -> str:
-        return (f"ContourErrorResult({len(self.errors)} points: {self.mean:.4f} ± {self.std:.4f} mm, "
-                f"max {self.max:.4f} mm, |E| = {np.linalg.norm(self.offset):.4f} mm)")
+        return (
+            f"ContourErrorResult({len(self.errors)} points: {self.mean:.4f} ± {self.std:.4f} mm, "
+            f"max {self.max:.4f} mm, |E| = {np.linalg.norm(self.offset):.4f} mm)"
+        )
 
 
 def contour_error(theoretical: ArrayLike, actual: ArrayLike, delta1: float = 1.0, delta2: float = 1.0) -> ContourErrorResult:

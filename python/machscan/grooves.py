@@ -209,17 +209,28 @@ class GrooveFits:
         return f"GrooveFits({len(self)} frames, {int(self.ok.sum())} converged)"
 
 
-def _options(template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid,
-             criteria) -> dict:
+def _options(
+    template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
+) -> dict:
     """The options dict of the core (the `_GrooveOptions` keys)."""
     c = FitCriteria() if criteria is None else criteria
     if not isinstance(c, FitCriteria):
         raise ValueError(f"criteria: expected a machscan.FitCriteria, got {type(c).__name__}")
-    return dict(template=template, alpha=alpha, nominal_width=nominal_width, window=window,
-                window_center=window_center, fit_alpha=fit_alpha, spike_threshold=spike_threshold,
-                min_depth=min_depth, min_valid=min_valid, max_iterations=c.max_iterations,
-                cost_tolerance=c.cost_tolerance, step_tolerance=c.step_tolerance,
-                gradient_tolerance=c.gradient_tolerance)
+    return dict(
+        template=template,
+        alpha=alpha,
+        nominal_width=nominal_width,
+        window=window,
+        window_center=window_center,
+        fit_alpha=fit_alpha,
+        spike_threshold=spike_threshold,
+        min_depth=min_depth,
+        min_valid=min_valid,
+        max_iterations=c.max_iterations,
+        cost_tolerance=c.cost_tolerance,
+        step_tolerance=c.step_tolerance,
+        gradient_tolerance=c.gradient_tolerance,
+    )
 
 
 def fit_grooves(
@@ -306,8 +317,9 @@ def fit_grooves(
     >>> fits = machscan.fit_grooves(x, z, window=200)
     >>> fits.width[fits.ok].mean(), fits.model_counts()
     """
-    options = _options(template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth,
-                       min_valid, criteria)
+    options = _options(
+        template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
+    )
     return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
 
 
@@ -355,8 +367,7 @@ class LevelledFrame:
         return c * x + s * z, -s * x + c * z
 
     def __repr__(self) -> str:
-        return (f"LevelledFrame({len(self.x)} readings, tilt={self.tilt:.3g} rad, {self.status.name}, "
-                f"{self.model.name})")
+        return f"LevelledFrame({len(self.x)} readings, tilt={self.tilt:.3g} rad, {self.status.name}, {self.model.name})"
 
 
 def level_groove_frame(
@@ -384,8 +395,9 @@ def level_groove_frame(
     >>> lf = machscan.level_groove_frame(x, z[0], window=200)
     >>> lf.model, lf.fit.width[0]
     """
-    options = _options(template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth,
-                       min_valid, criteria)
+    options = _options(
+        template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
+    )
     out = _core.view_groove_frame(x, z, options)
     fit = GrooveFits(**out.pop("fit"), template=template)
     return LevelledFrame(**out, fit=fit)

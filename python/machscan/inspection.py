@@ -66,8 +66,10 @@ class ContourResult:
     local: NDArray[np.float64]
 
     def __repr__(self) -> str:
-        return (f"ContourResult(CAD {self.cad_index}: {len(self.frames)} frames, width "
-                f"{self.width.mean():.4f} mm, depth {self.depth.mean():.4f} mm, error {self.error.mean:.4f} mm)")
+        return (
+            f"ContourResult(CAD {self.cad_index}: {len(self.frames)} frames, width "
+            f"{self.width.mean():.4f} mm, depth {self.depth.mean():.4f} mm, error {self.error.mean:.4f} mm)"
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,9 +152,11 @@ class GrooveReport:
         if self.contours or len(self.nearest_cad_distance) == 0:
             return None
         near = float(self.nearest_cad_distance.min())
-        return (f"no CAD contour within max_match_distance = {self.max_match_distance:g} mm of the "
-                f"{len(self.nearest_cad_distance)} scanned contours: the nearest CAD contour centroid is "
-                f"{near:.4g} mm away. Are the CAD contours in mm and in the workpiece coordinate system?")
+        return (
+            f"no CAD contour within max_match_distance = {self.max_match_distance:g} mm of the "
+            f"{len(self.nearest_cad_distance)} scanned contours: the nearest CAD contour centroid is "
+            f"{near:.4g} mm away. Are the CAD contours in mm and in the workpiece coordinate system?"
+        )
 
     @property
     def used(self) -> NDArray[np.bool_]:
@@ -165,14 +169,29 @@ class GrooveReport:
         """Paper 000 table 1: groove width and depth per contour (mean, std), mm."""
         rows: list[dict[str, float | int]] = []
         for c in self.contours:
-            rows.append({"contour": c.cad_index, "frames": len(c.frames), "width_mean": float(c.width.mean()),
-                         "width_std": float(c.width.std()), "depth_mean": float(c.depth.mean()),
-                         "depth_std": float(c.depth.std())})
+            rows.append(
+                {
+                    "contour": c.cad_index,
+                    "frames": len(c.frames),
+                    "width_mean": float(c.width.mean()),
+                    "width_std": float(c.width.std()),
+                    "depth_mean": float(c.depth.mean()),
+                    "depth_std": float(c.depth.std()),
+                }
+            )
         if self.contours:
             w = np.concatenate([c.width for c in self.contours])
             d = np.concatenate([c.depth for c in self.contours])
-            rows.append({"contour": -1, "frames": len(w), "width_mean": float(w.mean()), "width_std": float(w.std()),
-                         "depth_mean": float(d.mean()), "depth_std": float(d.std())})
+            rows.append(
+                {
+                    "contour": -1,
+                    "frames": len(w),
+                    "width_mean": float(w.mean()),
+                    "width_std": float(w.std()),
+                    "depth_mean": float(d.mean()),
+                    "depth_std": float(d.std()),
+                }
+            )
         return rows
 
     def contour_error_rows(self) -> list[dict[str, float | int]]:
@@ -180,50 +199,77 @@ class GrooveReport:
         and its offset, bending and local parts, mm. The last row (contour −1) is overall."""
         rows: list[dict[str, float | int]] = []
         for c in self.contours:
-            rows.append({"contour": c.cad_index, "points": len(c.error.errors), "error_mean": c.error.mean,
-                         "error_std": c.error.std, "error_max": c.error.max, "offset": c.offset_error,
-                         "bending_mean": float(c.bending.mean()), "bending_std": float(c.bending.std()),
-                         "local_mean": float(c.local.mean()), "local_std": float(c.local.std())})
+            rows.append(
+                {
+                    "contour": c.cad_index,
+                    "points": len(c.error.errors),
+                    "error_mean": c.error.mean,
+                    "error_std": c.error.std,
+                    "error_max": c.error.max,
+                    "offset": c.offset_error,
+                    "bending_mean": float(c.bending.mean()),
+                    "bending_std": float(c.bending.std()),
+                    "local_mean": float(c.local.mean()),
+                    "local_std": float(c.local.std()),
+                }
+            )
         if self.contours:
             e = np.concatenate([c.error.errors for c in self.contours])
             b = np.concatenate([c.bending for c in self.contours])
             lo = np.concatenate([c.local for c in self.contours])
             off = np.concatenate([np.full(len(c.error.errors), c.offset_error) for c in self.contours])
-            rows.append({"contour": -1, "points": len(e), "error_mean": float(e.mean()), "error_std": float(e.std()),
-                         "error_max": float(e.max()), "offset": float(off.mean()), "bending_mean": float(b.mean()),
-                         "bending_std": float(b.std()), "local_mean": float(lo.mean()), "local_std": float(lo.std())})
+            rows.append(
+                {
+                    "contour": -1,
+                    "points": len(e),
+                    "error_mean": float(e.mean()),
+                    "error_std": float(e.std()),
+                    "error_max": float(e.max()),
+                    "offset": float(off.mean()),
+                    "bending_mean": float(b.mean()),
+                    "bending_std": float(b.std()),
+                    "local_mean": float(lo.mean()),
+                    "local_std": float(lo.std()),
+                }
+            )
         return rows
 
     def width_depth_table(self) -> str:
         """Table 1 as text."""
-        lines = ["contour  frames   width (mm)          depth (mm)",
-                 "-------  ------   -----------------   -----------------"]
+        lines = ["contour  frames   width (mm)          depth (mm)", "-------  ------   -----------------   -----------------"]
         for r in self.width_depth_rows():
             name = "all" if r["contour"] == -1 else str(r["contour"])
-            lines.append(f"{name:>7}  {r['frames']:>6}   {r['width_mean']:.4f} ± {r['width_std']:.4f}   "
-                         f"{r['depth_mean']:.4f} ± {r['depth_std']:.4f}")
+            lines.append(
+                f"{name:>7}  {r['frames']:>6}   {r['width_mean']:.4f} ± {r['width_std']:.4f}   "
+                f"{r['depth_mean']:.4f} ± {r['depth_std']:.4f}"
+            )
         return "\n".join(lines)
 
     def contour_error_table(self) -> str:
         """Table 2 with the decomposition, as text."""
-        lines = ["contour  error (mm)          max (mm)  offset   bending             local",
-                 "-------  -----------------   --------  ------   -----------------   -----------------"]
+        lines = [
+            "contour  error (mm)          max (mm)  offset   bending             local",
+            "-------  -----------------   --------  ------   -----------------   -----------------",
+        ]
         for r in self.contour_error_rows():
             name = "all" if r["contour"] == -1 else str(r["contour"])
-            lines.append(f"{name:>7}  {r['error_mean']:.4f} ± {r['error_std']:.4f}   {r['error_max']:.4f}    "
-                         f"{r['offset']:.4f}   {r['bending_mean']:.4f} ± {r['bending_std']:.4f}   "
-                         f"{r['local_mean']:.4f} ± {r['local_std']:.4f}")
+            lines.append(
+                f"{name:>7}  {r['error_mean']:.4f} ± {r['error_std']:.4f}   {r['error_max']:.4f}    "
+                f"{r['offset']:.4f}   {r['bending_mean']:.4f} ± {r['bending_std']:.4f}   "
+                f"{r['local_mean']:.4f} ± {r['local_std']:.4f}"
+            )
         d = self.decomposition
         if d is not None:
-            lines.append(f"shares of the error: offset {100 * d.offset_share:.2f} %, bending {100 * d.bending_share:.2f} %, "
-                         f"local {100 * d.local_share:.2f} %")
+            lines.append(
+                f"shares of the error: offset {100 * d.offset_share:.2f} %, bending {100 * d.bending_share:.2f} %, "
+                f"local {100 * d.local_share:.2f} %"
+            )
         return "\n".join(lines)
 
     def summary(self) -> str:
         """Frames, fits, contours and both tables."""
         f = self.fits
-        lines = [f"groove inspection: {len(f)} frames, {int(f.ok.sum())} fitted; "
-                 f"{len(self.contours)} contours matched"]
+        lines = [f"groove inspection: {len(f)} frames, {int(f.ok.sum())} fitted; {len(self.contours)} contours matched"]
         bad = {k: v for k, v in f.counts().items() if v and k != "converged"}
         if bad:
             lines.append("  frames not fitted: " + ", ".join(f"{k} {v}" for k, v in bad.items()))
@@ -240,8 +286,7 @@ class GrooveReport:
         return "\n".join(lines)
 
     def __repr__(self) -> str:
-        return (f"GrooveReport({len(self.fits)} frames, {int(self.fits.ok.sum())} fitted, "
-                f"{len(self.contours)} contours)")
+        return f"GrooveReport({len(self.fits)} frames, {int(self.fits.ok.sum())} fitted, {len(self.contours)} contours)"
 
     def to_csv(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``frames.csv`` (per frame), ``widths.csv`` (table 1) and ``contour_errors.csv``
@@ -252,11 +297,24 @@ class GrooveReport:
         out.mkdir(parents=True, exist_ok=True)
         paths = []
         f = self.fits
-        frame_cols = {"frame": np.arange(len(f)), "status": f.status, "model": f.model, "suspect": self.suspect.astype(np.int64),
-                      "x0_scs": f.x0, "z0_scs": f.z0,
-                      "x_wcs": self.center_wcs[:, 0], "y_wcs": self.center_wcs[:, 1], "z_wcs": self.center_wcs[:, 2],
-                      "width": f.width, "depth": f.depth, "se_width": f.se_width, "se_depth": f.se_depth,
-                      "rms": f.rms, "cluster": self.cluster, "contour": self.contour}
+        frame_cols = {
+            "frame": np.arange(len(f)),
+            "status": f.status,
+            "model": f.model,
+            "suspect": self.suspect.astype(np.int64),
+            "x0_scs": f.x0,
+            "z0_scs": f.z0,
+            "x_wcs": self.center_wcs[:, 0],
+            "y_wcs": self.center_wcs[:, 1],
+            "z_wcs": self.center_wcs[:, 2],
+            "width": f.width,
+            "depth": f.depth,
+            "se_width": f.se_width,
+            "se_depth": f.se_depth,
+            "rms": f.rms,
+            "cluster": self.cluster,
+            "contour": self.contour,
+        }
         path = out / "frames.csv"
         with open(path, "w", newline="") as fh:
             w = csv.writer(fh)
@@ -284,6 +342,7 @@ def _cell(v: object) -> str | int:
 
 # ---- the bending surface ------------------------------------------------------------------
 
+
 def _exponents(degree: int) -> NDArray[np.int64]:
     return np.array([(i, j) for i in range(degree + 1) for j in range(degree + 1 - i)], dtype=np.int64)
 
@@ -309,6 +368,7 @@ def _fit_bending(x, y, dz, degree):
 
 
 # ---- the workflow -------------------------------------------------------------------------
+
 
 def _as_polylines(cad_contours: Sequence[ArrayLike] | NDArray[np.float64]) -> list[NDArray[np.float64]]:
     out = []
@@ -428,8 +488,7 @@ def inspect_grooves(
     prof = scan.profiler
     x = (np.arange(scan.n_readings) - prof.i0) * prof.pitch
     z = np.where(scan.valid_mask(), scan.frames, np.nan)
-    fits = fit_grooves(x, z, alpha=alpha, nominal_width=nominal_width, window=window, template=template,
-                       fit_alpha=fit_alpha)
+    fits = fit_grooves(x, z, alpha=alpha, nominal_width=nominal_width, window=window, template=template, fit_alpha=fit_alpha)
     if max_se_ratio is not None and not max_se_ratio > 0:
         raise ValueError(f"max_se_ratio: must be positive or None, got {max_se_ratio}")
     converged = fits.ok
@@ -462,8 +521,9 @@ def inspect_grooves(
     cad_centroids = np.array([p.mean(0) for p in theoretical])
     cl_centroids = np.array([center[cluster == c].mean(0) for c in range(n_clusters)]).reshape(-1, 3)
     match = match_contours(cl_centroids, cad_centroids, max_distance=max_match_distance)
-    nearest_cad = (np.linalg.norm(cl_centroids[:, None, :] - cad_centroids[None, :, :], axis=2).min(axis=1)
-                   if n_clusters else np.zeros(0))
+    nearest_cad = (
+        np.linalg.norm(cl_centroids[:, None, :] - cad_centroids[None, :, :], axis=2).min(axis=1) if n_clusters else np.zeros(0)
+    )
     contour = np.full(len(fits), -1, dtype=np.int64)
     for c, m in enumerate(match):
         if m >= 0:
@@ -501,18 +561,39 @@ def inspect_grooves(
             bend_p = np.abs(_poly_eval(ex, coef, p[:, 0], p[:, 1], bend_center, scale))
             flat_err = contour_error(p, flat)
             offset_error = float(np.linalg.norm(flat_err.offset))
-            results.append(ContourResult(cad_index=m, cluster=c, frames=frames, theoretical=p, actual=q,
-                                         width=fits.width[frames], depth=fits.depth[frames], error=err,
-                                         offset_error=offset_error, bending=bend_p, local=flat_err.deviations))
+            results.append(
+                ContourResult(
+                    cad_index=m,
+                    cluster=c,
+                    frames=frames,
+                    theoretical=p,
+                    actual=q,
+                    width=fits.width[frames],
+                    depth=fits.depth[frames],
+                    error=err,
+                    offset_error=offset_error,
+                    bending=bend_p,
+                    local=flat_err.deviations,
+                )
+            )
             totals += [offset_error * len(p), bend_p.sum(), flat_err.deviations.sum()]
             count += len(p)
         parts = totals / count
         shares = parts / parts.sum() if parts.sum() > 0 else np.zeros(3)
-        decomposition = Decomposition(offset=float(parts[0]), bending=float(parts[1]), local=float(parts[2]),
-                                      offset_share=float(shares[0]), bending_share=float(shares[1]),
-                                      local_share=float(shares[2]), bending_degree=degree,
-                                      bending_rms_residual=resid, exponents=ex, coefficients=coef,
-                                      center=bend_center, scale=scale)
+        decomposition = Decomposition(
+            offset=float(parts[0]),
+            bending=float(parts[1]),
+            local=float(parts[2]),
+            offset_share=float(shares[0]),
+            bending_share=float(shares[1]),
+            local_share=float(shares[2]),
+            bending_degree=degree,
+            bending_rms_residual=resid,
+            exponents=ex,
+            coefficients=coef,
+            center=bend_center,
+            scale=scale,
+        )
     matched_cad = {m for m, _ in pairs}
     return GrooveReport(
         fits=fits,
@@ -557,7 +638,7 @@ def _join_centers(q: NDArray[np.float64], spacing: float) -> NDArray[np.float64]
     out = []
     start = 0
     for end in list(cuts) + [len(pts) - 1]:
-        piece = pts[start:end + 1]
+        piece = pts[start : end + 1]
         out.append(piece if len(piece) == 1 else resample_polyline(piece, spacing, closed=False))
         start = end + 1
     return np.vstack(out)

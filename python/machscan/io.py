@@ -204,8 +204,9 @@ def _read_las(path: str | os.PathLike[str]) -> CloudFile:
         err = FileFormatError(f"{p}: not a readable LAS file ({e})")
         err.filename = p
         raise err from None
-    pts = np.column_stack([np.asarray(las.x, dtype=np.float64), np.asarray(las.y, dtype=np.float64),
-                           np.asarray(las.z, dtype=np.float64)])
+    pts = np.column_stack(
+        [np.asarray(las.x, dtype=np.float64), np.asarray(las.y, dtype=np.float64), np.asarray(las.z, dtype=np.float64)]
+    )
     scalars = {}
     for name in las.point_format.dimension_names:
         if name.lower() in ("x", "y", "z"):

@@ -76,8 +76,10 @@ class MountCalibration:
 
     def summary(self) -> str:
         """A table of the parameters with their standard errors."""
-        lines = [f"mount calibration: {len(self.residuals)} correspondences, "
-                 f"rms {self.rms * 1000:.2f} µm, {'converged' if self.converged else 'NOT converged'}"]
+        lines = [
+            f"mount calibration: {len(self.residuals)} correspondences, "
+            f"rms {self.rms * 1000:.2f} µm, {'converged' if self.converged else 'NOT converged'}"
+        ]
         for name, unit, v, s in zip(_NAMES, _UNITS, self.params, self.std_errors):
             if unit == "rad":
                 lines.append(f"  {name:>5} = {v: .6f} rad   ± {s * 1e3:.4f} mrad")
@@ -86,8 +88,10 @@ class MountCalibration:
         return "\n".join(lines)
 
     def __repr__(self) -> str:
-        return (f"MountCalibration(params={np.array2string(self.params, precision=6)}, "
-                f"rms={self.rms:.4g} mm, converged={self.converged})")
+        return (
+            f"MountCalibration(params={np.array2string(self.params, precision=6)}, "
+            f"rms={self.rms:.4g} mm, converged={self.converged})"
+        )
 
 
 def calibrate_mount(

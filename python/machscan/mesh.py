@@ -111,9 +111,7 @@ class InsertedPoints:
     landings: list[Landing]
 
 
-def insert_points(
-    vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, tolerance: float = 1e-6
-) -> InsertedPoints:
+def insert_points(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, tolerance: float = 1e-6) -> InsertedPoints:
     """Points of the surface as vertices of its mesh (SPEC S2; paper 002 §3.2, fig. 6), so that
     geodesic distances start and end exactly there. Each point, in order, goes to its closest
     point of the mesh: within ``tolerance`` of a vertex it is that vertex; within ``tolerance``

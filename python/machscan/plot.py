@@ -100,6 +100,7 @@ def _empty(ax: Axes, text: str) -> None:
 
 # ---- width and depth ------------------------------------------------------------------------
 
+
 def width_depth_along(
     report: GrooveReport,
     contour: int | None = None,
@@ -157,8 +158,15 @@ def width_depth_along(
             elif start > 0:
                 ax.axvline(start, color="0.6", lw=0.6)
         if not one:
-            aw.text(start + length / 2, 1.01, str(c.cad_index), transform=aw.get_xaxis_transform(),
-                    ha="center", va="bottom", fontsize="small")
+            aw.text(
+                start + length / 2,
+                1.01,
+                str(c.cad_index),
+                transform=aw.get_xaxis_transform(),
+                ha="center",
+                va="bottom",
+                fontsize="small",
+            )
         start += length
     if not chosen:
         _empty(aw, "no contour matched")
@@ -221,8 +229,10 @@ def width_depth_histograms(
         aw, ad = axes
         fig = aw.figure
     ok = report.used
-    for ax, v, name, col in ((aw, report.fits.width[ok], "groove width w (mm)", "tab:blue"),
-                             (ad, report.fits.depth[ok], "groove depth d (mm)", "tab:orange")):
+    for ax, v, name, col in (
+        (aw, report.fits.width[ok], "groove width w (mm)", "tab:blue"),
+        (ad, report.fits.depth[ok], "groove depth d (mm)", "tab:orange"),
+    ):
         ax.set_xlabel(name)
         ax.set_ylabel("frames")
         if len(v) == 0:
@@ -232,8 +242,9 @@ def width_depth_histograms(
         pad = 0.25 * max(hi - lo, 1e-6)
         lo, hi = lo - pad, hi + pad
         inside = (v >= lo) & (v <= hi)
-        ax.hist(v[inside], bins=bins, range=(lo, hi), color=col, alpha=0.75,
-                label=f"mean ± std: {v.mean():.4f} ± {v.std():.4f} mm")
+        ax.hist(
+            v[inside], bins=bins, range=(lo, hi), color=col, alpha=0.75, label=f"mean ± std: {v.mean():.4f} ± {v.std():.4f} mm"
+        )
         ax.axvline(float(v.mean()), color="k", lw=1.0)
         for k in (-1, 1):
             ax.axvline(float(v.mean() + k * v.std()), color="k", lw=0.8, ls="--")
@@ -246,6 +257,7 @@ def width_depth_histograms(
 
 
 # ---- contour error --------------------------------------------------------------------------
+
 
 def contour_error_map(
     report: GrooveReport,
@@ -344,8 +356,18 @@ def contour_error_map(
     ax.set_title(f"Contour error e_i: {all_e.mean():.4f} ± {all_e.std():.4f} mm over {len(report.contours)} contours")
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], ls="none", marker="x", color="red", ms=7, mew=2,
-                      label=f"max e = {worst.error.max:.4f} mm (contour {worst.cad_index})")]
+    handles = [
+        Line2D(
+            [],
+            [],
+            ls="none",
+            marker="x",
+            color="red",
+            ms=7,
+            mew=2,
+            label=f"max e = {worst.error.max:.4f} mm (contour {worst.cad_index})",
+        )
+    ]
     if show_centers:
         handles.insert(0, Line2D([], [], ls="none", marker=".", color="0.55", ms=6, label="measured groove centers"))
     if own_figure:
@@ -409,8 +431,10 @@ def error_decomposition(report: GrooveReport, *, ax: Axes | None = None) -> Figu
     ax.set_ylabel("mean error (mm)")
     ax.grid(True, axis="y", lw=0.3, alpha=0.5)
     ax.legend(loc="upper left", fontsize="small")
-    ax.set_title(f"Error decomposition: offset {100 * d.offset_share:.1f} %, bending {100 * d.bending_share:.1f} %, "
-                 f"local {100 * d.local_share:.1f} %")
+    ax.set_title(
+        f"Error decomposition: offset {100 * d.offset_share:.1f} %, bending {100 * d.bending_share:.1f} %, "
+        f"local {100 * d.local_share:.1f} %"
+    )
     return fig
 
 
@@ -472,6 +496,7 @@ def error_along(
 
 
 # ---- one frame ------------------------------------------------------------------------------
+
 
 def levelled_frame(
     x: ArrayLike,
@@ -543,9 +568,19 @@ def levelled_frame(
         raise ValueError(f"frame: {frame} is out of range for fits of {len(fits)} frames")
     if template is None:
         template = fits.template if fits is not None else GROOVE_DEFAULTS["template"]
-    lf = level_groove_frame(x, row, alpha, nominal_width, window, template=template, window_center=window_center,
-                            spike_threshold=spike_threshold, min_depth=min_depth, min_valid=min_valid)
-    if fits is not None and not np.array_equal(lf.fit.width, fits.width[frame:frame + 1], equal_nan=True):
+    lf = level_groove_frame(
+        x,
+        row,
+        alpha,
+        nominal_width,
+        window,
+        template=template,
+        window_center=window_center,
+        spike_threshold=spike_threshold,
+        min_depth=min_depth,
+        min_valid=min_valid,
+    )
+    if fits is not None and not np.array_equal(lf.fit.width, fits.width[frame : frame + 1], equal_nan=True):
         raise ValueError("fits: the frame's fit differs from this figure's: pass the settings the fits were made with")
     if ax is None:
         fig, ax = plt.subplots(figsize=(8.0, 4.0), layout="constrained")
@@ -559,17 +594,45 @@ def levelled_frame(
     w, d = float(lf.fit.width[0]), float(lf.fit.depth[0])
     if np.isfinite(w) and np.isfinite(d):
         x0l, z0l = lf.to_levelled(float(lf.fit.x0[0]), float(lf.fit.z0[0]))
-        ax.annotate("", xy=(x0l - w / 2, z0l), xytext=(x0l + w / 2, z0l),
-                    arrowprops=dict(arrowstyle="<->", color="0.25", lw=0.9, shrinkA=0, shrinkB=0))
+        ax.annotate(
+            "",
+            xy=(x0l - w / 2, z0l),
+            xytext=(x0l + w / 2, z0l),
+            arrowprops=dict(arrowstyle="<->", color="0.25", lw=0.9, shrinkA=0, shrinkB=0),
+        )
         box = dict(boxstyle="round,pad=0.2", fc="white", ec="none", alpha=0.85)
-        ax.annotate(f"w = {w:.3f} mm", xy=(x0l, z0l), xytext=(0, 14), textcoords="offset points", ha="center",
-                    va="bottom", fontsize="small", color="0.2", bbox=box)
-        ax.annotate("", xy=(x0l, z0l), xytext=(x0l, z0l - d),
-                    arrowprops=dict(arrowstyle="<->", color="0.25", lw=0.9, shrinkA=0, shrinkB=0))
-        ax.annotate(f"d = {d:.3f} mm", xy=(x0l + w / 2, z0l - d / 2), xytext=(8, 0), textcoords="offset points",
-                    ha="left", va="center", fontsize="small", color="0.2", bbox=box)
-        title = (f"Frame {frame}: w = {w:.4f} mm, d = {d:.4f} mm, rms {1000 * float(lf.fit.rms[0]):.1f} µm, "
-                 f"tilt {1000 * lf.tilt:.2f} mrad ({model}, {status.name.lower()})")
+        ax.annotate(
+            f"w = {w:.3f} mm",
+            xy=(x0l, z0l),
+            xytext=(0, 14),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize="small",
+            color="0.2",
+            bbox=box,
+        )
+        ax.annotate(
+            "",
+            xy=(x0l, z0l),
+            xytext=(x0l, z0l - d),
+            arrowprops=dict(arrowstyle="<->", color="0.25", lw=0.9, shrinkA=0, shrinkB=0),
+        )
+        ax.annotate(
+            f"d = {d:.3f} mm",
+            xy=(x0l + w / 2, z0l - d / 2),
+            xytext=(8, 0),
+            textcoords="offset points",
+            ha="left",
+            va="center",
+            fontsize="small",
+            color="0.2",
+            bbox=box,
+        )
+        title = (
+            f"Frame {frame}: w = {w:.4f} mm, d = {d:.4f} mm, rms {1000 * float(lf.fit.rms[0]):.1f} µm, "
+            f"tilt {1000 * lf.tilt:.2f} mrad ({model}, {status.name.lower()})"
+        )
     else:
         title = f"Frame {frame}: levelled readings, tilt {1000 * lf.tilt:.2f} mrad ({status.name.lower()})"
     ax.margins(y=0.15)
@@ -649,8 +712,9 @@ def allowance_map(
     lo, hi = float(a[finite].min()), float(a[finite].max())
     # A two-slope norm needs the centre strictly inside the range.
     span = max(hi - lo, 1e-9)
-    norm = TwoSlopeNorm(vcenter=min_allowance, vmin=min(lo, min_allowance - 1e-3 * span),
-                        vmax=max(hi, min_allowance + 1e-3 * span))
+    norm = TwoSlopeNorm(
+        vcenter=min_allowance, vmin=min(lo, min_allowance - 1e-3 * span), vmax=max(hi, min_allowance + 1e-3 * span)
+    )
     grey = keep & ~finite
     if grey.any():
         ax.scatter(*p[grey].T, s=2, color="0.6", lw=0)

@@ -323,9 +323,7 @@ class PositioningErrors:
         return "\n".join(rows)
 
 
-def positioning_errors(
-    measured: ArrayLike, model_points: ArrayLike, model_normals: ArrayLike | None = None
-) -> PositioningErrors:
+def positioning_errors(measured: ArrayLike, model_points: ArrayLike, model_normals: ArrayLike | None = None) -> PositioningErrors:
     """Positioning errors of measured points against the model (SPEC R5; paper 003 eq 11–14).
 
     The reference of each measured point p is the closest model point q; with
@@ -659,8 +657,18 @@ def _fit_round(points, normals, q, n, pose, commanded, directions, measured, pro
     nan3 = np.full_like(commanded, np.nan)
     if hit.sum() < 6:
         empty = np.zeros(0)
-        return ProbeRound(pose, commanded, directions, measured, nan3, np.full(len(q), np.nan),
-                          PositioningErrors(empty, empty, empty, empty), float("nan"), float("nan"), nan3[:, 0])
+        return ProbeRound(
+            pose,
+            commanded,
+            directions,
+            measured,
+            nan3,
+            np.full(len(q), np.nan),
+            PositioningErrors(empty, empty, empty, empty),
+            float("nan"),
+            float("nan"),
+            nan3[:, 0],
+        )
     fit = _core.probe_fit(measured[hit], q[hit], n[hit], probe_radius=probe_radius, init=pose)
     new = fit["transformation"]
     inverse = np.linalg.inv(new)

@@ -308,28 +308,19 @@ class Scan:
 
     def __post_init__(self) -> None:
         if not isinstance(self.profiler, Profiler):
-            raise ValueError(
-                f"profiler: expected a machscan.scan.Profiler, got {type(self.profiler).__name__}"
-            )
+            raise ValueError(f"profiler: expected a machscan.scan.Profiler, got {type(self.profiler).__name__}")
         n = self.profiler.readings
         frames = _as_f64(self.frames, "frames")
         if frames.ndim != 2 or frames.shape[1] != n:
-            raise ValueError(
-                f"frames: expected shape (F, {n}) (F frames of profiler.readings = {n}), "
-                f"got {frames.shape}"
-            )
+            raise ValueError(f"frames: expected shape (F, {n}) (F frames of profiler.readings = {n}), got {frames.shape}")
         f = frames.shape[0]
         poses = _as_f64(self.poses, "poses")
         if poses.shape != (f, 6):
-            raise ValueError(
-                f"poses: expected shape (F, 6) with F = {f} frames, got {poses.shape}"
-            )
+            raise ValueError(f"poses: expected shape (F, 6) with F = {f} frames, got {poses.shape}")
         _check_finite_rows(poses, "poses", "X, Y, Z, A, C, C2")
         times = _as_f64(self.frame_times, "frame_times")
         if times.shape != (f,):
-            raise ValueError(
-                f"frame_times: expected shape (F,) with F = {f} frames, got {times.shape}"
-            )
+            raise ValueError(f"frame_times: expected shape (F,) with F = {f} frames, got {times.shape}")
         _check_finite_rows(times, "frame_times", "time")
         if f > 1:
             bad = np.flatnonzero(np.diff(times) < 0.0)
@@ -345,9 +336,7 @@ class Scan:
         _check_finite_rows(c2, "c2_offset", "value")
         mount = _as_f64(self.mount, "mount")
         if mount.shape != (6,):
-            raise ValueError(
-                f"mount: expected shape (6,) (theta, psi, phi, dx, dy, dz), got {mount.shape}"
-            )
+            raise ValueError(f"mount: expected shape (6,) (theta, psi, phi, dx, dy, dz), got {mount.shape}")
         _check_finite_rows(mount, "mount", "value")
         if (self.axis_times is None) != (self.axis_samples is None):
             missing = "axis_samples" if self.axis_samples is None else "axis_times"
@@ -368,10 +357,7 @@ class Scan:
                     )
             asm = _as_f64(self.axis_samples, "axis_samples")
             if asm.shape != (at.size, 6):
-                raise ValueError(
-                    f"axis_samples: expected shape (S, 6) with S = {at.size} axis_times, "
-                    f"got {asm.shape}"
-                )
+                raise ValueError(f"axis_samples: expected shape (S, 6) with S = {at.size} axis_times, got {asm.shape}")
             _check_finite_rows(asm, "axis_samples", "X, Y, Z, A, C, C2")
         meta = {} if self.metadata is None else self.metadata
         if not isinstance(meta, Mapping):
@@ -430,9 +416,7 @@ class Scan:
             Frame of every point.
         """
         p = self.profiler
-        return _core.profile_to_points(
-            self.frames, p.pitch, center=p.center, valid_range=p.valid_range, sentinel=p.sentinel
-        )
+        return _core.profile_to_points(self.frames, p.pitch, center=p.center, valid_range=p.valid_range, sentinel=p.sentinel)
 
     def wcs_points(self) -> tuple[np.ndarray, np.ndarray]:
         """All valid readings as workpiece (WCS) points, through the AC + C2 chain (SPEC K2, K3).
@@ -472,9 +456,7 @@ class Scan:
         else:
             idx = np.asarray(idx)
             if idx.dtype == bool and idx.shape != (self.n_frames,):
-                raise ValueError(
-                    f"index: expected a boolean mask of shape ({self.n_frames},), got {idx.shape}"
-                )
+                raise ValueError(f"index: expected a boolean mask of shape ({self.n_frames},), got {idx.shape}")
         return Scan(
             frames=self.frames[idx],
             poses=self.poses[idx],
@@ -493,17 +475,13 @@ class Scan:
         f, n = self.frames.shape
         valid = float(self.valid_mask().mean()) if f * n else 0.0
         lines = [
-            f"Scan({f} frames x {n} readings, {self.duration:.3f} s, "
-            f"{100.0 * valid:.1f} % valid readings",
+            f"Scan({f} frames x {n} readings, {self.duration:.3f} s, {100.0 * valid:.1f} % valid readings",
             f"  profiler={self.profiler!r}",
             "  c2_offset=[" + ", ".join(f"{v:g}" for v in self.c2_offset) + "] mm, "
             "mount=[" + ", ".join(f"{v:g}" for v in self.mount) + "] (rad, mm)",
         ]
         if self.axis_times is not None:
-            lines.append(
-                f"  axis samples: {self.axis_times.size} over "
-                f"[{self.axis_times[0]:.3f}, {self.axis_times[-1]:.3f}] s"
-            )
+            lines.append(f"  axis samples: {self.axis_times.size} over [{self.axis_times[0]:.3f}, {self.axis_times[-1]:.3f}] s")
         if self.metadata:
             keys = ", ".join(sorted(self.metadata))
             lines.append(f"  metadata keys: {keys}")
@@ -627,16 +605,19 @@ def read_scan_csv(
     ...                      (0, 0, 0, 0, 0, -140))  # doctest: +SKIP
     """
     if not isinstance(profiler, Profiler):
-        raise ValueError(
-            f"profiler: expected a machscan.scan.Profiler, got {type(profiler).__name__}"
-        )
+        raise ValueError(f"profiler: expected a machscan.scan.Profiler, got {type(profiler).__name__}")
     n = profiler.readings
-    fdata, flines = _read_numeric_csv(frames_csv, "frames_csv", delimiter, (n, n + 1),
-                                      {n: "N readings", n + 1: "a timestamp and N readings"},
-                                      n_desc=f"N = profiler.readings = {n}")
-    pdata, plines = _read_numeric_csv(poses_csv, "poses_csv", delimiter, (6, 7),
-                                      {6: "X, Y, Z, A, C, C2", 7: "t, X, Y, Z, A, C, C2"},
-                                      n_desc="poses")
+    fdata, flines = _read_numeric_csv(
+        frames_csv,
+        "frames_csv",
+        delimiter,
+        (n, n + 1),
+        {n: "N readings", n + 1: "a timestamp and N readings"},
+        n_desc=f"N = profiler.readings = {n}",
+    )
+    pdata, plines = _read_numeric_csv(
+        poses_csv, "poses_csv", delimiter, (6, 7), {6: "X, Y, Z, A, C, C2", 7: "t, X, Y, Z, A, C, C2"}, n_desc="poses"
+    )
     ff, fp = os.fspath(frames_csv), os.fspath(poses_csv)
     if fdata.shape[0] != pdata.shape[0]:
         raise ValueError(
@@ -652,8 +633,7 @@ def read_scan_csv(
     bad = np.flatnonzero(~np.isfinite(poses).all(axis=1))
     if bad.size:
         raise ValueError(
-            f"poses_csv: {fp!r}, line {plines[bad[0]]}: pose is not finite "
-            f"({', '.join(repr(float(v)) for v in poses[bad[0]])})"
+            f"poses_csv: {fp!r}, line {plines[bad[0]]}: pose is not finite ({', '.join(repr(float(v)) for v in poses[bad[0]])})"
         )
     if ftimes is not None and ptimes is not None:
         off = np.flatnonzero(np.abs(ftimes - ptimes) > 1e-9)
@@ -736,10 +716,8 @@ def write_scan_csv(
     pcols = (["t"] if timestamps else []) + list(_AXES)
     fdata = np.column_stack([scan.frame_times, scan.frames]) if timestamps else scan.frames
     pdata = np.column_stack([scan.frame_times, scan.poses]) if timestamps else scan.poses
-    np.savetxt(os.fspath(frames_csv), fdata, fmt=fmt, delimiter=d,
-               header=d.join(fcols) if header else "", comments="")
-    np.savetxt(os.fspath(poses_csv), pdata, fmt=fmt, delimiter=d,
-               header=d.join(pcols) if header else "", comments="")
+    np.savetxt(os.fspath(frames_csv), fdata, fmt=fmt, delimiter=d, header=d.join(fcols) if header else "", comments="")
+    np.savetxt(os.fspath(poses_csv), pdata, fmt=fmt, delimiter=d, header=d.join(pcols) if header else "", comments="")
 
 
 # --------------------------------------------------------------------------------------------
@@ -776,8 +754,7 @@ def _check_finite_rows(a: np.ndarray, name: str, what: str) -> None:
         i = int(bad[0])
         vals = ", ".join(repr(float(v)) for v in a[i])
         raise ValueError(
-            f"{name}: row {i} is not finite ([{vals}]); expected {what} "
-            f"({bad.size} bad row{'s' if bad.size > 1 else ''} in all)"
+            f"{name}: row {i} is not finite ([{vals}]); expected {what} ({bad.size} bad row{'s' if bad.size > 1 else ''} in all)"
         )
 
 
@@ -789,8 +766,7 @@ def _is_number(cell: str) -> bool:
     return True
 
 
-def _read_numeric_csv(path, argname: str, delimiter: str, widths: tuple[int, ...],
-                      width_desc: dict[int, str], n_desc: str):
+def _read_numeric_csv(path, argname: str, delimiter: str, widths: tuple[int, ...], width_desc: dict[int, str], n_desc: str):
     """Parse a numeric CSV with an optional header line.
 
     Returns the (rows, cols) float64 array and the 1-based file line number of every row.
@@ -813,8 +789,7 @@ def _read_numeric_csv(path, argname: str, delimiter: str, widths: tuple[int, ...
     body = "\n".join(ln for _, ln in numbered)
     data = None
     try:
-        data = np.loadtxt(io.StringIO(body), delimiter=delimiter, dtype=np.float64, ndmin=2,
-                          comments=None)
+        data = np.loadtxt(io.StringIO(body), delimiter=delimiter, dtype=np.float64, ndmin=2, comments=None)
     except ValueError:
         data = None
     if data is not None and data.shape[1] in widths:
@@ -827,10 +802,7 @@ def _read_numeric_csv(path, argname: str, delimiter: str, widths: tuple[int, ...
             first_width = len(cells)
             if first_width not in widths:
                 choices = " or ".join(f"{w} cells ({width_desc[w]})" for w in widths)
-                raise ValueError(
-                    f"{argname}: {p!r}, line {lineno}: expected {choices} with {n_desc}, "
-                    f"got {first_width}"
-                )
+                raise ValueError(f"{argname}: {p!r}, line {lineno}: expected {choices} with {n_desc}, got {first_width}")
         elif len(cells) != first_width:
             raise ValueError(
                 f"{argname}: {p!r}, line {lineno}: ragged row, expected {first_width} cells "
@@ -840,13 +812,9 @@ def _read_numeric_csv(path, argname: str, delimiter: str, widths: tuple[int, ...
             cs = c.strip()
             if not cs:
                 raise ValueError(
-                    f"{argname}: {p!r}, line {lineno}, column {j + 1}: empty cell "
-                    "(write invalid readings as the sentinel or nan)"
+                    f"{argname}: {p!r}, line {lineno}, column {j + 1}: empty cell (write invalid readings as the sentinel or nan)"
                 )
             if not _is_number(cs):
-                raise ValueError(
-                    f"{argname}: {p!r}, line {lineno}, column {j + 1}: cannot read {cs!r} as "
-                    "a number"
-                )
+                raise ValueError(f"{argname}: {p!r}, line {lineno}, column {j + 1}: cannot read {cs!r} as a number")
     # loadtxt failed but every cell parses with float(): should not happen; be explicit.
     raise ValueError(f"{argname}: {p!r} could not be parsed as a numeric table")

@@ -255,8 +255,7 @@ class ContourShape:
         r = self.radius
         loops = np.floor(u / L)
         v = u - loops * L
-        lengths = [ey, 0.5 * math.pi * r, 2 * ex, 0.5 * math.pi * r, 2 * ey,
-                   0.5 * math.pi * r, 2 * ex, 0.5 * math.pi * r, ey]
+        lengths = [ey, 0.5 * math.pi * r, 2 * ex, 0.5 * math.pi * r, 2 * ey, 0.5 * math.pi * r, 2 * ex, 0.5 * math.pi * r, ey]
         starts = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
         turned = np.zeros_like(v)
         for k in (1, 3, 5, 7):
@@ -348,8 +347,9 @@ class PeriodicProfile:
         return float(np.sqrt(0.5 * np.sum(self.amplitudes**2)))
 
     @staticmethod
-    def random(rng: np.random.Generator, period: float, mean: float, rms: float,
-               wavelengths: tuple[float, float], n: int) -> PeriodicProfile:
+    def random(
+        rng: np.random.Generator, period: float, mean: float, rms: float, wavelengths: tuple[float, float], n: int
+    ) -> PeriodicProfile:
         """``n`` random harmonics with wavelengths in ``wavelengths`` (mm) and the given RMS."""
         kmin = max(1, math.ceil(period / wavelengths[1]))
         kmax = max(kmin, math.floor(period / wavelengths[0]))
@@ -375,8 +375,7 @@ class PeriodicProfile:
 
     def scaled(self, factor: float) -> PeriodicProfile:
         """The variation ``f - mean`` multiplied by ``factor``."""
-        return PeriodicProfile(self.period, self.mean, self.harmonics,
-                               self.amplitudes * factor, self.phases)
+        return PeriodicProfile(self.period, self.mean, self.harmonics, self.amplitudes * factor, self.phases)
 
 
 @dataclass(frozen=True, eq=False)
@@ -450,10 +449,10 @@ def _random_deflection(rng: np.random.Generator, bend: float) -> Deflection:
 # Groove cross-section
 # --------------------------------------------------------------------------------------------
 
-_LIP_OFFSET = 0.045    # lip crest outside the groove edge, mm
+_LIP_OFFSET = 0.045  # lip crest outside the groove edge, mm
 _LIP_HALF_WIDTH = 0.05  # half width of the lip bead, mm
-_TIP_RADIUS = 0.01      # the groove bottom rounded by the laser spot, mm (assumption)
-_EDGE_RADIUS = 0.01     # the top edges rounded, mm (assumption)
+_TIP_RADIUS = 0.01  # the groove bottom rounded by the laser spot, mm (assumption)
+_EDGE_RADIUS = 0.01  # the top edges rounded, mm (assumption)
 
 
 def _groove_section(s, width, depth, lip_in, lip_out):
@@ -475,13 +474,13 @@ def _groove_section(s, width, depth, lip_in, lip_out):
     d = depth.copy()
     for _ in range(30):
         d = depth + rt * (np.sqrt(1.0 + (d / a) ** 2) - 1.0)
-    m = d / a                                   # flank slope
+    m = d / a  # flank slope
     cos_t = 1.0 / np.sqrt(1.0 + m * m)
     sin_t = m * cos_t
-    x_tip = rt * sin_t                          # tip arc meets the flank
-    c_tip = -d + rt / cos_t                     # tip arc center height
-    x_c = a + re * (1.0 / cos_t - 1.0) / m      # edge arc center (on the surface's level - re)
-    x_edge = x_c - re * sin_t                   # edge arc meets the flank
+    x_tip = rt * sin_t  # tip arc meets the flank
+    c_tip = -d + rt / cos_t  # tip arc center height
+    x_c = a + re * (1.0 / cos_t - 1.0) / m  # edge arc center (on the surface's level - re)
+    x_edge = x_c - re * sin_t  # edge arc meets the flank
     tip = c_tip - np.sqrt(np.maximum(rt * rt - x * x, 0.0))
     flank_line = -d + m * x
     edge = -re + np.sqrt(np.maximum(re * re - (x - x_c) ** 2, 0.0))
@@ -672,8 +671,7 @@ def _groove_height_k(t: GrooveTruth | _Design, k: int, x, y):
     s = sdf - t.wiggle[k](u)
     lip = t.lip_profile[k](u)
     a = t.lip_asymmetry[k]
-    return _groove_section(s, t.width_profile[k](u), t.depth_profile[k](u),
-                           lip * (1.0 - a), lip * (1.0 + a))
+    return _groove_section(s, t.width_profile[k](u), t.depth_profile[k](u), lip * (1.0 - a), lip * (1.0 + a))
 
 
 @dataclass
@@ -710,9 +708,11 @@ def _make_design(rng: np.random.Generator, contours, bend: float) -> _Design:
         w_mean = float(np.clip(rng.normal(0.4806, 0.011), 0.45, 0.51))
         d_mean = float(np.clip(rng.normal(0.3124, 0.007), 0.295, 0.33))
         wp = PeriodicProfile.random(rng, L, w_mean, 0.008, (20.0, 200.0), 3).plus(
-            PeriodicProfile.random(rng, L, 0.0, 0.005, (1.0, 4.0), 4))
+            PeriodicProfile.random(rng, L, 0.0, 0.005, (1.0, 4.0), 4)
+        )
         dp = PeriodicProfile.random(rng, L, d_mean, 0.008, (20.0, 200.0), 3).plus(
-            PeriodicProfile.random(rng, L, 0.0, 0.005, (1.0, 4.0), 4))
+            PeriodicProfile.random(rng, L, 0.0, 0.005, (1.0, 4.0), 4)
+        )
         lp_mean = float(rng.uniform(0.012, 0.024))
         lp = PeriodicProfile.random(rng, L, lp_mean, 0.003, (2.0, 30.0), 4)
         if lp.bound > 0.6 * lp_mean:  # keep the lips positive (>= 0.4 of the mean)
@@ -724,8 +724,7 @@ def _make_design(rng: np.random.Generator, contours, bend: float) -> _Design:
         w_max = wp.mean + wp.bound
         band[i] = 0.5 * w_max + _LIP_OFFSET + _LIP_HALF_WIDTH + wg.bound + 1e-6
     deflection = _random_deflection(rng, bend)
-    return _Design(tuple(contours), offsets, tuple(wiggle), tuple(widths), tuple(depths),
-                   tuple(lips), lip_asym, deflection, band)
+    return _Design(tuple(contours), offsets, tuple(wiggle), tuple(widths), tuple(depths), tuple(lips), lip_asym, deflection, band)
 
 
 # --------------------------------------------------------------------------------------------
@@ -748,11 +747,13 @@ def _mount_rotation(theta, psi, phi):
     ct, st = math.cos(theta), math.sin(theta)
     cs, ss = math.cos(psi), math.sin(psi)
     cf, sf = math.cos(phi), math.sin(phi)
-    return np.array([
-        [ct * cf, ss * st * cf - cs * sf, cs * st * cf + ss * sf],
-        [ct * sf, ss * st * sf + cs * cf, cs * st * sf - ss * cf],
-        [-st, ss * ct, cs * ct],
-    ])
+    return np.array(
+        [
+            [ct * cf, ss * st * cf - cs * sf, cs * st * cf + ss * sf],
+            [ct * sf, ss * st * sf + cs * cf, cs * st * sf - ss * cf],
+            [-st, ss * ct, cs * ct],
+        ]
+    )
 
 
 def _transforms_a0c0(poses, c2_offset, mount):
@@ -871,8 +872,7 @@ def groove_scan(
         raise ValueError(f"bend: expected a non-negative peak deflection in mm, got {bend!r}")
     if feed <= 0.0:
         raise ValueError(f"feed: expected a positive speed in mm/s, got {feed!r}")
-    for name, v in (("dropout", dropout), ("flank_dropout", flank_dropout),
-                    ("spike_rate", spike_rate)):
+    for name, v in (("dropout", dropout), ("flank_dropout", flank_dropout), ("spike_rate", spike_rate)):
         if not 0.0 <= v < 1.0:
             raise ValueError(f"{name}: expected a probability in [0, 1), got {v!r}")
     profiler = Profiler.sr7140(readings=readings)
@@ -881,14 +881,12 @@ def groove_scan(
         raise ValueError(f"noise: expected a non-negative sigma in mm, got {noise!r}")
     c2_offset = np.asarray(c2_offset, dtype=np.float64).reshape(3)
     mount = np.asarray(mount, dtype=np.float64).reshape(6)
-    mount_true = mount + (0.0 if mount_error is None else
-                          np.asarray(mount_error, dtype=np.float64).reshape(6))
+    mount_true = mount + (0.0 if mount_error is None else np.asarray(mount_error, dtype=np.float64).reshape(6))
     shapes = default_contours() if contours is None else tuple(contours)
     x0p, y0p, x1p, y1p = PLATE
     for k, sh in enumerate(shapes):
         pl = sh.polyline(0.5)
-        if pl[:, 0].min() < x0p + 1 or pl[:, 0].max() > x1p - 1 or pl[:, 1].min() < y0p + 1 \
-                or pl[:, 1].max() > y1p - 1:
+        if pl[:, 0].min() < x0p + 1 or pl[:, 0].max() > x1p - 1 or pl[:, 1].min() < y0p + 1 or pl[:, 1].max() > y1p - 1:
             raise ValueError(f"contours: contour {k} does not lie on the plate {PLATE}")
 
     seeds = np.random.SeedSequence(seed).spawn(2)
@@ -1079,8 +1077,7 @@ def groove_scan(
         def plane_dist(u, k=k, ny=ny, tr=tr):
             xy = _engraved_xy(shapes[k], design.offsets[k], design.wiggle[k], u)
             zz = deflection(xy[:, 0], xy[:, 1])
-            return ((xy[:, 0] - tr[:, 0]) * ny[:, 0] + (xy[:, 1] - tr[:, 1]) * ny[:, 1]
-                    + (zz - tr[:, 2]) * ny[:, 2])
+            return (xy[:, 0] - tr[:, 0]) * ny[:, 0] + (xy[:, 1] - tr[:, 1]) * ny[:, 1] + (zz - tr[:, 2]) * ny[:, 2]
 
         u = frame_u[sel].copy()
         du = 1e-4
@@ -1100,10 +1097,12 @@ def groove_scan(
     center_bend = deflection(center_xy[:, 0], center_xy[:, 1])
     center_wcs = np.column_stack([center_xy, center_bend])
     rel = center_wcs - trans
-    center_scs = np.column_stack([
-        np.einsum("fi,fi->f", rot[:, :, 0], rel),
-        np.einsum("fi,fi->f", rot[:, :, 2], rel),
-    ])
+    center_scs = np.column_stack(
+        [
+            np.einsum("fi,fi->f", rot[:, :, 0], rel),
+            np.einsum("fi,fi->f", rot[:, :, 2], rel),
+        ]
+    )
     width = np.zeros(nf)
     depth = np.zeros(nf)
     center_nominal = np.zeros((nf, 3))
@@ -1214,15 +1213,23 @@ class SurfaceError:
     outlier_threshold: float
 
     def __repr__(self) -> str:
-        return (f"SurfaceError(n={self.n:,}, mean={self.mean * 1e3:.2f} um, "
-                f"rms={self.rms * 1e3:.2f} um, robust sigma={self.robust_sigma * 1e3:.2f} um, "
-                f"max |e|={self.max_abs * 1e3:.1f} um, {self.n_outliers} outliers "
-                f"> {self.outlier_threshold * 1e3:.0f} um)")
+        return (
+            f"SurfaceError(n={self.n:,}, mean={self.mean * 1e3:.2f} um, "
+            f"rms={self.rms * 1e3:.2f} um, robust sigma={self.robust_sigma * 1e3:.2f} um, "
+            f"max |e|={self.max_abs * 1e3:.1f} um, {self.n_outliers} outliers "
+            f"> {self.outlier_threshold * 1e3:.0f} um)"
+        )
 
 
-def surface_error(points, frame_index, truth: GrooveTruth, *, clearance: float = 1.0,
-                  edge_margin: float = 1.0, outlier_threshold: float | None = None
-                  ) -> SurfaceError:
+def surface_error(
+    points,
+    frame_index,
+    truth: GrooveTruth,
+    *,
+    clearance: float = 1.0,
+    edge_margin: float = 1.0,
+    outlier_threshold: float | None = None,
+) -> SurfaceError:
     """Compare workpiece points with the true bent surface, away from grooves and plate edges.
 
     A round-trip check of the kinematics on a synthetic scan: the points of the readings that
@@ -1251,25 +1258,21 @@ def surface_error(points, frame_index, truth: GrooveTruth, *, clearance: float =
     if p.ndim != 2 or p.shape[1] != 3:
         raise ValueError(f"points: expected shape (M, 3), got {p.shape}")
     if frame_index is not None and np.shape(frame_index) != (p.shape[0],):
-        raise ValueError(
-            f"frame_index: expected shape ({p.shape[0]},), got {np.shape(frame_index)}")
+        raise ValueError(f"frame_index: expected shape ({p.shape[0]},), got {np.shape(frame_index)}")
     x, y, z = p[:, 0], p[:, 1], p[:, 2]
     x0, y0, x1, y1 = truth.plate
-    keep = np.flatnonzero((x > x0 + edge_margin) & (x < x1 - edge_margin)
-                          & (y > y0 + edge_margin) & (y < y1 - edge_margin))
+    keep = np.flatnonzero((x > x0 + edge_margin) & (x < x1 - edge_margin) & (y > y0 + edge_margin) & (y < y1 - edge_margin))
     # A 0.5 mm grid over the plate says which contour, if any, may be within reach of a cell;
     # the exact signed distance is then evaluated only for the points of those cells.
     cell = 0.5
     nx = math.ceil((x1 - x0) / cell)
     ny = math.ceil((y1 - y0) / cell)
-    gx, gy = np.meshgrid(x0 + (np.arange(nx) + 0.5) * cell, y0 + (np.arange(ny) + 0.5) * cell,
-                         indexing="ij")
+    gx, gy = np.meshgrid(x0 + (np.arange(nx) + 0.5) * cell, y0 + (np.arange(ny) + 0.5) * cell, indexing="ij")
     owner = np.full((nx, ny), -1, dtype=np.int64)
     reach = np.zeros(len(truth.contours))
     for k, shape in enumerate(truth.contours):
         reach[k] = clearance + float(np.hypot(*truth.offsets[k])) + truth.wiggle[k].bound
-        g = shape.signed_distance(np.stack([gx - truth.offsets[k, 0], gy - truth.offsets[k, 1]],
-                                           axis=-1))
+        g = shape.signed_distance(np.stack([gx - truth.offsets[k, 0], gy - truth.offsets[k, 1]], axis=-1))
         owner[np.abs(g) < reach[k] + cell] = k  # cell half-diagonal < cell
     xk, yk = x[keep], y[keep]
     ix = np.clip(((xk - x0) * (1.0 / cell)).astype(np.int64), 0, nx - 1)
@@ -1279,8 +1282,7 @@ def surface_error(points, frame_index, truth: GrooveTruth, *, clearance: float =
     for k, shape in enumerate(truth.contours):
         sel = np.flatnonzero(own == k)
         if sel.size:
-            sdf = shape.signed_distance(np.column_stack([xk[sel] - truth.offsets[k, 0],
-                                                         yk[sel] - truth.offsets[k, 1]]))
+            sdf = shape.signed_distance(np.column_stack([xk[sel] - truth.offsets[k, 0], yk[sel] - truth.offsets[k, 1]]))
             away[sel[np.abs(sdf) < reach[k]]] = False
     keep = keep[away]
     e = z[keep] - truth.deflection(x[keep], y[keep])
@@ -1526,8 +1528,7 @@ def groove_frames(
     return GrooveFrames(x=x, z=z, width=width, depth=depth, center=center, tilt=tilt, shape=shape)
 
 
-def flat_plate_scan(seed: int = 0, *, readings: int = 400, keep_every: int = 400,
-                    **kwargs) -> tuple[Scan, GrooveTruth]:
+def flat_plate_scan(seed: int = 0, *, readings: int = 400, keep_every: int = 400, **kwargs) -> tuple[Scan, GrooveTruth]:
     """A small, quick :func:`groove_scan` of the unbent plate (about 360 frames of 400 readings).
 
     Keyword arguments are passed on to :func:`groove_scan` (``bend`` defaults to 0).
@@ -1536,8 +1537,7 @@ def flat_plate_scan(seed: int = 0, *, readings: int = 400, keep_every: int = 400
     return groove_scan(seed, readings=readings, keep_every=keep_every, **kwargs)
 
 
-def pocket_plate(seed: int = 0, *, spacing: float = 0.25, noise: float = 0.003,
-                 wall_angle: float = 90.0) -> np.ndarray:
+def pocket_plate(seed: int = 0, *, spacing: float = 0.25, noise: float = 0.003, wall_angle: float = 90.0) -> np.ndarray:
     """A scanned pocket plate for simplification studies: sharp features and a free boundary.
 
     A 120 mm x 80 mm plate (top at z = 0) with a notch cut from its outline (x > 90, y > 55),
