@@ -976,23 +976,7 @@ mod tests {
         norm(sub(a, b))
     }
 
-    /// An n × m flat grid of spacing h, split along alternating diagonals.
-    fn grid(n: usize, m: usize, h: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-        let v = (0..n * m).map(|i| [(i % n) as f64 * h, (i / n) as f64 * h, 0.0]).collect();
-        let mut f = Vec::new();
-        for j in 0..m - 1 {
-            for i in 0..n - 1 {
-                let a = (j * n + i) as u32;
-                let (b, c, d) = (a + 1, a + n as u32, a + n as u32 + 1);
-                if (i + j) % 2 == 0 {
-                    f.extend([[a, b, d], [a, d, c]]);
-                } else {
-                    f.extend([[a, b, c], [b, d, c]]);
-                }
-            }
-        }
-        (v, f)
-    }
+    use crate::mesh::test_meshes::grid_nm as grid;
 
     /// The largest |row − truth|; inf where one is inf and the other not.
     fn worst(row: &[f64], truth: impl Fn(usize) -> f64) -> f64 {

@@ -62,9 +62,14 @@ pub fn surface_faces(
 pub(crate) mod test_meshes {
     /// A flat n × n grid of spacing h, split along alternating diagonals.
     pub(crate) fn grid(n: usize, h: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-        let v = (0..n * n).map(|i| [(i % n) as f64 * h, (i / n) as f64 * h, 0.0]).collect();
+        grid_nm(n, n, h)
+    }
+
+    /// A flat n × m grid (n along x) of spacing h, split along alternating diagonals.
+    pub(crate) fn grid_nm(n: usize, m: usize, h: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let v = (0..n * m).map(|i| [(i % n) as f64 * h, (i / n) as f64 * h, 0.0]).collect();
         let mut f = Vec::new();
-        for j in 0..n - 1 {
+        for j in 0..m - 1 {
             for i in 0..n - 1 {
                 let a = (j * n + i) as u32;
                 let (b, c, d) = (a + 1, a + n as u32, a + n as u32 + 1);
