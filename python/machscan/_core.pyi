@@ -40,6 +40,10 @@ __all__ = [
     "insert_points",
     "interpolate_poses",
     "bead_chain",
+    "grinding_paths",
+    "removal_depths",
+    "removal_feeds",
+    "simulate_removal",
     "scallop_heights",
     "step_overs",
     "isometric_match",
@@ -137,6 +141,23 @@ class _CompensatedArrays(TypedDict):
 class _BeadChainArrays(TypedDict):
     order: _I64
     closed: bool
+
+class _GrindingPathArrays(TypedDict):
+    points: _F64
+    normals: _F64
+    row: _I64
+    curvature: _F64
+    allowance: _F64
+    feed: _F64
+    tool_fits: NDArray[np.bool_]
+    row_offsets: _F64
+    row_closed: NDArray[np.bool_]
+
+class _RemovalArrays(TypedDict):
+    deviation: _F64
+    nearest: _I64
+
+_RemovalArgs = tuple[float, tuple[float, float, float], float, float, tuple[float, float]]
 
 class _IcpDefaults(TypedDict):
     method: Literal["point_to_point", "point_to_plane"]
@@ -528,6 +549,45 @@ def bead_chain(
 ) -> _BeadChainArrays:
     """Bead-chain ordering (SPEC P2); ``machscan.bead_chain`` documents it and wraps the
     ``_BeadChainArrays`` this returns.
+    """
+
+def grinding_paths(
+    points: ArrayLike,
+    normals: ArrayLike,
+    allowance: ArrayLike,
+    *,
+    tool_radius: float,
+    scallop_height: float,
+    section_normal: ArrayLike,
+    thickness: float | None,
+    spacing: float | None,
+    fit_radius: float | None,
+    removal: _RemovalArgs | None,
+) -> _GrindingPathArrays:
+    """Grinding paths (SPEC P1–P5); ``machscan.grinding_paths`` documents it and wraps the
+    ``_GrindingPathArrays`` this returns.
+    """
+
+def removal_feeds(depths: ArrayLike, removal: _RemovalArgs) -> _F64:
+    """Feeds removing the given depths under a removal model; ``machscan.RemovalModel.feed``."""
+
+def removal_depths(feeds: ArrayLike, removal: _RemovalArgs) -> _F64:
+    """Depths removed at the given feeds under a removal model; ``machscan.RemovalModel.removal``."""
+
+def simulate_removal(
+    points: ArrayLike,
+    normals: ArrayLike,
+    allowance: ArrayLike,
+    path_points: ArrayLike,
+    path_normals: ArrayLike,
+    path_allowance: ArrayLike,
+    path_row: Sequence[int] | NDArray[np.int64],
+    depths: ArrayLike,
+    *,
+    tool_radius: float,
+) -> _RemovalArrays:
+    """Removal simulation (SPEC P5 beyond); ``machscan.simulate_removal`` documents it and wraps the
+    ``_RemovalArrays`` this returns.
     """
 
 def scallop_heights(tool_radius: ArrayLike, curvature_radius: ArrayLike, step: ArrayLike) -> _F64:

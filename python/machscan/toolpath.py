@@ -12,6 +12,8 @@ actual surface and the offset put back along the actual normal; a tool axis turn
 
 from __future__ import annotations
 
+import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
@@ -19,18 +21,23 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
-from machscan.io import Toolpath
+from machscan.io import Toolpath, write_toolpath
 from machscan.mesh import _surface
 
 __all__ = [
     "BeadChain",
     "ChainMethod",
     "CompensatedToolpath",
+    "GrindingPaths",
     "Interpolation",
+    "RemovalCheck",
+    "RemovalModel",
     "SurfaceNormals",
     "bead_chain",
     "compensate_toolpath",
+    "grinding_paths",
     "scallop_height",
+    "simulate_removal",
     "step_over",
 ]
 
@@ -274,3 +281,283 @@ def bead_chain(
     """
     out = _core.bead_chain(points, start, direction, method=method)
     return BeadChain(out["order"], bool(out["closed"]))
+
+
+@dataclass(frozen=True)
+class RemovalModel:
+    """The removal model of belt grinding (SPEC P4; paper 004 eq 11): the depth removed is
+    ``r = C · Vb^e₁ · Vw^e₂ · F^e₃`` for belt speed ``Vb``, feed ``Vw`` and contact force ``F``, in the units the
+    model was calibrated in (the paper's: mm, m/s, mm/s, N).
+
+    Attributes
+    ----------
+    C : float
+        Coefficient, > 0.
+    exponents : (float, float, float)
+        ``(e_belt, e_feed, e_force)``; ``e_feed`` ≠ 0 (negative: a faster feed removes less).
+    belt_speed, force : float
+        The belt speed and contact force the path is ground at, > 0.
+    feed_limits : (float, float)
+        The machine's lowest and highest feed, ``0 < low ≤ high``.
+
+    Examples
+    --------
+    >>> model = machscan.RemovalModel(C=0.3, exponents=(0.6, -0.7, 0.8), belt_speed=20.0, force=15.0,
+    ...                               feed_limits=(1.0, 50.0))
+    >>> feed = model.feed([0.10, 0.25])          # removes 0.10 and 0.25 mm
+    >>> model.removal(feed)
+    array([0.1 , 0.25])
+    """
+
+    C: float
+    exponents: tuple[float, float, float]
+    belt_speed: float
+    force: float
+    feed_limits: tuple[float, float]
+
+    @classmethod
+    def of(cls, model: RemovalModel | Mapping[str, object]) -> RemovalModel:
+        """A RemovalModel, or one built from a mapping with the same keys (the issue's ``dict(C=..., ...)``)."""
+        if isinstance(model, RemovalModel):
+            return model
+        if not isinstance(model, Mapping):
+            raise TypeError(f"removal_model: expected a RemovalModel or a dict of its fields, got {type(model).__name__}")
+        fields = {"C", "exponents", "belt_speed", "force", "feed_limits"}
+        missing, extra = fields - set(model), set(model) - fields
+        if missing or extra:
+            raise ValueError(f"removal_model: missing keys {sorted(missing)}, unknown keys {sorted(extra)}")
+        return cls(**model)  # type: ignore[arg-type]
+
+    def _args(self) -> tuple[float, tuple[float, float, float], float, float, tuple[float, float]]:
+        e = tuple(float(x) for x in self.exponents)
+        lim = tuple(float(x) for x in self.feed_limits)
+        if len(e) != 3 or len(lim) != 2:
+            raise ValueError("removal_model: expected three exponents (belt, feed, force) and two feed limits (low, high)")
+        return (float(self.C), (e[0], e[1], e[2]), float(self.belt_speed), float(self.force), (lim[0], lim[1]))
+
+    def feed(self, allowance: ArrayLike) -> NDArray[np.float64]:
+        """The feed that removes ``allowance`` (mm) at each point, clamped to the limits; where there is nothing to
+        remove (≤ 0), the limit that removes least."""
+        a = np.asarray(allowance, dtype=np.float64)
+        return _core.removal_feeds(np.ravel(a), self._args()).reshape(a.shape)
+
+    def removal(self, feed: ArrayLike) -> NDArray[np.float64]:
+        """The depth (mm) removed at each ``feed``."""
+        f = np.asarray(feed, dtype=np.float64)
+        return _core.removal_depths(np.ravel(f), self._args()).reshape(f.shape)
+
+
+@dataclass(frozen=True, eq=False)
+class GrindingPaths:
+    """Result of :func:`grinding_paths`: one path, row after row, one entry per path point (paper 004 table 4).
+
+    Attributes
+    ----------
+    points : ndarray, shape (M, 3)
+        Contact points on the surface, each on its row's section plane, mm.
+    normals : ndarray, shape (M, 3)
+        Unit outward surface normals there (the tool axis of a contact-wheel program).
+    row : ndarray of int64, shape (M,)
+        Row of each point, 0 at the lowest section offset.
+    curvature : ndarray, shape (M,)
+        Normal curvature of the surface across the rows, 1/mm: > 0 convex, < 0 concave.
+    allowance : ndarray, shape (M,)
+        The allowance field at each point, mm.
+    feed : ndarray, shape (M,)
+        Feed removing that allowance under the removal model, clamped to its limits; NaN without a model.
+    tool_fits : ndarray of bool, shape (M,)
+        False where the surface is concave with a radius no larger than the tool's: the tool cannot reach there.
+    row_offsets : ndarray, shape (rows,)
+        Each row's plane: offset along the unit section normal, mm.
+    row_closed : ndarray of bool, shape (rows,)
+        Whether the row closes round the part (a blade section) or runs edge to edge.
+    tool_radius, scallop_height : float
+        As requested.
+    section_normal : ndarray, shape (3,)
+        The unit section normal.
+    removal_model : RemovalModel or None
+    """
+
+    points: NDArray[np.float64]
+    normals: NDArray[np.float64]
+    row: NDArray[np.int64]
+    curvature: NDArray[np.float64]
+    allowance: NDArray[np.float64]
+    feed: NDArray[np.float64]
+    tool_fits: NDArray[np.bool_]
+    row_offsets: NDArray[np.float64]
+    row_closed: NDArray[np.bool_]
+    tool_radius: float
+    scallop_height: float
+    section_normal: NDArray[np.float64]
+    removal_model: RemovalModel | None
+
+    def __repr__(self) -> str:
+        return f"GrindingPaths({len(self.points)} points in {len(self.row_offsets)} rows, tool radius {self.tool_radius} mm)"
+
+    def removal(self) -> NDArray[np.float64]:
+        """The depth removed at each path point: the removal model at the point's feed, or its allowance when the
+        path has no model (an ideal tool that removes what it is asked to)."""
+        if self.removal_model is None:
+            return self.allowance.copy()
+        return self.removal_model.removal(self.feed)
+
+    def to_apt(self, path: str | os.PathLike[str]) -> None:
+        """Write the path as APT/CL: ``GOTO/x,y,z,i,j,k`` per point (contact point and outward normal), ``FEDRAT/``
+        where the feed changes (none without a removal model). Reads back through :func:`machscan.io.read_toolpath`.
+        """
+        feeds = self.feed if np.isfinite(self.feed).all() else None
+        write_toolpath(path, self.points, axes=self.normals, feeds=feeds)
+
+
+def grinding_paths(
+    points: ArrayLike,
+    normals: ArrayLike,
+    allowance: ArrayLike,
+    tool_radius: float,
+    scallop_height: float,
+    section_normal: ArrayLike,
+    removal_model: RemovalModel | Mapping[str, object] | None = None,
+    *,
+    thickness: float | None = None,
+    spacing: float | None = None,
+    fit_radius: float | None = None,
+) -> GrindingPaths:
+    """Belt-grinding paths over an allowance cloud, rows spaced by the scallop height (SPEC P1–P5; paper 004 §2–3).
+
+    Rows are sections of the surface by planes of normal ``section_normal``. Between two rows the surface's
+    curvature across them sets the spacing: the widest that keeps the cusp at ``scallop_height``
+    (:func:`step_over`), so rows close up on convex stretches and open out on concave ones. Curvature comes from a
+    quadric fitted over ``fit_radius`` (the scale of a step, so scan noise does not turn into curvature). Each row's
+    points are put in order by :func:`bead_chain`, resampled every ``spacing`` and put back on the surface within
+    their plane; open rows alternate direction, closed rows (blade sections) run the same way. The feed at each
+    point removes its allowance under ``removal_model``.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        The surface the allowance was measured on (e.g. the model points of a registered scan), mm.
+    normals : array_like, shape (N, 3)
+        Outward normals there, pointing to the tool side (need not be unit).
+    allowance : array_like, shape (N,)
+        Stock above the model at each point, mm.
+    tool_radius : float
+        Contact radius R of the wheel across the rows, mm.
+    scallop_height : float
+        Allowed cusp height between rows, mm (0 < h < R).
+    section_normal : array_like, shape (3,)
+        Normal of the section planes (e.g. the span axis of a blade).
+    removal_model : RemovalModel or dict, optional
+        The removal model; without one ``.feed`` is NaN and the APT file has no FEDRAT.
+    thickness : float, optional
+        Slab of cloud points that traces a row, mm; default twice the cloud's median point spacing (give it for
+        scans whose spacing differs much between directions).
+    spacing : float, optional
+        Path point spacing along a row, mm; default the cloud's median point spacing.
+    fit_radius : float, optional
+        Radius of the curvature fits, mm; default the flat step-over, at least four point spacings.
+
+    Returns
+    -------
+    GrindingPaths
+
+    Examples
+    --------
+    >>> paths = machscan.grinding_paths(points, normals, allowance, tool_radius=10.0, scallop_height=0.01,
+    ...                                 section_normal=(0, 0, 1), removal_model=model)
+    >>> paths.to_apt("grind.cl")
+    """
+    model = None if removal_model is None else RemovalModel.of(removal_model)
+    normal = np.asarray(section_normal, dtype=np.float64)
+    out = _core.grinding_paths(
+        points,
+        normals,
+        allowance,
+        tool_radius=tool_radius,
+        scallop_height=scallop_height,
+        section_normal=normal,
+        thickness=thickness,
+        spacing=spacing,
+        fit_radius=fit_radius,
+        removal=None if model is None else model._args(),
+    )
+    return GrindingPaths(
+        **out,
+        tool_radius=float(tool_radius),
+        scallop_height=float(scallop_height),
+        section_normal=normal / np.linalg.norm(normal),
+        removal_model=model,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class RemovalCheck:
+    """Result of :func:`simulate_removal`.
+
+    Attributes
+    ----------
+    deviation : ndarray, shape (N,)
+        Stock left over the model at each blank point after the pass, mm (negative: ground below the model).
+    section : ndarray of int64, shape (N,)
+        The row (section) each blank point belongs to: that of its nearest path point.
+    minimum, maximum, mean : ndarray, shape (rows,)
+        The deviation over each section's points (NaN for a section with none).
+    """
+
+    deviation: NDArray[np.float64]
+    section: NDArray[np.int64]
+    minimum: NDArray[np.float64]
+    maximum: NDArray[np.float64]
+    mean: NDArray[np.float64]
+
+    def __repr__(self) -> str:
+        return (
+            f"RemovalCheck({len(self.deviation)} points in {len(self.mean)} sections, deviation "
+            f"{np.nanmin(self.minimum):+.4f} … {np.nanmax(self.maximum):+.4f} mm)"
+        )
+
+
+def simulate_removal(paths: GrindingPaths, points: ArrayLike, normals: ArrayLike, allowance: ArrayLike) -> RemovalCheck:
+    """Sweep the contact wheel along a grinding path over the blank and report the stock left over the model
+    (SPEC P5 beyond; paper 004 measures ground sections within ±0.08 mm).
+
+    The wheel is a sphere of the path's tool radius at every path point, its lowest point sunk below the blank
+    (model + allowance) by the depth the point's feed removes (:meth:`GrindingPaths.removal`); every blank point
+    keeps the lower of its stock and the depth any wheel position reaches along its normal. What remains is the
+    scallop between rows, plus whatever the feed limits kept the model from removing.
+
+    Parameters
+    ----------
+    paths : GrindingPaths
+    points, normals, allowance : array_like
+        The blank as model points, their outward normals and the stock above them (e.g. the cloud the path was
+        made from, or a denser one).
+
+    Returns
+    -------
+    RemovalCheck
+    """
+    out = _core.simulate_removal(
+        points,
+        normals,
+        allowance,
+        paths.points,
+        paths.normals,
+        paths.allowance,
+        paths.row,
+        paths.removal(),
+        tool_radius=paths.tool_radius,
+    )
+    section = paths.row[out["nearest"]]
+    rows = len(paths.row_offsets)
+    dev = out["deviation"]
+    count = np.bincount(section, minlength=rows)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.bincount(section, weights=dev, minlength=rows) / count
+    minimum = np.full(rows, np.inf)
+    maximum = np.full(rows, -np.inf)
+    np.minimum.at(minimum, section, dev)
+    np.maximum.at(maximum, section, dev)
+    empty = count == 0
+    minimum[empty] = maximum[empty] = np.nan
+    return RemovalCheck(deviation=dev, section=section, minimum=minimum, maximum=maximum, mean=mean)

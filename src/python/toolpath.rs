@@ -1,8 +1,12 @@
 //! Bindings of `crate::toolpath`.
-use super::convert::{enter, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array};
+use super::convert::{enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array};
 use super::mesh::surface;
 use crate::mesh::surface_faces;
 use crate::toolpath::bead_chain::{bead_chain as run_bead_chain, Chain};
+use crate::toolpath::grinding::{
+    grinding_paths as run_grinding_paths, simulate_removal as run_simulate_removal, GrindingOptions, RemovalModel,
+    Stock,
+};
 use crate::toolpath::scallop::{scallop_height, step_over};
 use crate::toolpath::{compensate_toolpath as run_compensate, CompensateOptions, Interpolation, Normals};
 use pyo3::prelude::*;
@@ -145,7 +149,145 @@ fn bead_chain<'py>(
     Ok(d)
 }
 
+/// The removal model's parameters as ``machscan.RemovalModel`` hands them over.
+type RemovalArgs = (f64, [f64; 3], f64, f64, [f64; 2]);
+
+fn removal_model(args: RemovalArgs) -> crate::Result<RemovalModel> {
+    let (c, exponents, belt_speed, force, feed_limits) = args;
+    RemovalModel::new(c, exponents, belt_speed, force, feed_limits)
+}
+
+fn column<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<F64Array<'py>> {
+    F64Array::extract(obj, name, &[Dim::Any("N")], "(one value per point)")
+}
+
+/// Grinding paths (SPEC P1–P5); ``machscan.grinding_paths`` documents it and wraps the
+/// ``_GrindingPathArrays`` this returns.
+#[pyfunction]
+#[pyo3(signature = (
+    points, normals, allowance, *, tool_radius, scallop_height, section_normal, thickness, spacing, fit_radius, removal
+))]
+#[allow(clippy::too_many_arguments)]
+fn grinding_paths<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    normals: &Bound<'py, PyAny>,
+    allowance: &Bound<'py, PyAny>,
+    tool_radius: f64,
+    scallop_height: f64,
+    section_normal: &Bound<'py, PyAny>,
+    thickness: Option<f64>,
+    spacing: Option<f64>,
+    fit_radius: Option<f64>,
+    removal: Option<RemovalArgs>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = F64Array::points(points, "points")?;
+    let nn = F64Array::points(normals, "normals")?;
+    let a = column(allowance, "allowance")?;
+    let section_normal = f64_vector::<3>(section_normal, "section_normal", "(a vector)")?;
+    let (pr, nr, av) = (p.rows::<3>()?, nn.rows::<3>()?, a.values()?);
+    let r = enter(py, || {
+        let options = GrindingOptions {
+            tool_radius,
+            scallop_height,
+            section_normal,
+            thickness,
+            spacing,
+            fit_radius,
+            removal: removal.map(removal_model).transpose()?,
+        };
+        run_grinding_paths(pr, nr, av, &options)
+    })?;
+    let (m, rows) = (r.points.len(), r.row_offsets.len());
+    let d = PyDict::new(py);
+    d.set_item("points", points_to_numpy(py, r.points)?)?;
+    d.set_item("normals", points_to_numpy(py, r.normals)?)?;
+    d.set_item("row", indices_to_numpy(py, r.row)?)?;
+    d.set_item("curvature", to_numpy(py, r.curvature, &[m])?)?;
+    d.set_item("allowance", to_numpy(py, r.allowance, &[m])?)?;
+    d.set_item("feed", to_numpy(py, r.feed, &[m])?)?;
+    d.set_item("tool_fits", to_numpy(py, r.tool_fits, &[m])?)?;
+    d.set_item("row_offsets", to_numpy(py, r.row_offsets, &[rows])?)?;
+    d.set_item("row_closed", to_numpy(py, r.row_closed, &[rows])?)?;
+    Ok(d)
+}
+
+/// Feeds removing the given depths under a removal model; ``machscan.RemovalModel.feed``.
+#[pyfunction]
+fn removal_feeds<'py>(
+    py: Python<'py>,
+    depths: &Bound<'py, PyAny>,
+    removal: RemovalArgs,
+) -> PyResult<Bound<'py, PyAny>> {
+    let d = column(depths, "allowance")?;
+    let dv = d.values()?;
+    let out = enter(py, || {
+        let model = removal_model(removal)?;
+        Ok(dv.iter().map(|&x| model.feed(x)).collect::<Vec<f64>>())
+    })?;
+    to_numpy(py, out, &[dv.len()])
+}
+
+/// Depths removed at the given feeds under a removal model; ``machscan.RemovalModel.removal``.
+#[pyfunction]
+fn removal_depths<'py>(
+    py: Python<'py>,
+    feeds: &Bound<'py, PyAny>,
+    removal: RemovalArgs,
+) -> PyResult<Bound<'py, PyAny>> {
+    let f = column(feeds, "feed")?;
+    let fv = f.values()?;
+    let out = enter(py, || {
+        let model = removal_model(removal)?;
+        if let Some(i) = fv.iter().position(|&x| !(x.is_finite() && x > 0.0)) {
+            return Err(crate::Error::invalid("feed", format!("must be positive and finite, got {} at {i}", fv[i])));
+        }
+        Ok(fv.iter().map(|&x| model.removal(x)).collect::<Vec<f64>>())
+    })?;
+    to_numpy(py, out, &[fv.len()])
+}
+
+/// Removal simulation (SPEC P5 beyond); ``machscan.simulate_removal`` documents it and wraps the
+/// ``_RemovalArrays`` this returns.
+#[pyfunction]
+#[pyo3(signature = (points, normals, allowance, path_points, path_normals, path_allowance, path_row, depths, *, tool_radius))]
+#[allow(clippy::too_many_arguments)]
+fn simulate_removal<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    normals: &Bound<'py, PyAny>,
+    allowance: &Bound<'py, PyAny>,
+    path_points: &Bound<'py, PyAny>,
+    path_normals: &Bound<'py, PyAny>,
+    path_allowance: &Bound<'py, PyAny>,
+    path_row: Vec<i64>,
+    depths: &Bound<'py, PyAny>,
+    tool_radius: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = F64Array::points(points, "points")?;
+    let nn = F64Array::points(normals, "normals")?;
+    let a = column(allowance, "allowance")?;
+    let pp = F64Array::points(path_points, "path_points")?;
+    let pn = F64Array::points(path_normals, "path_normals")?;
+    let pa = column(path_allowance, "path_allowance")?;
+    let dd = column(depths, "depths")?;
+    let (pr, nr, av) = (p.rows::<3>()?, nn.rows::<3>()?, a.values()?);
+    let (ppr, pnr, pav, dv) = (pp.rows::<3>()?, pn.rows::<3>()?, pa.values()?, dd.values()?);
+    let blank = Stock { points: pr, normals: nr, allowance: av };
+    let path = Stock { points: ppr, normals: pnr, allowance: pav };
+    let rows: Vec<usize> = path_row.iter().map(|&r| r.max(0) as usize).collect();
+    let (left, nearest) = enter(py, || run_simulate_removal(blank, path, &rows, dv, tool_radius))?;
+    let d = PyDict::new(py);
+    d.set_item("deviation", to_numpy(py, left, &[pr.len()])?)?;
+    d.set_item("nearest", indices_to_numpy(py, nearest)?)?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(grinding_paths, m)?)?;
+    m.add_function(wrap_pyfunction!(removal_feeds, m)?)?;
+    m.add_function(wrap_pyfunction!(removal_depths, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate_removal, m)?)?;
     m.add_function(wrap_pyfunction!(bead_chain, m)?)?;
     m.add_function(wrap_pyfunction!(scallop_heights, m)?)?;
     m.add_function(wrap_pyfunction!(step_overs, m)?)?;

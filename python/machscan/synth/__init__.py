@@ -4,6 +4,7 @@
   (:func:`groove_frames`), with their truth.
 * :mod:`machscan.synth.blade`: paper 003 turbine blade (:class:`Blade`) and touch-probe simulator
   (:class:`TouchProbe`, :func:`misplacement`).
+* :mod:`machscan.synth.grinding`: allowance clouds for grinding paths (:class:`WavyPanel`, :func:`blade_allowance`).
 * :mod:`machscan.synth.skin`: paper 002 thin skin bent when clamped (:class:`BentSkin`), for mirror milling.
 
 The package is pure NumPy (it does not use the compiled core), so its truth is independent of the code
@@ -11,6 +12,7 @@ it tests.
 """
 
 from machscan.synth.blade import Blade, TouchProbe, misplacement
+from machscan.synth.grinding import AllowanceCloud, WavyPanel, blade_allowance
 from machscan.synth.grooves import (
     DEFAULT_C2_OFFSET,
     DEFAULT_MOUNT,
@@ -36,6 +38,7 @@ __all__ = [
     "DEFAULT_MOUNT",
     "GROOVE_SHAPES",
     "PLATE",
+    "AllowanceCloud",
     "BentSkin",
     "Blade",
     "ContourShape",
@@ -45,6 +48,8 @@ __all__ = [
     "PeriodicProfile",
     "SurfaceError",
     "TouchProbe",
+    "WavyPanel",
+    "blade_allowance",
     "default_contours",
     "flat_plate_scan",
     "groove_frames",

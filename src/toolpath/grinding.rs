@@ -1,0 +1,839 @@
+//! Belt-grinding paths from an allowance cloud (SPEC P1–P5; paper 004 §2–3).
+//!
+//! The cloud is the blade's surface sampled with, at each point, its outward normal (toward the
+//! tool) and the allowance — the stock standing above the model there. The path is a set of rows,
+//! each the intersection of the surface with one plane of a parallel family (`section_normal`),
+//! joined into one polyline:
+//!
+//! 1. **Row spacing.** Neighbouring rows an arc L apart leave a cusp whose height depends on the
+//!    tool radius R and the surface's radius ρ across the rows (`scallop.rs`). ρ is taken at
+//!    sample points of the cloud from a quadric fitted over `fit_radius` — the scale of a step, so
+//!    a few µm of scan noise do not turn into curvature — and each sample gives the widest plane
+//!    spacing that keeps its cusp at the scallop height: `step_over(R, ρ, h)` times the sine of
+//!    the angle between the surface and the planes. From a row at offset d, the next lies at
+//!    d + Δ, Δ the smallest such spacing over the samples between d and d + Δ (a fixed point: the
+//!    band only narrows as Δ does). The first and last rows lie half a slab inside the cloud's
+//!    ends; where the rows would overshoot the last, every gap shrinks in proportion.
+//! 2. **Row points.** The cloud points within ±thickness/2 of the plane are projected onto it,
+//!    ordered by the bead chain (`bead_chain.rs`) and resampled every `spacing` along the chain.
+//!    Each sample is then put on the surface without leaving the plane: a quadric of the nearest
+//!    cloud points (height and allowance), solved along the in-plane direction of its normal.
+//!    This is where a path point's position, normal and allowance come from; its curvature across
+//!    the rows comes from the wide fit of step 1.
+//! 3. **Joining.** Open rows alternate direction (a boustrophedon); closed rows all run the same
+//!    way, each starting at the point nearest the end of the row before.
+//! 4. **Feed** (eq 11–15): the removal model r = C·Vb^e₁·Vw^e₂·F^e₃ solved for the feed Vw that
+//!    removes each point's allowance, clamped to the machine's limits.
+//!
+//! `simulate_removal` checks a path: a spherical tool of radius R at every path point, sunk by
+//! the depth the feed removes there, is swept over the blank (model + allowance), and the stock
+//! left over the model is reported at every cloud point.
+use super::bead_chain::{bead_chain, Chain};
+use super::scallop::step_over;
+use crate::error::{check_finite, check_finite_points, check_positive, Error, Result};
+use crate::spatial::PointIndex;
+use nalgebra::{Matrix6, SMatrix, SVector, Vector3, Vector6};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+type V3 = Vector3<f64>;
+
+/// Nearest cloud points a path point's position, normal and allowance are fitted to (of twice as
+/// many candidates, those on the same side of a thin edge).
+const LOCAL_POINTS: usize = 24;
+/// Cubic fields fitted over a local patch: the height, the allowance and the three components of
+/// the normal.
+const CHANNELS: usize = 5;
+/// Neighbours whose given normal turns more than 60° from the nearest point's lie on the other
+/// side of a thin edge (a blade's trailing edge) and are left out of a fit.
+const SAME_SIDE: f64 = 0.5;
+/// Fewest points of a wide (curvature) fit; fewer within `fit_radius` falls back to the nearest.
+const WIDE_MIN_POINTS: usize = 12;
+/// Cloud samples per `fit_radius` along each axis used for the wide fits (and the samples that
+/// set the row spacing): enough to fit a quadric, few enough that 1 M points stay cheap.
+const WIDE_SAMPLES_PER_RADIUS: f64 = 5.0;
+/// Stretches whose surface meets the section planes at less than asin(0.2) ≈ 11.5° (an edge's tip
+/// seen along the section normal) do not set the row spacing: there a plane spacing says little
+/// about the arc between rows.
+const MIN_CROSSING: f64 = 0.2;
+/// Height of the ridges the removal simulation leaves between its tool positions along a row, mm:
+/// the sweep is sampled finely enough that it is continuous to this.
+const SWEEP_TOLERANCE: f64 = 1e-5;
+/// Newton iterations putting a point on the local quadric within its plane.
+const PLACE_ITERATIONS: usize = 6;
+
+/// The removal model of belt grinding (SPEC P4, paper 004 eq 11): depth removed
+/// r = C · Vb^e₁ · Vw^e₂ · F^e₃ for belt speed Vb, feed Vw and contact force F.
+#[derive(Debug, Clone, Copy)]
+pub struct RemovalModel {
+    pub c: f64,
+    pub exponents: [f64; 3],
+    pub belt_speed: f64,
+    pub force: f64,
+    pub feed_limits: [f64; 2],
+}
+
+impl RemovalModel {
+    pub fn new(c: f64, exponents: [f64; 3], belt_speed: f64, force: f64, feed_limits: [f64; 2]) -> Result<Self> {
+        check_positive("removal_model.C", c, "")?;
+        check_positive("removal_model.belt_speed", belt_speed, "")?;
+        check_positive("removal_model.force", force, "")?;
+        check_finite("removal_model.exponents", &exponents, 3)?;
+        if exponents[1] == 0.0 {
+            return Err(Error::invalid(
+                "removal_model.exponents",
+                "the feed exponent (the second) is 0: the feed does not change the removal",
+            ));
+        }
+        let [lo, hi] = feed_limits;
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+            return Err(Error::invalid(
+                "removal_model.feed_limits",
+                format!("expected (low, high) with 0 < low ≤ high, finite; got ({lo}, {hi})"),
+            ));
+        }
+        Ok(RemovalModel { c, exponents, belt_speed, force, feed_limits })
+    }
+
+    /// Depth removed at feed `feed`.
+    pub fn removal(&self, feed: f64) -> f64 {
+        let [e1, e2, e3] = self.exponents;
+        self.c * self.belt_speed.powf(e1) * feed.powf(e2) * self.force.powf(e3)
+    }
+
+    /// The feed removing `depth`, clamped to the limits; a depth ≤ 0 gets the limit that removes
+    /// least.
+    pub fn feed(&self, depth: f64) -> f64 {
+        let [lo, hi] = self.feed_limits;
+        let [e1, e2, e3] = self.exponents;
+        let least = if e2 < 0.0 { hi } else { lo };
+        if depth.is_nan() || depth <= 0.0 {
+            return least;
+        }
+        let unclamped = (depth / (self.c * self.belt_speed.powf(e1) * self.force.powf(e3))).powf(1.0 / e2);
+        if unclamped.is_nan() {
+            least
+        } else {
+            unclamped.clamp(lo, hi)
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct GrindingOptions {
+    pub tool_radius: f64,
+    pub scallop_height: f64,
+    pub section_normal: [f64; 3],
+    /// Slab thickness of a section, mm; default twice the cloud's point spacing.
+    pub thickness: Option<f64>,
+    /// Path point spacing along a row, mm; default the cloud's point spacing.
+    pub spacing: Option<f64>,
+    /// Radius of the curvature fits, mm; default the step-over on a flat surface, at least four
+    /// point spacings.
+    pub fit_radius: Option<f64>,
+    pub removal: Option<RemovalModel>,
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct GrindingPaths {
+    pub points: Vec<[f64; 3]>,
+    pub normals: Vec<[f64; 3]>,
+    pub row: Vec<usize>,
+    /// Normal curvature across the rows, 1/mm (> 0 convex).
+    pub curvature: Vec<f64>,
+    pub allowance: Vec<f64>,
+    /// NaN without a removal model.
+    pub feed: Vec<f64>,
+    /// False where the surface is concave tighter than the tool.
+    pub tool_fits: Vec<bool>,
+    /// Per row: plane offset along the unit section normal, and whether it closes up.
+    pub row_offsets: Vec<f64>,
+    pub row_closed: Vec<bool>,
+}
+
+/// A quadric height field h(x, y) = c₀ + c₁x + c₂y + c₃x² + c₄xy + c₅y² over the frame
+/// (origin, u, v, w) — the wide fit, for curvature — and for a local fit, cubic fields of the
+/// height and of values (allowance, normal) over the same (x, y). The local fields are cubic
+/// because at an edge of the cloud the patch is one-sided and a quadric's error there grows with
+/// the third derivatives: 2.6 µm of height on a 20 mm radius sampled every mm, against 0.3 µm.
+struct Patch {
+    origin: V3,
+    u: V3,
+    v: V3,
+    w: V3,
+    height: Vector6<f64>,
+    /// Cubic coefficients over (x, y) / `scale`, in the order of `cubic_terms`, one column per
+    /// channel.
+    value: Option<SMatrix<f64, 10, CHANNELS>>,
+    scale: f64,
+}
+
+fn cubic_terms(x: f64, y: f64) -> SVector<f64, 10> {
+    SVector::<f64, 10>::from([1.0, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y])
+}
+
+impl Patch {
+    /// Weighted least-squares fit to `points` (and `values`, e.g. allowance) in the frame whose w
+    /// is `normal`, each point weighted by exp(−(d/σ)²) for its distance d from the origin
+    /// (`sigma` ∞: unweighted). None when the points do not span the fields.
+    fn fit(origin: V3, normal: V3, points: &[V3], values: Option<&[[f64; CHANNELS]]>, sigma: f64) -> Option<Patch> {
+        let w = normal.normalize();
+        let u = if w.x.abs() < 0.9 { V3::x() } else { V3::y() }.cross(&w).normalize();
+        let v = w.cross(&u);
+        // Lengths scaled by the patch size inside the fits, for conditioning.
+        let scale = points.iter().map(|p| (p - origin).norm()).fold(0.0, f64::max).max(1e-12);
+        let (mut ata, mut atb) = (Matrix6::zeros(), Vector6::zeros());
+        let (mut cta, mut ctv) = (SMatrix::<f64, 10, 10>::zeros(), SMatrix::<f64, 10, CHANNELS>::zeros());
+        for (k, p) in points.iter().enumerate() {
+            let d = (p - origin) / scale;
+            let (x, y) = (d.dot(&u), d.dot(&v));
+            let weight = (-(p - origin).norm_squared() / (sigma * sigma)).exp();
+            let row = Vector6::new(1.0, x, y, x * x, x * y, y * y);
+            ata += weight * row * row.transpose();
+            atb += weight * row * d.dot(&w);
+            if let Some(vals) = values {
+                let c = cubic_terms(x, y);
+                let mut row = vals[k];
+                row[0] = (p - origin).dot(&w);
+                cta += weight * c * c.transpose();
+                ctv += weight * c * SMatrix::<f64, 1, CHANNELS>::from_row_slice(&row);
+            }
+        }
+        let unscale = Vector6::new(scale, 1.0, 1.0, 1.0 / scale, 1.0 / scale, 1.0 / scale);
+        let height = ata.cholesky()?.solve(&atb).component_mul(&unscale);
+        // A light ridge on the cubic terms: a scan's points lie on lines, and across three lines
+        // a cubic is not determined (y³ is a multiple of y there); the ridge (a thousandth of
+        // each term's own weight) picks the smallest cubic through them and barely moves a
+        // determined one.
+        for k in 6..10 {
+            cta[(k, k)] *= 1.0 + 1e-3;
+        }
+        let value = match values {
+            Some(_) => Some(cta.cholesky()?.solve(&ctv)),
+            None => None,
+        };
+        height.iter().all(|c| c.is_finite()).then_some(Patch { origin, u, v, w, height, value, scale })
+    }
+
+    /// Height and slopes at (x, y): of the cubic when there is one.
+    fn height_slopes(&self, x: f64, y: f64) -> (f64, f64, f64) {
+        match &self.value {
+            Some(c) => {
+                let (a, b) = (x / self.scale, y / self.scale);
+                let h = c.column(0);
+                let dx = [0.0, 1.0, 0.0, 2.0 * a, b, 0.0, 3.0 * a * a, 2.0 * a * b, b * b, 0.0];
+                let dy = [0.0, 0.0, 1.0, 0.0, a, 2.0 * b, 0.0, a * a, 2.0 * a * b, 3.0 * b * b];
+                let slope = |d: [f64; 10]| (0..10).map(|k| h[k] * d[k]).sum::<f64>() / self.scale;
+                (h.dot(&cubic_terms(a, b)), slope(dx), slope(dy))
+            }
+            None => {
+                let (hx, hy) = self.slopes(x, y);
+                (Self::eval(&self.height, x, y), hx, hy)
+            }
+        }
+    }
+
+    /// The cubic fields at (x, y): height, then the values' channels.
+    fn value_at(&self, x: f64, y: f64) -> Option<[f64; CHANNELS]> {
+        let t = cubic_terms(x / self.scale, y / self.scale);
+        self.value.as_ref().map(|c| std::array::from_fn(|j| c.column(j).dot(&t)))
+    }
+
+    fn coords(&self, p: V3) -> (f64, f64) {
+        let d = p - self.origin;
+        (d.dot(&self.u), d.dot(&self.v))
+    }
+
+    fn eval(c: &Vector6<f64>, x: f64, y: f64) -> f64 {
+        c[0] + c[1] * x + c[2] * y + c[3] * x * x + c[4] * x * y + c[5] * y * y
+    }
+
+    fn slopes(&self, x: f64, y: f64) -> (f64, f64) {
+        let c = &self.height;
+        (c[1] + 2.0 * c[3] * x + c[4] * y, c[2] + c[4] * x + 2.0 * c[5] * y)
+    }
+
+    fn normal(&self, x: f64, y: f64) -> V3 {
+        let (hx, hy) = self.slopes(x, y);
+        (self.w - hx * self.u - hy * self.v).normalize()
+    }
+
+    /// Normal curvature (> 0 convex, the normal w pointing away from the material) in the
+    /// direction of the tangent vector `t` at (x, y).
+    fn curvature(&self, x: f64, y: f64, t: V3) -> f64 {
+        let (hx, hy) = self.slopes(x, y);
+        let c = &self.height;
+        let (hxx, hxy, hyy) = (2.0 * c[3], c[4], 2.0 * c[5]);
+        let (du, dv) = (t.dot(&self.u), t.dot(&self.v));
+        let root = (1.0 + hx * hx + hy * hy).sqrt();
+        let second = (hxx * du * du + 2.0 * hxy * du * dv + hyy * dv * dv) / root;
+        let first = (1.0 + hx * hx) * du * du + 2.0 * hx * hy * du * dv + (1.0 + hy * hy) * dv * dv;
+        if first > 0.0 {
+            -second / first
+        } else {
+            0.0
+        }
+    }
+
+    /// The surface point within the plane {p : p·n = offset} nearest `q` (a point of the
+    /// plane), found along the in-plane direction of w.
+    fn place_in_plane(&self, q: V3, n: V3) -> Option<V3> {
+        let m = self.w - self.w.dot(&n) * n;
+        if m.norm() < 1e-6 {
+            return None;
+        }
+        let m = m.normalize();
+        let mut t = 0.0;
+        for _ in 0..PLACE_ITERATIONS {
+            let p = q + t * m;
+            let (x, y) = self.coords(p);
+            let (height, hx, hy) = self.height_slopes(x, y);
+            let g = (p - self.origin).dot(&self.w) - height;
+            let dg = m.dot(&self.w) - hx * m.dot(&self.u) - hy * m.dot(&self.v);
+            if dg.abs() < 1e-12 {
+                return None;
+            }
+            let step = g / dg;
+            t -= step;
+            if step.abs() < 1e-12 {
+                break;
+            }
+        }
+        // A point that wandered off the patch is no point of the surface.
+        let p = q + t * m;
+        (p.iter().all(|c| c.is_finite()) && t.abs() <= self.scale).then_some(p)
+    }
+}
+
+/// The cloud, with its two indices: the full one (positions, allowance) and a thinned one for the
+/// wide curvature fits.
+struct Cloud<'a> {
+    points: &'a [[f64; 3]],
+    normals: Vec<V3>,
+    allowance: &'a [f64],
+    index: PointIndex,
+    wide: Vec<usize>,
+    wide_index: PointIndex,
+    fit_radius: f64,
+}
+
+impl Cloud<'_> {
+    fn p(&self, i: usize) -> V3 {
+        V3::from(self.points[i])
+    }
+
+    /// The mean of the given normals of `near`, for a fit frame.
+    fn mean_normal(&self, near: &[usize]) -> V3 {
+        let s: V3 = near.iter().map(|&i| self.normals[i]).sum();
+        if s.norm() > 0.0 {
+            s.normalize()
+        } else {
+            self.normals[near[0]]
+        }
+    }
+
+    /// `near` (nearest first) without the points on the other side of a thin edge from the first.
+    fn same_side(&self, near: Vec<usize>) -> Vec<usize> {
+        let Some(&first) = near.first() else { return near };
+        let reference = self.normals[first];
+        near.into_iter().filter(|&i| self.normals[i].dot(&reference) > SAME_SIDE).collect()
+    }
+
+    /// The local fit at q: (point on the surface in the plane (n, q), normal, allowance).
+    fn local(&self, q: V3, n: V3) -> Option<(V3, V3, f64)> {
+        let found = self.index.knn(&q.into(), 2 * LOCAL_POINTS);
+        let mut near = self.same_side(found.iter().map(|&(i, _)| i).collect());
+        near.truncate(LOCAL_POINTS);
+        if near.len() < LOCAL_POINTS / 2 {
+            return None;
+        }
+        // Weighted toward the middle of the patch: where the patch is one-sided (an edge of the
+        // cloud) the fit extrapolates, and its error grows with the patch's size.
+        let sigma = (self.p(near[near.len() / 3]) - q).norm().max(1e-9);
+        let pts: Vec<V3> = near.iter().map(|&i| self.p(i)).collect();
+        let vals: Vec<[f64; CHANNELS]> = near
+            .iter()
+            .map(|&i| {
+                let m = self.normals[i];
+                [0.0, self.allowance[i], m.x, m.y, m.z]
+            })
+            .collect();
+        let patch = Patch::fit(q, self.mean_normal(&near), &pts, Some(&vals), sigma)?;
+        let on = patch.place_in_plane(q, n)?;
+        let (x, y) = patch.coords(on);
+        let [_, allowance, nx, ny, nz] = patch.value_at(x, y)?;
+        // The normal interpolated from the given ones: a model's normals are exact, and a scan's
+        // were estimated over more points than this patch holds.
+        let normal = V3::new(nx, ny, nz);
+        (normal.norm() > 0.0).then(|| (on, normal.normalize(), allowance))
+    }
+
+    /// Curvature across the rows (planes of normal n) at q from the wide fit, and the sine of
+    /// the angle between the surface and the planes there.
+    fn across(&self, q: V3, n: V3) -> Option<(f64, f64)> {
+        let mut near: Vec<usize> = Vec::new();
+        self.wide_index.for_each_within(&q.into(), self.fit_radius, |k| near.push(self.wide[k]));
+        if near.len() < WIDE_MIN_POINTS {
+            near = self.wide_index.knn(&q.into(), WIDE_MIN_POINTS).into_iter().map(|(k, _)| self.wide[k]).collect();
+        } else {
+            let nearest = self.wide[self.wide_index.nearest(&q.into()).0];
+            near.sort_by_key(|&i| i != nearest);
+        }
+        let near = self.same_side(near);
+        if near.len() < 6 {
+            return None;
+        }
+        let pts: Vec<V3> = near.iter().map(|&i| self.p(i)).collect();
+        let patch = Patch::fit(q, self.mean_normal(&near), &pts, None, f64::INFINITY)?;
+        let (x, y) = patch.coords(q);
+        let normal = patch.normal(x, y);
+        let along_row = n.cross(&normal);
+        if along_row.norm() < 1e-9 {
+            return Some((0.0, 0.0));
+        }
+        let across = normal.cross(&along_row.normalize());
+        let k = patch.curvature(x, y, across);
+        k.is_finite().then_some((k, across.dot(&n).abs()))
+    }
+}
+
+/// The plane spacing that keeps the cusp at `h` where the curvature across the rows is `k` and
+/// the surface meets the planes at sine `crossing`; the flat step where the tool does not fit a
+/// concave stretch.
+fn plane_step(r: f64, h: f64, k: f64, crossing: f64, flat: f64) -> f64 {
+    let rho = if k == 0.0 { f64::INFINITY } else { 1.0 / k };
+    let arc = if rho < 0.0 && -rho <= r { flat } else { step_over(r, rho, h).unwrap_or(flat) };
+    arc * crossing
+}
+
+/// Median distance from a point to its nearest neighbour, over up to 2000 points spread through
+/// the cloud.
+fn point_spacing(points: &[[f64; 3]], index: &PointIndex) -> f64 {
+    let every = (points.len() / 2000).max(1);
+    let mut d: Vec<f64> = (0..points.len())
+        .step_by(every)
+        .filter_map(|i| index.knn(&points[i], 2).get(1).map(|&(_, d2)| d2.sqrt()))
+        .filter(|d| *d > 0.0)
+        .collect();
+    if d.is_empty() {
+        return 0.0;
+    }
+    let mid = d.len() / 2;
+    *d.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// One point per occupied voxel of size `voxel`: the first one met.
+fn thin(points: &[[f64; 3]], voxel: f64) -> Vec<usize> {
+    let mut seen: HashMap<[i64; 3], ()> = HashMap::new();
+    let mut kept = Vec::new();
+    for (i, p) in points.iter().enumerate() {
+        let key = p.map(|c| (c / voxel).floor() as i64);
+        if seen.insert(key, ()).is_none() {
+            kept.push(i);
+        }
+    }
+    kept
+}
+
+/// Points every `spacing` of arc length along the polyline (closed: back to the start), ends
+/// included.
+fn resample(line: &[V3], closed: bool, spacing: f64) -> Vec<V3> {
+    let mut pts: Vec<V3> = line.to_vec();
+    if closed {
+        pts.push(line[0]);
+    }
+    let mut arc = vec![0.0];
+    for k in 1..pts.len() {
+        arc.push(arc[k - 1] + (pts[k] - pts[k - 1]).norm());
+    }
+    let total = *arc.last().unwrap_or(&0.0);
+    if total == 0.0 {
+        return vec![pts[0]];
+    }
+    let count = (total / spacing).round().max(1.0) as usize;
+    let last = if closed { count - 1 } else { count };
+    let mut out = Vec::with_capacity(last + 1);
+    let mut seg = 0;
+    for j in 0..=last {
+        let s = total * j as f64 / count as f64;
+        while seg + 2 < arc.len() && arc[seg + 1] < s {
+            seg += 1;
+        }
+        let len = arc[seg + 1] - arc[seg];
+        let f = if len > 0.0 { ((s - arc[seg]) / len).clamp(0.0, 1.0) } else { 0.0 };
+        out.push(pts[seg] + f * (pts[seg + 1] - pts[seg]));
+    }
+    out
+}
+
+struct Row {
+    points: Vec<[f64; 3]>,
+    normals: Vec<[f64; 3]>,
+    curvature: Vec<f64>,
+    allowance: Vec<f64>,
+    closed: bool,
+}
+
+fn check_inputs(points: &[[f64; 3]], normals: &[[f64; 3]], allowance: &[f64], o: &GrindingOptions) -> Result<V3> {
+    check_finite_points("points", points)?;
+    check_finite_points("normals", normals)?;
+    check_finite("allowance", allowance, 1)?;
+    if normals.len() != points.len() || allowance.len() != points.len() {
+        return Err(Error::invalid(
+            "normals",
+            format!(
+                "points, normals and allowance must have one row per point; got {}, {} and {}",
+                points.len(),
+                normals.len(),
+                allowance.len()
+            ),
+        ));
+    }
+    if let Some(i) = normals.iter().position(|n| V3::from(*n).norm() == 0.0) {
+        return Err(Error::invalid("normals", format!("row {i} is a zero vector")));
+    }
+    if points.len() < LOCAL_POINTS {
+        return Err(Error::invalid(
+            "points",
+            format!("{} points are too few for the surface fits (at least {LOCAL_POINTS})", points.len()),
+        ));
+    }
+    check_positive("tool_radius", o.tool_radius, "mm")?;
+    let h = o.scallop_height;
+    if !(h.is_finite() && h > 0.0 && h < o.tool_radius) {
+        return Err(Error::invalid(
+            "scallop_height",
+            format!("must be > 0 and below the tool radius {} mm, got {h}", o.tool_radius),
+        ));
+    }
+    let n = V3::from(o.section_normal);
+    if !(n.iter().all(|c| c.is_finite()) && n.norm() > 0.0) {
+        return Err(Error::invalid(
+            "section_normal",
+            format!("must be a finite non-zero vector, got {:?}", o.section_normal),
+        ));
+    }
+    for (name, value) in [("thickness", o.thickness), ("spacing", o.spacing), ("fit_radius", o.fit_radius)] {
+        if let Some(v) = value {
+            check_positive(name, v, "mm")?;
+        }
+    }
+    Ok(n.normalize())
+}
+
+/// Grinding paths over an allowance cloud (module docs).
+pub fn grinding_paths(
+    points: &[[f64; 3]],
+    normals: &[[f64; 3]],
+    allowance: &[f64],
+    options: &GrindingOptions,
+) -> Result<GrindingPaths> {
+    let n = check_inputs(points, normals, allowance, options)?;
+    let (r, h) = (options.tool_radius, options.scallop_height);
+    let index = PointIndex::new(points)?;
+    let spacing_cloud = point_spacing(points, &index);
+    if spacing_cloud <= 0.0 {
+        return Err(Error::invalid("points", "all points coincide"));
+    }
+    let flat = step_over(r, f64::INFINITY, h)?;
+    let thickness = options.thickness.unwrap_or(2.0 * spacing_cloud);
+    let spacing = options.spacing.unwrap_or(spacing_cloud);
+    let fit_radius = options.fit_radius.unwrap_or(flat.max(4.0 * spacing_cloud));
+    let voxel = fit_radius / WIDE_SAMPLES_PER_RADIUS;
+    let wide = if voxel > spacing_cloud { thin(points, voxel) } else { (0..points.len()).collect() };
+    let wide_points: Vec<[f64; 3]> = wide.iter().map(|&i| points[i]).collect();
+    let wide_index = PointIndex::new(&wide_points)?;
+    let normals: Vec<V3> = normals.iter().map(|&v| V3::from(v).normalize()).collect();
+    let cloud = Cloud { points, normals, allowance, index, wide, wide_index, fit_radius };
+
+    // 1. Row offsets from the samples' plane steps.
+    let mut samples: Vec<(f64, f64)> = cloud
+        .wide
+        .par_iter()
+        .filter_map(|&i| {
+            let p = cloud.p(i);
+            let (k, crossing) = cloud.across(p, n)?;
+            (crossing >= MIN_CROSSING).then(|| (p.dot(&n), plane_step(r, h, k, crossing, flat)))
+        })
+        .collect();
+    samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let offsets: Vec<f64> = points.iter().map(|&p| V3::from(p).dot(&n)).collect();
+    let (lo, hi) = offsets.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &d| (a.min(d), b.max(d)));
+    let rows = row_offsets(&samples, lo + 0.5 * thickness, hi - 0.5 * thickness, flat, thickness);
+
+    // 2. Row points.
+    let mut by_offset: Vec<usize> = (0..points.len()).collect();
+    by_offset.sort_by(|&a, &b| offsets[a].total_cmp(&offsets[b]));
+    let sorted: Vec<f64> = by_offset.iter().map(|&i| offsets[i]).collect();
+    let built: Vec<Option<Row>> = rows
+        .par_iter()
+        .map(|&d| {
+            let a = sorted.partition_point(|&x| x < d - 0.5 * thickness);
+            let b = sorted.partition_point(|&x| x <= d + 0.5 * thickness);
+            if b - a < 2 {
+                return Ok(None);
+            }
+            let slab: Vec<[f64; 3]> =
+                by_offset[a..b].iter().map(|&i| (cloud.p(i) - (offsets[i] - d) * n).into()).collect();
+            let chain = bead_chain(&slab, None, None, Chain::Tree)?;
+            let line: Vec<V3> = chain.order.iter().map(|&k| V3::from(slab[k])).collect();
+            let mut row = Row {
+                points: Vec::new(),
+                normals: Vec::new(),
+                curvature: Vec::new(),
+                allowance: Vec::new(),
+                closed: chain.closed,
+            };
+            for q in resample(&line, chain.closed, spacing) {
+                let Some((on, normal, value)) = cloud.local(q, n) else { continue };
+                let (k, _) = cloud.across(on, n).unwrap_or((0.0, 0.0));
+                row.points.push(on.into());
+                row.normals.push(normal.into());
+                row.curvature.push(k);
+                row.allowance.push(value);
+            }
+            Ok((!row.points.is_empty()).then_some(row))
+        })
+        .collect::<Result<_>>()?;
+
+    // 3. Joining.
+    let mut out = GrindingPaths::default();
+    let mut open_rows = 0usize;
+    for (mut row, d) in built.into_iter().zip(rows).filter_map(|(row, d)| row.map(|row| (row, d))) {
+        let m = row.points.len();
+        let mut order: Vec<usize> = (0..m).collect();
+        let previous = out.points.last().map(|&p| V3::from(p));
+        if row.closed {
+            if let Some(end) = previous {
+                let start = (0..m)
+                    .min_by(|&a, &b| {
+                        (V3::from(row.points[a]) - end).norm().total_cmp(&(V3::from(row.points[b]) - end).norm())
+                    })
+                    .unwrap_or(0);
+                order.rotate_left(start);
+            }
+        } else {
+            if open_rows % 2 == 1 {
+                order.reverse();
+            }
+            open_rows += 1;
+        }
+        let k = out.row_offsets.len();
+        for i in order {
+            out.points.push(row.points[i]);
+            out.normals.push(row.normals[i]);
+            out.row.push(k);
+            let kappa = row.curvature[i];
+            out.curvature.push(kappa);
+            out.tool_fits.push(!(kappa < 0.0 && -1.0 / kappa <= r));
+            out.allowance.push(row.allowance[i]);
+            out.feed.push(options.removal.map_or(f64::NAN, |model| model.feed(row.allowance[i])));
+        }
+        row.points.clear();
+        out.row_offsets.push(d);
+        out.row_closed.push(row.closed);
+    }
+    Ok(out)
+}
+
+/// Row offsets from `first` to `last`: each step the smallest plane step of the samples (sorted
+/// by offset) between the row and the next (module docs, step 1).
+fn row_offsets(samples: &[(f64, f64)], first: f64, last: f64, flat: f64, thickness: f64) -> Vec<f64> {
+    if last <= first {
+        return vec![0.5 * (first + last)];
+    }
+    let band_min = |a: f64, b: f64| -> Option<f64> {
+        let i = samples.partition_point(|s| s.0 < a);
+        let j = samples.partition_point(|s| s.0 <= b);
+        samples[i..j].iter().map(|s| s.1).reduce(f64::min)
+    };
+    let mut rows = vec![first];
+    let mut d = first;
+    loop {
+        let mut step = band_min(d - 0.5 * thickness, d + 0.5 * thickness).unwrap_or(flat);
+        loop {
+            match band_min(d, d + step) {
+                Some(m) if m < step => step = m,
+                _ => break,
+            }
+        }
+        // A step shorter than a thousandth of the flat one would stall on a degenerate sample.
+        let step = step.max(1e-3 * flat);
+        if d + step >= last {
+            // The rows would overshoot the last: every gap shrinks in proportion so that the last
+            // row lands on it, rather than one short gap at the end.
+            let end = d + step;
+            let scale = (last - first) / (end - first);
+            rows.push(end);
+            return rows.into_iter().map(|x| first + (x - first) * scale).collect();
+        }
+        d += step;
+        rows.push(d);
+    }
+}
+
+/// Points of a surface with their outward normals and the stock standing above the model there.
+#[derive(Clone, Copy)]
+pub struct Stock<'a> {
+    pub points: &'a [[f64; 3]],
+    pub normals: &'a [[f64; 3]],
+    pub allowance: &'a [f64],
+}
+
+impl Stock<'_> {
+    fn check(&self, prefix: &str) -> Result<()> {
+        check_finite_points(&format!("{prefix}points"), self.points)?;
+        check_finite_points(&format!("{prefix}normals"), self.normals)?;
+        check_finite(&format!("{prefix}allowance"), self.allowance, 1)?;
+        if self.normals.len() != self.points.len() || self.allowance.len() != self.points.len() {
+            return Err(Error::invalid(
+                &format!("{prefix}normals"),
+                format!(
+                    "{prefix}points, normals and allowance must have one row per point; got {}, {} and {}",
+                    self.points.len(),
+                    self.normals.len(),
+                    self.allowance.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The stock left over the model at every blank point after a spherical tool of radius
+/// `tool_radius` at each path point, sunk by `depths` below the blank (model + allowance) there,
+/// has swept the path (module docs), and the nearest path point of each blank point. Negative
+/// stock: cut below the model. The tool centre moves in straight lines between the points of a
+/// row (`rows`: the row of each path point), as a machine interpolates between GOTOs.
+pub fn simulate_removal(
+    blank: Stock,
+    path: Stock,
+    rows: &[usize],
+    depths: &[f64],
+    tool_radius: f64,
+) -> Result<(Vec<f64>, Vec<usize>)> {
+    blank.check("")?;
+    path.check("path_")?;
+    check_finite("depths", depths, 1)?;
+    check_positive("tool_radius", tool_radius, "mm")?;
+    let m = path.points.len();
+    if depths.len() != m {
+        return Err(Error::invalid("depths", format!("expected one per path point ({m}), got {}", depths.len())));
+    }
+    if m == 0 {
+        return Err(Error::invalid("path_points", "the path is empty"));
+    }
+    if rows.len() != m {
+        return Err(Error::invalid("rows", format!("expected one per path point ({m}), got {}", rows.len())));
+    }
+    let (points, normals, allowance) = (blank.points, blank.normals, blank.allowance);
+    let (path_points, path_normals, path_allowance) = (path.points, path.normals, path.allowance);
+    let r = tool_radius;
+    // Tool centres: the contact point sunk to allowance − depth above the model, one radius out.
+    let at: Vec<V3> = (0..m)
+        .map(|j| {
+            let nj = V3::from(path_normals[j]).normalize();
+            V3::from(path_points[j]) + (path_allowance[j] - depths[j] + r) * nj
+        })
+        .collect();
+    // The sweep between two points of a row as tool positions close enough that the ridges
+    // between them stay below SWEEP_TOLERANCE (δ²/8R).
+    let delta = (8.0 * r * SWEEP_TOLERANCE).sqrt();
+    let mut centres: Vec<[f64; 3]> = Vec::with_capacity(m);
+    for j in 0..m {
+        centres.push(at[j].into());
+        if j + 1 < m && rows[j + 1] == rows[j] {
+            let pieces = ((at[j + 1] - at[j]).norm() / delta).ceil().min(1e6) as usize;
+            for k in 1..pieces {
+                centres.push(at[j].lerp(&at[j + 1], k as f64 / pieces as f64).into());
+            }
+        }
+    }
+    let contacts = PointIndex::new(path_points)?;
+    // A tool reaches a point only if its lowest point lies no higher than the top of the stock
+    // anywhere: the vertical drop it can reach is bounded by the spread of the heights.
+    let top = allowance.iter().chain(path_allowance).fold(0.0f64, |a, &b| a.max(b));
+    let bottom = (0..m).map(|j| path_allowance[j] - depths[j]).fold(0.0f64, f64::min);
+    let index = PointIndex::new(&centres)?;
+    let reach = r + (top - bottom).max(0.0);
+    Ok((0..points.len())
+        .into_par_iter()
+        .map(|i| {
+            let q = V3::from(points[i]);
+            let nq = V3::from(normals[i]).normalize();
+            let mut left = allowance[i];
+            index.for_each_within(&(q + nq * allowance[i]).into(), reach, |j| {
+                let w = V3::from(centres[j]) - q;
+                let b = w.dot(&nq);
+                let across2 = w.norm_squared() - b * b;
+                if across2 < r * r {
+                    left = left.min(b - (r * r - across2).sqrt());
+                }
+            });
+            (left, contacts.nearest(&points[i]).0)
+        })
+        .unzip())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// z = a·sin(2πy/λ) over [0, 40] × [0, 60], rows along x (section normal y).
+    fn wavy(spacing: f64, a: f64, lambda: f64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<f64>) {
+        let (mut p, mut nn, mut al) = (Vec::new(), Vec::new(), Vec::new());
+        let k = 2.0 * std::f64::consts::PI / lambda;
+        for i in 0..=(40.0 / spacing) as usize {
+            for j in 0..=(60.0 / spacing) as usize {
+                let (x, y) = (i as f64 * spacing, j as f64 * spacing);
+                let slope = a * k * (k * y).cos();
+                p.push([x, y, a * (k * y).sin()]);
+                nn.push(V3::new(0.0, -slope, 1.0).normalize().into());
+                al.push(0.2 + 0.001 * x + 0.002 * y);
+            }
+        }
+        (p, nn, al)
+    }
+
+    #[test]
+    fn rows_lie_on_their_planes_on_the_surface_and_carry_the_allowance() {
+        let (p, nn, al) = wavy(0.25, 2.0, 40.0);
+        let o = GrindingOptions {
+            tool_radius: 8.0,
+            scallop_height: 0.01,
+            section_normal: [0.0, 1.0, 0.0],
+            thickness: None,
+            spacing: Some(1.0),
+            fit_radius: None,
+            removal: None,
+        };
+        let g = grinding_paths(&p, &nn, &al, &o).unwrap();
+        let k = 2.0 * std::f64::consts::PI / 40.0;
+        assert!(g.row_offsets.len() > 40);
+        for (i, q) in g.points.iter().enumerate() {
+            assert!((q[1] - g.row_offsets[g.row[i]]).abs() < 1e-9);
+            assert!((q[2] - 2.0 * (k * q[1]).sin()).abs() < 2e-4, "{q:?}");
+            assert!((g.allowance[i] - (0.2 + 0.001 * q[0] + 0.002 * q[1])).abs() < 1e-6);
+            let curvature = 2.0 * k * k * (k * q[1]).sin() / (1.0 + (2.0 * k * (k * q[1]).cos()).powi(2)).powf(1.5);
+            assert!((g.curvature[i] - curvature).abs() < 0.1 * k * k * 2.0, "{} {}", g.curvature[i], curvature);
+        }
+        // Alternating open rows.
+        let first: Vec<f64> = (0..2).map(|r| g.points[g.row.iter().position(|&x| x == r).unwrap()][0]).collect();
+        assert!(first[0] < 1.0 && first[1] > 39.0, "{first:?}");
+    }
+
+    #[test]
+    fn the_feed_removes_the_allowance_within_the_limits() {
+        let m = RemovalModel::new(0.02, [0.8, -0.6, 0.9], 20.0, 30.0, [1.0, 40.0]).unwrap();
+        for depth in [0.05, 0.1, 0.3] {
+            let f = m.feed(depth);
+            if f > 1.0 && f < 40.0 {
+                assert!((m.removal(f) - depth).abs() < 1e-12 * depth.max(1.0));
+            }
+        }
+        assert_eq!(m.feed(-0.1), 40.0);
+        assert_eq!(m.feed(1e9), 1.0);
+        assert!(RemovalModel::new(0.02, [0.8, 0.0, 0.9], 20.0, 30.0, [1.0, 40.0]).is_err());
+        assert!(RemovalModel::new(0.02, [0.8, -0.6, 0.9], 20.0, 30.0, [4.0, 1.0]).is_err());
+    }
+}
