@@ -561,6 +561,7 @@ def grinding_paths(
     section_normal: ArrayLike,
     thickness: float | None,
     spacing: float | None,
+    tolerance: float | None,
     fit_radius: float | None,
     removal: _RemovalArgs | None,
 ) -> _GrindingPathArrays:

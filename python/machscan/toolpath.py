@@ -421,6 +421,7 @@ def grinding_paths(
     *,
     thickness: float | None = None,
     spacing: float | None = None,
+    tolerance: float | None = None,
     fit_radius: float | None = None,
 ) -> GrindingPaths:
     """Belt-grinding paths over an allowance cloud, rows spaced by the scallop height (SPEC P1–P5; paper 004 §2–3).
@@ -454,6 +455,11 @@ def grinding_paths(
         scans whose spacing differs much between directions).
     spacing : float, optional
         Path point spacing along a row, mm; default the cloud's median point spacing.
+    tolerance : float, optional
+        Largest deviation of the tool centre (``tool_radius`` out along the normal) between two path points from
+        the straight line joining them, mm; default a quarter of ``scallop_height``. Rows take extra points where
+        the normal turns fast (round a blade's edges), so that a machine moving in straight lines does not cut
+        the edge.
     fit_radius : float, optional
         Radius of the curvature fits, mm; default the flat step-over, at least four point spacings.
 
@@ -478,6 +484,7 @@ def grinding_paths(
         section_normal=normal,
         thickness=thickness,
         spacing=spacing,
+        tolerance=tolerance,
         fit_radius=fit_radius,
         removal=None if model is None else model._args(),
     )

@@ -165,7 +165,8 @@ fn column<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<F64Array<'py>> {
 /// ``_GrindingPathArrays`` this returns.
 #[pyfunction]
 #[pyo3(signature = (
-    points, normals, allowance, *, tool_radius, scallop_height, section_normal, thickness, spacing, fit_radius, removal
+    points, normals, allowance, *, tool_radius, scallop_height, section_normal, thickness, spacing, tolerance, fit_radius,
+    removal
 ))]
 #[allow(clippy::too_many_arguments)]
 fn grinding_paths<'py>(
@@ -178,6 +179,7 @@ fn grinding_paths<'py>(
     section_normal: &Bound<'py, PyAny>,
     thickness: Option<f64>,
     spacing: Option<f64>,
+    tolerance: Option<f64>,
     fit_radius: Option<f64>,
     removal: Option<RemovalArgs>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -193,6 +195,7 @@ fn grinding_paths<'py>(
             section_normal,
             thickness,
             spacing,
+            tolerance,
             fit_radius,
             removal: removal.map(removal_model).transpose()?,
         };

@@ -47,6 +47,9 @@ const CHANNELS: usize = 5;
 /// Neighbours whose given normal turns more than 60° from the nearest point's lie on the other
 /// side of a thin edge (a blade's trailing edge) and are left out of a fit.
 const SAME_SIDE: f64 = 0.5;
+/// A local fit takes only neighbours whose normals turn less than 30° from the nearest point's:
+/// round an edge a few point spacings in radius a height field over a wider turn is no cubic.
+const LOCAL_TURN: f64 = 0.866;
 /// Fewest points of a wide (curvature) fit; fewer within `fit_radius` falls back to the nearest.
 const WIDE_MIN_POINTS: usize = 12;
 /// Cloud samples per `fit_radius` along each axis used for the wide fits (and the samples that
@@ -59,6 +62,18 @@ const MIN_CROSSING: f64 = 0.2;
 /// Height of the ridges the removal simulation leaves between its tool positions along a row, mm:
 /// the sweep is sampled finely enough that it is continuous to this.
 const SWEEP_TOLERANCE: f64 = 1e-5;
+/// Smallest eigenvalue of the Jacobi-scaled normal matrix of a local cubic fit below which the
+/// local fields fall back to quadrics.
+const CUBIC_CONDITION: f64 = 1e-6;
+/// The tangent-plane spread of a local patch, as the ratio of the smaller to the larger variance,
+/// below which the patch takes twice as many points (up to 16 times `LOCAL_POINTS`): the patch of
+/// a line scan must cross several lines.
+const PATCH_SPREAD: f64 = 0.1;
+/// Default tolerance of the tool centre's straight moves between path points, as a fraction of
+/// the scallop height.
+const DEFAULT_TOLERANCE: f64 = 0.25;
+/// Cosine of the largest angle (15°) between a local fit's normal and its nearest points' normals.
+const FIT_AGREEMENT: f64 = 0.966;
 /// Newton iterations putting a point on the local quadric within its plane.
 const PLACE_ITERATIONS: usize = 6;
 
@@ -128,6 +143,9 @@ pub struct GrindingOptions {
     pub thickness: Option<f64>,
     /// Path point spacing along a row, mm; default the cloud's point spacing.
     pub spacing: Option<f64>,
+    /// Largest deviation of the tool centre between two path points from the straight line
+    /// joining them, mm; default a quarter of the scallop height.
+    pub tolerance: Option<f64>,
     /// Radius of the curvature fits, mm; default the step-over on a flat surface, at least four
     /// point spacings.
     pub fit_radius: Option<f64>,
@@ -201,15 +219,23 @@ impl Patch {
         }
         let unscale = Vector6::new(scale, 1.0, 1.0, 1.0 / scale, 1.0 / scale, 1.0 / scale);
         let height = ata.cholesky()?.solve(&atb).component_mul(&unscale);
-        // A light ridge on the cubic terms: a scan's points lie on lines, and across three lines
-        // a cubic is not determined (y³ is a multiple of y there); the ridge (a thousandth of
-        // each term's own weight) picks the smallest cubic through them and barely moves a
-        // determined one.
-        for k in 6..10 {
-            cta[(k, k)] *= 1.0 + 1e-3;
-        }
         let value = match values {
-            Some(_) => Some(cta.cholesky()?.solve(&ctv)),
+            Some(_) => {
+                // The cubic terms need the patch to span four lines of points across every
+                // direction; a scan's points lie on lines, and across fewer a cubic is not
+                // determined (y³ is a multiple of y on three lines). Then the fields are quadrics.
+                let scaled = SVector::<f64, 10>::from_fn(|k, _| 1.0 / cta[(k, k)].max(f64::MIN_POSITIVE).sqrt());
+                let normalized = SMatrix::<f64, 10, 10>::from_fn(|i, j| cta[(i, j)] * scaled[i] * scaled[j]);
+                if normalized.symmetric_eigenvalues().min() < CUBIC_CONDITION {
+                    for k in 6..10 {
+                        cta.row_mut(k).fill(0.0);
+                        cta.column_mut(k).fill(0.0);
+                        cta[(k, k)] = 1.0;
+                        ctv.row_mut(k).fill(0.0);
+                    }
+                }
+                Some(cta.cholesky()?.solve(&ctv))
+            }
             None => None,
         };
         height.iter().all(|c| c.is_finite()).then_some(Patch { origin, u, v, w, height, value, scale })
@@ -334,19 +360,54 @@ impl Cloud<'_> {
 
     /// `near` (nearest first) without the points on the other side of a thin edge from the first.
     fn same_side(&self, near: Vec<usize>) -> Vec<usize> {
+        self.within_turn(near, SAME_SIDE)
+    }
+
+    /// `near` (nearest first) without the points whose normal's cosine to the first's is below
+    /// `cosine`.
+    fn within_turn(&self, near: Vec<usize>, cosine: f64) -> Vec<usize> {
         let Some(&first) = near.first() else { return near };
         let reference = self.normals[first];
-        near.into_iter().filter(|&i| self.normals[i].dot(&reference) > SAME_SIDE).collect()
+        near.into_iter().filter(|&i| self.normals[i].dot(&reference) > cosine).collect()
+    }
+
+    /// The smaller over the larger variance of the points in the plane of their mean normal.
+    fn spread(&self, near: &[usize]) -> f64 {
+        let w = self.mean_normal(near);
+        let u = if w.x.abs() < 0.9 { V3::x() } else { V3::y() }.cross(&w).normalize();
+        let v = w.cross(&u);
+        let c: V3 = near.iter().map(|&i| self.p(i)).sum::<V3>() / near.len() as f64;
+        let (mut a, mut b, mut d) = (0.0, 0.0, 0.0);
+        for &i in near {
+            let (x, y) = ((self.p(i) - c).dot(&u), (self.p(i) - c).dot(&v));
+            a += x * x;
+            b += x * y;
+            d += y * y;
+        }
+        let mean = 0.5 * (a + d);
+        let root = (0.25 * (a - d) * (a - d) + b * b).sqrt();
+        if mean + root > 0.0 {
+            (mean - root) / (mean + root)
+        } else {
+            0.0
+        }
     }
 
     /// The local fit at q: (point on the surface in the plane (n, q), normal, allowance).
     fn local(&self, q: V3, n: V3) -> Option<(V3, V3, f64)> {
-        let found = self.index.knn(&q.into(), 2 * LOCAL_POINTS);
-        let mut near = self.same_side(found.iter().map(|&(i, _)| i).collect());
-        near.truncate(LOCAL_POINTS);
-        if near.len() < LOCAL_POINTS / 2 {
-            return None;
-        }
+        let mut k = LOCAL_POINTS;
+        let near = loop {
+            let found = self.index.knn(&q.into(), 2 * k);
+            let mut near = self.within_turn(found.iter().map(|&(i, _)| i).collect(), LOCAL_TURN);
+            near.truncate(k);
+            if near.len() < LOCAL_POINTS / 2 {
+                return None;
+            }
+            if k >= 16 * LOCAL_POINTS || found.len() < 2 * k || self.spread(&near) >= PATCH_SPREAD {
+                break near;
+            }
+            k *= 2;
+        };
         // Weighted toward the middle of the patch: where the patch is one-sided (an edge of the
         // cloud) the fit extrapolates, and its error grows with the patch's size.
         let sigma = (self.p(near[near.len() / 3]) - q).norm().max(1e-9);
@@ -358,14 +419,42 @@ impl Cloud<'_> {
                 [0.0, self.allowance[i], m.x, m.y, m.z]
             })
             .collect();
-        let patch = Patch::fit(q, self.mean_normal(&near), &pts, Some(&vals), sigma)?;
-        let on = patch.place_in_plane(q, n)?;
-        let (x, y) = patch.coords(on);
-        let [_, allowance, nx, ny, nz] = patch.value_at(x, y)?;
-        // The normal interpolated from the given ones: a model's normals are exact, and a scan's
-        // were estimated over more points than this patch holds.
-        let normal = V3::new(nx, ny, nz);
-        (normal.norm() > 0.0).then(|| (on, normal.normalize(), allowance))
+        let fitted = || {
+            let patch = Patch::fit(q, self.mean_normal(&near), &pts, Some(&vals), sigma)?;
+            let on = patch.place_in_plane(q, n)?;
+            let (x, y) = patch.coords(on);
+            let [_, allowance, nx, ny, nz] = patch.value_at(x, y)?;
+            // The normal interpolated from the given ones: a model's normals are exact, and a
+            // scan's were estimated over more points than this patch holds.
+            let normal = V3::new(nx, ny, nz);
+            (normal.norm() > 0.0).then(|| (on, normal.normalize(), allowance))
+        };
+        // Where the surface turns within the patch (a trailing edge a few point spacings round)
+        // a fit says nothing reliable: it must agree with the nearest points' own normals, or q
+        // itself stands in — a point of the section's chain, on the surface to within the chord
+        // between two cloud points — with its nearest points' normal and allowance.
+        match fitted() {
+            Some(fit) if fit.1.dot(&self.nearby(fit.0).0) >= FIT_AGREEMENT => Some(fit),
+            _ => {
+                let (normal, allowance) = self.nearby(q);
+                Some((q, normal, allowance))
+            }
+        }
+    }
+
+    /// The given normals and allowances of the 4 nearest points on one side, weighted by inverse
+    /// distance.
+    fn nearby(&self, q: V3) -> (V3, f64) {
+        let found = self.index.knn(&q.into(), 8);
+        let near = self.same_side(found.iter().map(|&(i, _)| i).collect());
+        let (mut normal, mut allowance, mut total) = (V3::zeros(), 0.0, 0.0);
+        for &i in near.iter().take(4) {
+            let w = 1.0 / ((self.p(i) - q).norm() + 1e-9);
+            normal += w * self.normals[i];
+            allowance += w * self.allowance[i];
+            total += w;
+        }
+        (normal.try_normalize(0.0).unwrap_or(self.normals[near[0]]), allowance / total)
     }
 
     /// Curvature across the rows (planes of normal n) at q from the wide fit, and the sine of
@@ -435,33 +524,98 @@ fn thin(points: &[[f64; 3]], voxel: f64) -> Vec<usize> {
     kept
 }
 
-/// Points every `spacing` of arc length along the polyline (closed: back to the start), ends
-/// included.
-fn resample(line: &[V3], closed: bool, spacing: f64) -> Vec<V3> {
-    let mut pts: Vec<V3> = line.to_vec();
-    if closed {
-        pts.push(line[0]);
-    }
-    let mut arc = vec![0.0];
-    for k in 1..pts.len() {
-        arc.push(arc[k - 1] + (pts[k] - pts[k - 1]).norm());
-    }
-    let total = *arc.last().unwrap_or(&0.0);
-    if total == 0.0 {
-        return vec![pts[0]];
-    }
-    let count = (total / spacing).round().max(1.0) as usize;
-    let last = if closed { count - 1 } else { count };
-    let mut out = Vec::with_capacity(last + 1);
-    let mut seg = 0;
-    for j in 0..=last {
-        let s = total * j as f64 / count as f64;
-        while seg + 2 < arc.len() && arc[seg + 1] < s {
-            seg += 1;
+/// A polyline by arc length (closed: back to the start).
+struct Polyline {
+    points: Vec<V3>,
+    arc: Vec<f64>,
+}
+
+impl Polyline {
+    fn new(line: &[V3], closed: bool) -> Polyline {
+        let mut points: Vec<V3> = line.to_vec();
+        if closed {
+            points.push(line[0]);
         }
-        let len = arc[seg + 1] - arc[seg];
-        let f = if len > 0.0 { ((s - arc[seg]) / len).clamp(0.0, 1.0) } else { 0.0 };
-        out.push(pts[seg] + f * (pts[seg + 1] - pts[seg]));
+        let mut arc = vec![0.0];
+        for k in 1..points.len() {
+            arc.push(arc[k - 1] + (points[k] - points[k - 1]).norm());
+        }
+        Polyline { points, arc }
+    }
+
+    fn length(&self) -> f64 {
+        *self.arc.last().unwrap_or(&0.0)
+    }
+
+    fn at(&self, s: f64) -> V3 {
+        let seg = self.arc.partition_point(|&a| a < s).clamp(1, self.arc.len().max(2) - 1);
+        if self.points.len() < 2 {
+            return self.points[0];
+        }
+        let (a, b) = (self.arc[seg - 1], self.arc[seg]);
+        let f = if b > a { ((s - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
+        self.points[seg - 1].lerp(&self.points[seg], f)
+    }
+}
+
+/// A row's path points: every `spacing` of arc length along the chain's polyline, then halved
+/// where the tool centre (`tool_radius` out along the normal) strays more than `tolerance` from
+/// the straight line between two neighbours — round a thin edge the normal turns half a turn in a
+/// millimetre, and a machine interpolating the centre between sparse points would cut through it.
+fn row_points(
+    line: &Polyline,
+    closed: bool,
+    spacing: f64,
+    tolerance: f64,
+    tool_radius: f64,
+    eval: impl Fn(V3) -> Option<(V3, V3, f64)>,
+) -> Vec<(V3, V3, f64)> {
+    let total = line.length();
+    let count = (total / spacing).round().max(1.0) as usize;
+    let last = if closed { count } else { count + 1 };
+    let mut at: Vec<(f64, (V3, V3, f64))> = (0..last)
+        .filter_map(|j| {
+            let s = total * j as f64 / count as f64;
+            eval(line.at(s)).map(|e| (s, e))
+        })
+        .collect();
+    if closed {
+        if let Some(&(_, first)) = at.first() {
+            at.push((total, first));
+        }
+    }
+    // The centre between two points on an arc of radius ρ whose normals turn by θ strays
+    // (R + ρ)(1 − cos θ/2) ≈ (R + ρ)θ²/8 from the chord, with ρθ the contact points' distance:
+    // from the end points alone, so the fits' noise does not drive the halving.
+    let strays = |a: &(V3, V3, f64), b: &(V3, V3, f64)| {
+        let theta = a.1.angle(&b.1);
+        (tool_radius * theta + (b.0 - a.0).norm()) * theta / 8.0 > tolerance
+    };
+    let min_gap = 1e-4 * spacing;
+    let mut out: Vec<(V3, V3, f64)> = Vec::with_capacity(at.len());
+    for pair in at.windows(2) {
+        let (mut stack, mut from) = (vec![pair[1]], pair[0]);
+        out.push(from.1);
+        while let Some(to) = stack.last().copied() {
+            let mid_s = 0.5 * (from.0 + to.0);
+            let mid = if to.0 - from.0 > min_gap && strays(&from.1, &to.1) { eval(line.at(mid_s)) } else { None };
+            match mid {
+                Some(m) => stack.push((mid_s, m)),
+                None => {
+                    stack.pop();
+                    if stack.is_empty() {
+                        break;
+                    }
+                    out.push(to.1);
+                    from = to;
+                }
+            }
+        }
+    }
+    if !closed {
+        if let Some(&(_, e)) = at.last() {
+            out.push(e);
+        }
     }
     out
 }
@@ -513,7 +667,9 @@ fn check_inputs(points: &[[f64; 3]], normals: &[[f64; 3]], allowance: &[f64], o:
             format!("must be a finite non-zero vector, got {:?}", o.section_normal),
         ));
     }
-    for (name, value) in [("thickness", o.thickness), ("spacing", o.spacing), ("fit_radius", o.fit_radius)] {
+    for (name, value) in
+        [("thickness", o.thickness), ("spacing", o.spacing), ("tolerance", o.tolerance), ("fit_radius", o.fit_radius)]
+    {
         if let Some(v) = value {
             check_positive(name, v, "mm")?;
         }
@@ -538,6 +694,7 @@ pub fn grinding_paths(
     let flat = step_over(r, f64::INFINITY, h)?;
     let thickness = options.thickness.unwrap_or(2.0 * spacing_cloud);
     let spacing = options.spacing.unwrap_or(spacing_cloud);
+    let tolerance = options.tolerance.unwrap_or(DEFAULT_TOLERANCE * h);
     let fit_radius = options.fit_radius.unwrap_or(flat.max(4.0 * spacing_cloud));
     let voxel = fit_radius / WIDE_SAMPLES_PER_RADIUS;
     let wide = if voxel > spacing_cloud { thin(points, voxel) } else { (0..points.len()).collect() };
@@ -584,8 +741,8 @@ pub fn grinding_paths(
                 allowance: Vec::new(),
                 closed: chain.closed,
             };
-            for q in resample(&line, chain.closed, spacing) {
-                let Some((on, normal, value)) = cloud.local(q, n) else { continue };
+            let line = Polyline::new(&line, chain.closed);
+            for (on, normal, value) in row_points(&line, chain.closed, spacing, tolerance, r, |q| cloud.local(q, n)) {
                 let (k, _) = cloud.across(on, n).unwrap_or((0.0, 0.0));
                 row.points.push(on.into());
                 row.normals.push(normal.into());
@@ -761,15 +918,28 @@ pub fn simulate_removal(
         .map(|i| {
             let q = V3::from(points[i]);
             let nq = V3::from(normals[i]).normalize();
-            let mut left = allowance[i];
+            // The chords of q's normal line inside each tool position; the stock's top comes
+            // down to a chord's lower end only if the chord reaches the top as it stands then
+            // (a chord wholly below it is the line passing through the part to a tool on the
+            // other side), so they are taken from the highest upper end down.
+            let mut chords: Vec<(f64, f64)> = Vec::new();
             index.for_each_within(&(q + nq * allowance[i]).into(), reach, |j| {
                 let w = V3::from(centres[j]) - q;
                 let b = w.dot(&nq);
                 let across2 = w.norm_squared() - b * b;
                 if across2 < r * r {
-                    left = left.min(b - (r * r - across2).sqrt());
+                    let half = (r * r - across2).sqrt();
+                    chords.push((b - half, b + half));
                 }
             });
+            chords.sort_by(|a, b| b.1.total_cmp(&a.1));
+            let mut left = allowance[i];
+            for (low, high) in chords {
+                if high < left {
+                    break;
+                }
+                left = left.min(low);
+            }
             (left, contacts.nearest(&points[i]).0)
         })
         .unzip())
@@ -804,6 +974,7 @@ mod tests {
             section_normal: [0.0, 1.0, 0.0],
             thickness: None,
             spacing: Some(1.0),
+            tolerance: None,
             fit_radius: None,
             removal: None,
         };
