@@ -163,6 +163,30 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
             grid[:5], grid, grid, grid, None, interpolation="cubic", normals="smooth", radius=None, max_edge=None
         ),
         "_BeadChainArrays": _core.bead_chain(grid, None, None, method="tree"),
+        "_GrindingPathArrays": _core.grinding_paths(
+            grid,
+            np.tile([0.0, 0.0, 1.0], (49, 1)),
+            np.full(49, 0.2),
+            tool_radius=5.0,
+            scallop_height=0.01,
+            section_normal=[0.0, 1.0, 0.0],
+            thickness=None,
+            spacing=None,
+            tolerance=None,
+            fit_radius=None,
+            removal=(0.05, (0.6, -0.7, 0.8), 20.0, 15.0, (0.5, 200.0)),
+        ),
+        "_RemovalArrays": _core.simulate_removal(
+            grid,
+            np.tile([0.0, 0.0, 1.0], (49, 1)),
+            np.full(49, 0.2),
+            grid[:7],
+            np.tile([0.0, 0.0, 1.0], (7, 1)),
+            np.full(7, 0.2),
+            [0] * 7,
+            np.full(7, 0.2),
+            tool_radius=5.0,
+        ),
         "_EnvelopeFitArrays": _core.envelope_fit(
             10 * unit, unit, 10.5 * unit, min_allowance=0.0, k=8, surface="quadric", init=None
         ),

@@ -333,6 +333,94 @@ def _allowance(args: argparse.Namespace) -> int:
     return 0
 
 
+def _floats(text: str, count: int, name: str) -> tuple[float, ...]:
+    """``count`` comma-separated numbers."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise ValueError(f"{name}: expected {count} comma-separated numbers, got {text!r}") from None
+    if len(values) != count:
+        raise ValueError(f"{name}: expected {count} comma-separated numbers, got {text!r}")
+    return values
+
+
+def _read_allowance(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Model points, normals and allowance as ``machscan allowance`` writes them: a point file with normals and an
+    ``allowance`` scalar, or a CSV table x, y, z, nx, ny, nz, allowance."""
+    from machscan.io import read
+
+    if path.suffix.lower() in (".csv", ".txt"):
+        rows = _read_rows(path, "ALLOWANCE", (7,))
+        return rows[:, :3], rows[:, 3:6], rows[:, 6]
+    f = read(path)
+    if f.normals is None or "allowance" not in f.scalars:
+        raise ValueError(f"ALLOWANCE: {path} holds no normals and 'allowance' field (write it with `machscan allowance`)")
+    return f.points, f.normals, f.scalars["allowance"]
+
+
+def _grind(args: argparse.Namespace) -> int:
+    from machscan.io import read_points
+    from machscan.registration import allowance
+    from machscan.synth import blade_allowance
+    from machscan.toolpath import RemovalModel, grinding_paths, simulate_removal
+
+    if args.simulate:
+        cloud = blade_allowance(spacing=args.spacing, seed=args.seed)
+        points, normals, stock = cloud.points, cloud.normals, cloud.allowance
+        print(f"simulated blade: {len(points):,} model points every ~{args.spacing:g} mm, allowance "
+              f"{stock.min():.3f} … {stock.max():.3f} mm")
+    elif args.source is None:
+        raise ValueError("grind: give ALLOWANCE (or MODEL --blank BLANK, or --simulate)")
+    elif args.blank is not None:
+        points, normals = _read_model(args.source)
+        stock = allowance(points, normals, read_points(args.blank))
+        keep = np.isfinite(stock)
+        points, normals, stock = points[keep], normals[keep], stock[keep]
+    else:
+        points, normals, stock = _read_allowance(args.source)
+    model = None
+    if args.removal is not None:
+        c, e1, e2, e3, vb, force, lo, hi = _floats(args.removal, 8, "--removal")
+        model = RemovalModel(C=c, exponents=(e1, e2, e3), belt_speed=vb, force=force, feed_limits=(lo, hi))
+    section = _floats(args.section_normal, 3, "--section-normal")
+    paths = grinding_paths(
+        points, normals, stock, args.tool_radius, args.scallop_height, section, model, spacing=args.path_spacing
+    )
+    check = simulate_removal(paths, points, normals, stock)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths.to_apt(out / "grind.cl")
+    _write_table(
+        out / "path.csv",
+        "x,y,z,nx,ny,nz,row,curvature,allowance,feed",
+        np.column_stack([paths.points, paths.normals, paths.row, paths.curvature, paths.allowance, paths.feed]),
+    )
+    rows = len(paths.row_offsets)
+    count = np.bincount(paths.row, minlength=rows)
+    _write_table(
+        out / "report.csv",
+        "row,offset,points,closed,deviation_min,deviation_mean,deviation_max",
+        np.column_stack([np.arange(rows), paths.row_offsets, count, paths.row_closed, check.minimum, check.mean, check.maximum]),
+    )
+    steps = np.diff(paths.row_offsets)
+    print(f"rows      : {rows} (spacing {steps.min():.3f} … {steps.max():.3f} mm)" if rows > 1 else f"rows      : {rows}")
+    print(f"points    : {len(paths.points):,}")
+    if model is not None:
+        clamped = int(np.sum((paths.feed <= model.feed_limits[0]) | (paths.feed >= model.feed_limits[1])))
+        print(f"feed      : {np.nanmin(paths.feed):.4g} … {np.nanmax(paths.feed):.4g} ({clamped} points at a limit)")
+    print(f"simulated : stock left over the model {check.deviation.min():+.4f} … {check.deviation.max():+.4f} mm")
+    print(f"written   : {out / 'grind.cl'}, {out / 'path.csv'}, {out / 'report.csv'}")
+    holds = True
+    if not paths.tool_fits.all():
+        _warn(f"{int((~paths.tool_fits).sum())} path points lie on concave stretches tighter than the tool")
+        holds = False
+    outside = int(np.sum(np.abs(check.deviation) > args.band))
+    if outside:
+        _warn(f"{outside} points end more than {args.band:g} mm off the model after the simulated pass")
+        holds = False
+    return 0 if holds else 3
+
+
 def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
     """A CSV table of numbers with one header line, of one of ``widths`` columns."""
     rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
@@ -644,6 +732,36 @@ def build_parser() -> argparse.ArgumentParser:
     )
     co.add_argument("--seed", type=int, default=0, help="seed of the simulated misplacement and noise (default: %(default)s)")
     co.set_defaults(run=_compensate)
+
+    gr = sub.add_parser("grind", help="belt-grinding paths from an allowance cloud, spaced by the scallop height")
+    gr.add_argument(
+        "source",
+        nargs="?",
+        type=Path,
+        help="allowance file from `machscan allowance` (points, normals, allowance), or the model with --blank",
+    )
+    gr.add_argument("--blank", type=Path, help="measured blank points: SOURCE is then the model and the allowance is computed")
+    gr.add_argument("--tool-radius", type=float, default=10.0, help="contact radius across the rows, mm (default: %(default)s)")
+    gr.add_argument("--scallop-height", type=float, default=0.01, help="allowed cusp height, mm (default: %(default)s)")
+    gr.add_argument(
+        "--section-normal", default="0,0,1", help="normal of the section planes, x,y,z (default: %(default)s, a blade's span)"
+    )
+    gr.add_argument(
+        "--removal",
+        metavar="C,E_BELT,E_FEED,E_FORCE,BELT_SPEED,FORCE,FEED_LO,FEED_HI",
+        help="removal model r = C·Vb^e1·Vw^e2·F^e3 and feed limits; without it no feeds are written",
+    )
+    gr.add_argument("--path-spacing", type=float, default=None, help="path point spacing along a row, mm (default: the cloud's)")
+    gr.add_argument(
+        "--band", type=float, default=0.08, help="allowed deviation after the simulated pass, mm (default: %(default)s)"
+    )
+    gr.add_argument(
+        "--out", type=Path, default=Path("grinding"), help="output folder: grind.cl, path.csv, report.csv (default: %(default)s)"
+    )
+    gr.add_argument("--simulate", action="store_true", help="run on the built-in synthetic blade")
+    gr.add_argument("--spacing", type=float, default=0.5, help="point spacing of the simulated blade, mm (default: %(default)s)")
+    gr.add_argument("--seed", type=int, default=0, help="seed of the simulated allowance (default: %(default)s)")
+    gr.set_defaults(run=_grind)
     return parser
 
 
