@@ -61,7 +61,7 @@ const WIDE_SAMPLES_PER_RADIUS: f64 = 5.0;
 const MIN_CROSSING: f64 = 0.2;
 /// Height of the ridges the removal simulation leaves between its tool positions along a row, mm:
 /// the sweep is sampled finely enough that it is continuous to this.
-const SWEEP_TOLERANCE: f64 = 1e-5;
+const SWEEP_TOLERANCE: f64 = 1e-4;
 /// Smallest eigenvalue of the Jacobi-scaled normal matrix of a local cubic fit below which the
 /// local fields fall back to quadrics.
 const CUBIC_CONDITION: f64 = 1e-6;
@@ -909,12 +909,10 @@ pub fn simulate_removal(
         }
     }
     let contacts = PointIndex::new(path_points)?;
-    // A tool reaches a point only if its lowest point lies no higher than the top of the stock
-    // anywhere: the vertical drop it can reach is bounded by the spread of the heights.
-    let top = allowance.iter().chain(path_allowance).fold(0.0f64, |a, &b| a.max(b));
+    // A tool position matters to q only if it holds a point of q's normal line between the
+    // lowest any tool sinks to and the top of q's stock: its centre lies within R of that segment.
     let bottom = (0..m).map(|j| path_allowance[j] - depths[j]).fold(0.0f64, f64::min);
     let index = PointIndex::new(&centres)?;
-    let reach = r + (top - bottom).max(0.0);
     Ok((0..points.len())
         .into_par_iter()
         .map(|i| {
@@ -925,7 +923,9 @@ pub fn simulate_removal(
             // (a chord wholly below it is the line passing through the part to a tool on the
             // other side), so they are taken from the highest upper end down.
             let mut chords: Vec<(f64, f64)> = Vec::new();
-            index.for_each_within(&(q + nq * allowance[i]).into(), reach, |j| {
+            let (low, high) = (bottom.min(allowance[i]), allowance[i]);
+            let middle = q + nq * (0.5 * (low + high));
+            index.for_each_within(&middle.into(), r + 0.5 * (high - low), |j| {
                 let w = V3::from(centres[j]) - q;
                 let b = w.dot(&nq);
                 let across2 = w.norm_squared() - b * b;
