@@ -382,3 +382,46 @@ def test_compensate_names_a_missing_argument_and_a_bad_table(tmp_path, capsys):
     ]
     assert main(["compensate", *args]) == 2
     assert "--locating" in capsys.readouterr().err
+
+
+def test_grind_writes_the_path_table_and_report_from_an_allowance_file(tmp_path, capsys):
+    panel = synth.WavyPanel(width=20.0, length=30.0)
+    cloud = panel.sample(0.5, seed=4)
+    source = tmp_path / "allowance.ply"
+    machscan.io.write_points(source, cloud.points, normals=cloud.normals, scalars={"allowance": cloud.allowance})
+    out = tmp_path / "grinding"
+    removal = "0.05,0.6,-0.7,0.8,20,15,0.5,200"
+    args = ["grind", str(source), "--section-normal", "0,1,0", "--tool-radius", "8", "--removal", removal, "--out", str(out)]
+    assert main(args) == 0
+    assert "rows" in capsys.readouterr().out
+    path = machscan.io.read_toolpath(out / "grind.cl")
+    table = np.loadtxt(out / "path.csv", delimiter=",", skiprows=1)
+    assert np.abs(path.points - table[:, :3]).max() < 1e-4
+    np.testing.assert_allclose(path.feeds, table[:, 9], rtol=1e-6)
+    expected = machscan.grinding_paths(
+        cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), machscan.RemovalModel.of(
+            dict(C=0.05, exponents=(0.6, -0.7, 0.8), belt_speed=20.0, force=15.0, feed_limits=(0.5, 200.0))
+        )
+    )
+    assert len(table) == len(expected.points)
+    report = np.loadtxt(out / "report.csv", delimiter=",", skiprows=1)
+    assert len(report) == len(expected.row_offsets) and np.abs(report[:, 4:]).max() <= 0.08
+    # The CSV form of `machscan allowance` reads the same.
+    csv = tmp_path / "allowance.csv"
+    np.savetxt(csv, np.column_stack([cloud.points, cloud.normals, cloud.allowance]), delimiter=",", header="x,y,z,nx,ny,nz,a")
+    assert main(["grind", str(csv), "--section-normal", "0,1,0", "--tool-radius", "8", "--out", str(tmp_path / "g2")]) == 0
+
+
+def test_grind_refuses_a_malformed_removal_model_and_a_file_without_allowance(tmp_path, capsys):
+    src = tmp_path / "bare.ply"
+    machscan.io.write_points(src, np.random.default_rng(0).random((50, 3)))
+    assert main(["grind", str(src), "--out", str(tmp_path / "o")]) == 2
+    assert "allowance" in capsys.readouterr().err
+    assert main(["grind", "--simulate", "--removal", "1,2,3", "--out", str(tmp_path / "o")]) == 2
+    assert "--removal" in capsys.readouterr().err
+
+
+def test_grind_simulate_runs_on_the_built_in_blade(tmp_path, capsys):
+    assert main(["grind", "--simulate", "--spacing", "1.0", "--band", "0.5", "--out", str(tmp_path / "b")]) == 0
+    text = capsys.readouterr().out
+    assert "simulated blade" in text and "stock left" in text
