@@ -62,7 +62,7 @@ class WavyPanel:
     20.26
     >>> cloud = panel.sample(0.5)
     >>> cloud.points.shape
-    (12961, 3)
+    (13041, 3)
     """
 
     width: float = 40.0
