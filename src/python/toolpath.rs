@@ -215,6 +215,23 @@ fn grinding_paths<'py>(
     Ok(d)
 }
 
+/// `f(model, value)` for every value of a 1-D array under the removal model given.
+fn under_model<'py>(
+    py: Python<'py>,
+    values: &Bound<'py, PyAny>,
+    name: &str,
+    removal: RemovalArgs,
+    f: fn(&RemovalModel, f64) -> crate::Result<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let v = column(values, name)?;
+    let vv = v.values()?;
+    let out = enter(py, || {
+        let model = removal_model(removal)?;
+        vv.iter().map(|&x| f(&model, x)).collect::<crate::Result<Vec<f64>>>()
+    })?;
+    to_numpy(py, out, &[vv.len()])
+}
+
 /// Feeds removing the given depths under a removal model; ``machscan.RemovalModel.feed``.
 #[pyfunction]
 fn removal_feeds<'py>(
@@ -222,13 +239,7 @@ fn removal_feeds<'py>(
     depths: &Bound<'py, PyAny>,
     removal: RemovalArgs,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let d = column(depths, "allowance")?;
-    let dv = d.values()?;
-    let out = enter(py, || {
-        let model = removal_model(removal)?;
-        Ok(dv.iter().map(|&x| model.feed(x)).collect::<Vec<f64>>())
-    })?;
-    to_numpy(py, out, &[dv.len()])
+    under_model(py, depths, "allowance", removal, |model, depth| Ok(model.feed(depth)))
 }
 
 /// Depths removed at the given feeds under a removal model; ``machscan.RemovalModel.removal``.
@@ -238,16 +249,13 @@ fn removal_depths<'py>(
     feeds: &Bound<'py, PyAny>,
     removal: RemovalArgs,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let f = column(feeds, "feed")?;
-    let fv = f.values()?;
-    let out = enter(py, || {
-        let model = removal_model(removal)?;
-        if let Some(i) = fv.iter().position(|&x| !(x.is_finite() && x > 0.0)) {
-            return Err(crate::Error::invalid("feed", format!("must be positive and finite, got {} at {i}", fv[i])));
+    under_model(py, feeds, "feed", removal, |model, feed| {
+        if feed.is_finite() && feed > 0.0 {
+            Ok(model.removal(feed))
+        } else {
+            Err(crate::Error::invalid("feed", format!("must be positive and finite, got {feed}")))
         }
-        Ok(fv.iter().map(|&x| model.removal(x)).collect::<Vec<f64>>())
-    })?;
-    to_numpy(py, out, &[fv.len()])
+    })
 }
 
 /// Removal simulation (SPEC P5 beyond); ``machscan.simulate_removal`` documents it and wraps the

@@ -34,7 +34,7 @@ use crate::error::{check_finite, check_finite_points, check_positive, Error, Res
 use crate::spatial::PointIndex;
 use nalgebra::{Matrix6, SMatrix, SVector, Vector3, Vector6};
 use rayon::prelude::*;
-use std::collections::HashMap;
+use std::collections::HashSet;
 
 type V3 = Vector3<f64>;
 
@@ -513,15 +513,8 @@ fn point_spacing(points: &[[f64; 3]], index: &PointIndex) -> f64 {
 
 /// One point per occupied voxel of size `voxel`: the first one met.
 fn thin(points: &[[f64; 3]], voxel: f64) -> Vec<usize> {
-    let mut seen: HashMap<[i64; 3], ()> = HashMap::new();
-    let mut kept = Vec::new();
-    for (i, p) in points.iter().enumerate() {
-        let key = p.map(|c| (c / voxel).floor() as i64);
-        if seen.insert(key, ()).is_none() {
-            kept.push(i);
-        }
-    }
-    kept
+    let mut seen: HashSet<[i64; 3]> = HashSet::new();
+    (0..points.len()).filter(|&i| seen.insert(points[i].map(|c| (c / voxel).floor() as i64))).collect()
 }
 
 /// A polyline by arc length (closed: back to the start).
@@ -623,29 +616,16 @@ fn row_points(
     out
 }
 
+/// One row: (point, normal, curvature across the rows, allowance) per path point, and whether
+/// it closes up.
 struct Row {
-    points: Vec<[f64; 3]>,
-    normals: Vec<[f64; 3]>,
-    curvature: Vec<f64>,
-    allowance: Vec<f64>,
+    points: Vec<(V3, V3, f64, f64)>,
     closed: bool,
 }
 
-fn check_inputs(points: &[[f64; 3]], normals: &[[f64; 3]], allowance: &[f64], o: &GrindingOptions) -> Result<V3> {
-    check_finite_points("points", points)?;
-    check_finite_points("normals", normals)?;
-    check_finite("allowance", allowance, 1)?;
-    if normals.len() != points.len() || allowance.len() != points.len() {
-        return Err(Error::invalid(
-            "normals",
-            format!(
-                "points, normals and allowance must have one row per point; got {}, {} and {}",
-                points.len(),
-                normals.len(),
-                allowance.len()
-            ),
-        ));
-    }
+fn check_inputs(cloud: Stock, o: &GrindingOptions) -> Result<V3> {
+    cloud.check("")?;
+    let (points, normals) = (cloud.points, cloud.normals);
     if let Some(i) = normals.iter().position(|n| V3::from(*n).norm() == 0.0) {
         return Err(Error::invalid("normals", format!("row {i} is a zero vector")));
     }
@@ -687,7 +667,7 @@ pub fn grinding_paths(
     allowance: &[f64],
     options: &GrindingOptions,
 ) -> Result<GrindingPaths> {
-    let n = check_inputs(points, normals, allowance, options)?;
+    let n = check_inputs(Stock { points, normals, allowance }, options)?;
     let (r, h) = (options.tool_radius, options.scallop_height);
     let index = PointIndex::new(points)?;
     let spacing_cloud = point_spacing(points, &index);
@@ -737,21 +717,12 @@ pub fn grinding_paths(
                 by_offset[a..b].iter().map(|&i| (cloud.p(i) - (offsets[i] - d) * n).into()).collect();
             let chain = bead_chain(&slab, None, None, Chain::Tree)?;
             let line: Vec<V3> = chain.order.iter().map(|&k| V3::from(slab[k])).collect();
-            let mut row = Row {
-                points: Vec::new(),
-                normals: Vec::new(),
-                curvature: Vec::new(),
-                allowance: Vec::new(),
-                closed: chain.closed,
-            };
             let line = Polyline::new(&line, chain.closed);
-            for (on, normal, value) in row_points(&line, chain.closed, spacing, tolerance, r, |q| cloud.local(q, n)) {
-                let (k, _) = cloud.across(on, n).unwrap_or((0.0, 0.0));
-                row.points.push(on.into());
-                row.normals.push(normal.into());
-                row.curvature.push(k);
-                row.allowance.push(value);
-            }
+            let points = row_points(&line, chain.closed, spacing, tolerance, r, |q| cloud.local(q, n))
+                .into_iter()
+                .map(|(on, normal, value)| (on, normal, cloud.across(on, n).map_or(0.0, |(k, _)| k), value))
+                .collect();
+            let row = Row { points, closed: chain.closed };
             Ok((!row.points.is_empty()).then_some(row))
         })
         .collect::<Result<_>>()?;
@@ -759,37 +730,31 @@ pub fn grinding_paths(
     // 3. Joining.
     let mut out = GrindingPaths::default();
     let mut open_rows = 0usize;
-    for (mut row, d) in built.into_iter().zip(rows).filter_map(|(row, d)| row.map(|row| (row, d))) {
-        let m = row.points.len();
-        let mut order: Vec<usize> = (0..m).collect();
-        let previous = out.points.last().map(|&p| V3::from(p));
+    for (row, d) in built.into_iter().zip(rows).filter_map(|(row, d)| row.map(|row| (row, d))) {
+        let mut points = row.points;
         if row.closed {
-            if let Some(end) = previous {
-                let start = (0..m)
-                    .min_by(|&a, &b| {
-                        (V3::from(row.points[a]) - end).norm().total_cmp(&(V3::from(row.points[b]) - end).norm())
-                    })
+            if let Some(end) = out.points.last().map(|&p| V3::from(p)) {
+                let start = (0..points.len())
+                    .min_by(|&a, &b| (points[a].0 - end).norm().total_cmp(&(points[b].0 - end).norm()))
                     .unwrap_or(0);
-                order.rotate_left(start);
+                points.rotate_left(start);
             }
         } else {
             if open_rows % 2 == 1 {
-                order.reverse();
+                points.reverse();
             }
             open_rows += 1;
         }
         let k = out.row_offsets.len();
-        for i in order {
-            out.points.push(row.points[i]);
-            out.normals.push(row.normals[i]);
+        for (p, normal, kappa, allowance) in points {
+            out.points.push(p.into());
+            out.normals.push(normal.into());
             out.row.push(k);
-            let kappa = row.curvature[i];
             out.curvature.push(kappa);
             out.tool_fits.push(!(kappa < 0.0 && -1.0 / kappa <= r));
-            out.allowance.push(row.allowance[i]);
-            out.feed.push(options.removal.map_or(f64::NAN, |model| model.feed(row.allowance[i])));
+            out.allowance.push(allowance);
+            out.feed.push(options.removal.map_or(f64::NAN, |model| model.feed(allowance)));
         }
-        row.points.clear();
         out.row_offsets.push(d);
         out.row_closed.push(row.closed);
     }
