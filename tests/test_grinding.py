@@ -188,5 +188,8 @@ def test_bad_clouds_are_refused_by_name(panel_paths):
         machscan.grinding_paths(p, n, a, 8.0, 0.01, (0, 1, 0))
     with pytest.raises(ValueError, match="normals"):
         machscan.grinding_paths(p, np.zeros_like(n), cloud.allowance[:500], 8.0, 0.01, (0, 1, 0))
+    with pytest.raises(ValueError, match="normals"):
+        paths = machscan.grinding_paths(p, n, cloud.allowance[:500], 8.0, 0.01, (0, 1, 0))
+        machscan.simulate_removal(paths, p, np.zeros_like(n), cloud.allowance[:500])
     with pytest.raises(TypeError, match="removal_model"):
         machscan.grinding_paths(p, n, cloud.allowance[:500], 8.0, 0.01, (0, 1, 0), removal_model=3.0)

@@ -543,6 +543,12 @@ def simulate_removal(paths: GrindingPaths, points: ArrayLike, normals: ArrayLike
     Returns
     -------
     RemovalCheck
+
+    Examples
+    --------
+    >>> check = machscan.simulate_removal(paths, cloud.points, cloud.normals, cloud.allowance)
+    >>> bool((np.abs(check.deviation) <= 0.08).all())   # the paper's band for ground sections
+    True
     """
     out = _core.simulate_removal(
         points,

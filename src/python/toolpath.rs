@@ -1,5 +1,7 @@
 //! Bindings of `crate::toolpath`.
-use super::convert::{enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array};
+use super::convert::{
+    count, enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array,
+};
 use super::mesh::surface;
 use crate::mesh::surface_faces;
 use crate::toolpath::bead_chain::{bead_chain as run_bead_chain, Chain};
@@ -286,7 +288,7 @@ fn simulate_removal<'py>(
     let (ppr, pnr, pav, dv) = (pp.rows::<3>()?, pn.rows::<3>()?, pa.values()?, dd.values()?);
     let blank = Stock { points: pr, normals: nr, allowance: av };
     let path = Stock { points: ppr, normals: pnr, allowance: pav };
-    let rows: Vec<usize> = path_row.iter().map(|&r| r.max(0) as usize).collect();
+    let rows: Vec<usize> = path_row.iter().map(|&r| count("path_row", r)).collect::<PyResult<_>>()?;
     let (left, nearest) = enter(py, || run_simulate_removal(blank, path, &rows, dv, tool_radius))?;
     let d = PyDict::new(py);
     d.set_item("deviation", to_numpy(py, left, &[pr.len()])?)?;

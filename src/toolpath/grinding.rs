@@ -625,10 +625,7 @@ struct Row {
 
 fn check_inputs(cloud: Stock, o: &GrindingOptions) -> Result<V3> {
     cloud.check("")?;
-    let (points, normals) = (cloud.points, cloud.normals);
-    if let Some(i) = normals.iter().position(|n| V3::from(*n).norm() == 0.0) {
-        return Err(Error::invalid("normals", format!("row {i} is a zero vector")));
-    }
+    let points = cloud.points;
     if points.len() < LOCAL_POINTS {
         return Err(Error::invalid(
             "points",
@@ -820,6 +817,9 @@ impl Stock<'_> {
                     self.allowance.len()
                 ),
             ));
+        }
+        if let Some(i) = self.normals.iter().position(|n| V3::from(*n).norm() == 0.0) {
+            return Err(Error::invalid(&format!("{prefix}normals"), format!("row {i} is a zero vector")));
         }
         Ok(())
     }
