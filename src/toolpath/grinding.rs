@@ -16,8 +16,11 @@
 //!    ends; where the rows would overshoot the last, every gap shrinks in proportion.
 //! 2. **Row points.** The cloud points within ±thickness/2 of the plane are projected onto it,
 //!    ordered by the bead chain (`bead_chain.rs`) and resampled every `spacing` along the chain.
-//!    Each sample is then put on the surface without leaving the plane: a quadric of the nearest
-//!    cloud points (height and allowance), solved along the in-plane direction of its normal.
+//!    Each sample is then put on the surface without leaving the plane: a height field of the
+//!    nearest cloud points (cubic where they span four scan lines, else quadric, widened until they
+//!    span three), solved along the in-plane direction of its normal; round an edge, where the
+//!    nearest points' normals turn by more than 30°, the support function of the edge's cuts
+//!    (`edge.rs`), which follows an edge of a few point spacings' radius between scan lines.
 //!    This is where a path point's position, normal and allowance come from; its curvature across
 //!    the rows comes from the wide fit of step 1.
 //! 3. **Joining.** Open rows alternate direction (a boustrophedon); closed rows all run the same
@@ -29,6 +32,7 @@
 //! the depth the feed removes there, is swept over the blank (model + allowance), and the stock
 //! left over the model is reported at every cloud point.
 use super::bead_chain::{bead_chain, Chain};
+use super::edge::EdgePatch;
 use super::scallop::step_over;
 use crate::error::{check_finite, check_finite_points, check_positive, Error, Result};
 use crate::spatial::PointIndex;
@@ -41,6 +45,8 @@ type V3 = Vector3<f64>;
 /// Nearest cloud points a path point's position, normal and allowance are fitted to (of twice as
 /// many candidates, those on the same side of a thin edge).
 const LOCAL_POINTS: usize = 24;
+/// Nearest cloud points of an edge patch (`edge.rs`): a few scan lines' worth of an edge's tip.
+const EDGE_POINTS: usize = 40;
 /// Cubic fields fitted over a local patch: the height, the allowance and the three components of
 /// the normal.
 const CHANNELS: usize = 5;
@@ -63,12 +69,15 @@ const MIN_CROSSING: f64 = 0.2;
 /// the sweep is sampled finely enough that it is continuous to this.
 const SWEEP_TOLERANCE: f64 = 1e-4;
 /// Smallest eigenvalue of the Jacobi-scaled normal matrix of a local cubic fit below which the
-/// local fields fall back to quadrics.
-const CUBIC_CONDITION: f64 = 1e-6;
-/// The tangent-plane spread of a local patch, as the ratio of the smaller to the larger variance,
-/// below which the patch takes twice as many points (up to 16 times `LOCAL_POINTS`): the patch of
-/// a line scan must cross several lines.
-const PATCH_SPREAD: f64 = 0.1;
+/// local fields fall back to quadrics: over three scan lines it is 1.5e-6 (y³ is nearly a
+/// combination of 1, y, y²) and the cubic's height 45 µm off; over four, 0.04.
+const CUBIC_CONDITION: f64 = 1e-3;
+/// Smallest eigenvalue of the Jacobi-scaled normal matrix of a quadric over a local patch's points
+/// below which the patch takes twice as many points (up to 16 times `LOCAL_POINTS`): a scan's
+/// points lie on lines, and a patch of two lines (a line scan, or dense points along the lines
+/// round an edge) leaves the curvature across them undetermined — 7e-5 there, 0.14 over four
+/// lines, on the synthetic blade.
+const QUADRIC_CONDITION: f64 = 1e-3;
 /// Default tolerance of the tool centre's straight moves between path points, as a fraction of
 /// the scallop height.
 const DEFAULT_TOLERANCE: f64 = 0.25;
@@ -371,30 +380,31 @@ impl Cloud<'_> {
         near.into_iter().filter(|&i| self.normals[i].dot(&reference) > cosine).collect()
     }
 
-    /// The smaller over the larger variance of the points in the plane of their mean normal.
-    fn spread(&self, near: &[usize]) -> f64 {
+    /// How well `near` determine a quadric height field over the plane of their mean normal: the
+    /// smallest eigenvalue of the Jacobi-scaled normal matrix (1 for ideally spread points, 0
+    /// when a term is a combination of the others — all points on one or two lines).
+    fn quadric_condition(&self, near: &[usize]) -> f64 {
         let w = self.mean_normal(near);
         let u = if w.x.abs() < 0.9 { V3::x() } else { V3::y() }.cross(&w).normalize();
         let v = w.cross(&u);
         let c: V3 = near.iter().map(|&i| self.p(i)).sum::<V3>() / near.len() as f64;
-        let (mut a, mut b, mut d) = (0.0, 0.0, 0.0);
+        let scale = near.iter().map(|&i| (self.p(i) - c).norm()).fold(0.0, f64::max).max(1e-12);
+        let mut m = Matrix6::zeros();
         for &i in near {
-            let (x, y) = ((self.p(i) - c).dot(&u), (self.p(i) - c).dot(&v));
-            a += x * x;
-            b += x * y;
-            d += y * y;
+            let d = (self.p(i) - c) / scale;
+            let (x, y) = (d.dot(&u), d.dot(&v));
+            let row = Vector6::new(1.0, x, y, x * x, x * y, y * y);
+            m += row * row.transpose();
         }
-        let mean = 0.5 * (a + d);
-        let root = (0.25 * (a - d) * (a - d) + b * b).sqrt();
-        if mean + root > 0.0 {
-            (mean - root) / (mean + root)
-        } else {
-            0.0
-        }
+        let scaled = Vector6::from_fn(|k, _| 1.0 / m[(k, k)].max(f64::MIN_POSITIVE).sqrt());
+        Matrix6::from_fn(|i, j| m[(i, j)] * scaled[i] * scaled[j]).symmetric_eigenvalues().min()
     }
 
     /// The local fit at q: (point on the surface in the plane (n, q), normal, allowance).
     fn local(&self, q: V3, n: V3) -> Option<(V3, V3, f64)> {
+        if let Some(fit) = self.edge(q, n) {
+            return Some(fit);
+        }
         let mut k = LOCAL_POINTS;
         let near = loop {
             let found = self.index.knn(&q.into(), 2 * k);
@@ -403,7 +413,7 @@ impl Cloud<'_> {
             if near.len() < LOCAL_POINTS / 2 {
                 return None;
             }
-            if k >= 16 * LOCAL_POINTS || found.len() < 2 * k || self.spread(&near) >= PATCH_SPREAD {
+            if k >= 16 * LOCAL_POINTS || found.len() < 2 * k || self.quadric_condition(&near) >= QUADRIC_CONDITION {
                 break near;
             }
             k *= 2;
@@ -440,6 +450,21 @@ impl Cloud<'_> {
                 Some((q, normal, allowance))
             }
         }
+    }
+
+    /// The fit at q of an edge patch, where the normals of q's nearest points turn by more than
+    /// a height field follows (`LOCAL_TURN`); None elsewhere or where the patch does not fit.
+    fn edge(&self, q: V3, n: V3) -> Option<(V3, V3, f64)> {
+        let found = self.index.knn(&q.into(), EDGE_POINTS);
+        let reference = self.normals[found.first()?.0];
+        if found.iter().all(|&(i, _)| self.normals[i].dot(&reference) >= LOCAL_TURN) {
+            return None;
+        }
+        let sigma = 1.5 * found[found.len() / 3].1.sqrt();
+        let points: Vec<V3> = found.iter().map(|&(i, _)| self.p(i)).collect();
+        let normals: Vec<V3> = found.iter().map(|&(i, _)| self.normals[i]).collect();
+        let allowance: Vec<f64> = found.iter().map(|&(i, _)| self.allowance[i]).collect();
+        EdgePatch::fit(q, reference, &points, &normals, &allowance, sigma)?.place_in_plane(q, n)
     }
 
     /// The given normals and allowances of the 4 nearest points on one side, weighted by inverse

@@ -24,6 +24,7 @@
 //! extrapolated (by the spline, or by the plane of the nearest triangle) and flagged in
 //! `inside`.
 pub mod bead_chain;
+mod edge;
 pub mod grinding;
 pub mod scallop;
 pub mod spline;
