@@ -19,8 +19,10 @@ The API is organised by domain, and the everyday names are also here at the top 
 - :mod:`machscan.matching` — isometric matching of a bent skin (mirror milling);
 - :mod:`machscan.toolpath` — toolpath compensation onto the bent skin;
 - :mod:`machscan.cad` — CAD contours from CSV and APT files;
+- :mod:`machscan.dask` — the same on Dask arrays and many files, on a cluster (``machscan[dask]``);
 - :mod:`machscan.synth` — synthetic scans and parts with exact ground truth;
-- :mod:`machscan.plot` — figures (needs matplotlib).
+- :mod:`machscan.plot` — figures (needs matplotlib);
+- :func:`machscan.thread_limit` — how many threads the kernels use from the calling thread.
 """
 
 import importlib as _importlib
@@ -96,6 +98,7 @@ from machscan.registration import (
     positioning_errors,
 )
 from machscan.scan import Profiler, Scan, read_scan_csv, write_scan_csv
+from machscan.threads import thread_limit
 from machscan.toolpath import (
     BeadChain,
     CompensatedToolpath,
@@ -200,6 +203,7 @@ __all__ = [
     "step_over",
     "surface_variation",
     "synth",
+    "thread_limit",
     "toolpath",
     "uniform_downsample",
     "voxel_downsample",
@@ -208,9 +212,9 @@ __all__ = [
     "write_scan_csv",
 ]
 
-# Imported on first use: demos, tests and figures need them, a plant script does not (and
-# plot needs matplotlib).
-_LAZY = ("cad", "plot", "synth")
+# Imported on first use: demos, tests and figures need them, a plant script does not (plot
+# needs matplotlib, dask the optional dependencies machscan[dask]).
+_LAZY = ("cad", "dask", "plot", "synth")
 
 # Older spellings, kept importable with a DeprecationWarning that names the new one.
 _RENAMED = {
@@ -231,4 +235,4 @@ def __getattr__(name: str) -> object:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    return sorted(set(globals()) | set(__all__) | set(_LAZY))

@@ -66,6 +66,7 @@ __all__ = [
     "remove_statistical_outliers",
     "resample_polyline",
     "scan_to_wcs",
+    "set_thread_limit",
     "surface_variation",
     "uniform_downsample",
     "view_groove_frame",
@@ -82,6 +83,11 @@ ALLOWANCE_NEIGHBORS: int
 _Path = str | PathLike[str]
 _F64 = NDArray[np.float64]
 _I64 = NDArray[np.int64]
+
+def set_thread_limit(threads: int) -> int:
+    """Sets the number of threads the kernels called from this Python thread run on (0: all cores)
+    and returns the previous setting; `machscan.thread_limit` is the public face. The kernels'
+    results do not depend on it."""
 
 class FileFormatError(ValueError):
     """A file's content does not follow its format (truncated data, a header that promises more than there is, a number that is not one, ...). A ``ValueError``; ``filename`` names the file."""

@@ -10,21 +10,70 @@
 //!
 //! Value checks (finite, positive, in range) are the core's, so they hold for Rust callers too.
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::PyDict;
+use std::cell::Cell;
+use std::sync::{Arc, Mutex};
 
-/// Runs `kernel` with the GIL released, then raises its error as the Python exception, or a
+/// Runs `kernel` with the GIL released — on the calling thread's limit of threads
+/// (`set_thread_limit`), else on all cores — then raises its error as the Python exception, or a
 /// `KeyboardInterrupt` when Ctrl-C was pressed while it ran.
 pub fn enter<T, F>(py: Python<'_>, kernel: F) -> PyResult<T>
 where
     F: FnOnce() -> crate::Result<T> + Send,
     T: Send,
 {
-    let out = py.detach(kernel);
+    let out = match limited_pool()? {
+        Some(pool) => py.detach(|| pool.install(kernel)),
+        None => py.detach(kernel),
+    };
     py.check_signals()?;
     Ok(out?)
+}
+
+/// The largest thread limit taken: far beyond any machine's cores, short of a typo's millions.
+const MAX_THREADS: usize = 1024;
+
+thread_local! {
+    /// The calling Python thread's thread limit for the kernels; 0: all cores (rayon's global pool).
+    static THREAD_LIMIT: Cell<usize> = const { Cell::new(0) };
+}
+
+/// One rayon pool per limit asked for, kept for the life of the process: a Dask worker runs
+/// thousands of tasks, each entering the core on its thread's limit.
+static POOLS: Mutex<Vec<(usize, Arc<rayon::ThreadPool>)>> = Mutex::new(Vec::new());
+
+fn limited_pool() -> PyResult<Option<Arc<rayon::ThreadPool>>> {
+    let limit = THREAD_LIMIT.with(Cell::get);
+    if limit == 0 {
+        return Ok(None);
+    }
+    let mut pools = POOLS.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    if let Some((_, pool)) = pools.iter().find(|(n, _)| *n == limit) {
+        return Ok(Some(pool.clone()));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(limit)
+        .thread_name(move |i| format!("machscan-{limit}-{i}"))
+        .build()
+        .map_err(|e| PyRuntimeError::new_err(format!("threads: could not start a pool of {limit} threads ({e})")))?;
+    let pool = Arc::new(pool);
+    pools.push((limit, pool.clone()));
+    Ok(Some(pool))
+}
+
+/// Sets the number of threads the kernels called from this Python thread run on (0: all cores)
+/// and returns the previous setting; `machscan.thread_limit` is the public face. The kernels'
+/// results do not depend on it.
+#[pyfunction]
+pub fn set_thread_limit(threads: i64) -> PyResult<i64> {
+    let n = count("threads", threads)?;
+    if n > MAX_THREADS {
+        return Err(PyValueError::new_err(format!("threads: at most {MAX_THREADS}, got {n}")));
+    }
+    Ok(THREAD_LIMIT.with(|t| t.replace(n)) as i64)
 }
 
 /// A count or index argument (k, window, …). Taken from Python as a signed int and checked here:

@@ -19,6 +19,7 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(convert::set_thread_limit, m)?)?;
     kinematics::register(m)?;
     io::register(m)?;
     groove::register(m)?;
