@@ -15,13 +15,18 @@ machscan compensate THEORETICAL SCAN TOOLPATH --locating loc.csv --matching matc
                                                 and a report; exit status 3 when the match did
                                                 not converge or tool points lie outside the hull
 machscan compensate --simulate [--out DIR]      the same on the built-in bent skin, with its truth
+machscan batch grooves SCAN... --cad CAD... [--workers N | --scheduler ADDR] [--out DIR]
+                                                the groove inspection over many scans on a Dask
+                                                cluster; exit status 3 when a scan failed
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import get_args
 
@@ -153,17 +158,7 @@ def _grooves(args: argparse.Namespace) -> int:
     scan = _load_scan(args)
     _check_readings(scan)
     cad = read_contours(args.cad)
-    report = inspect_grooves(
-        scan,
-        cad,
-        window=args.window,
-        template=args.template,
-        alpha=args.alpha,
-        nominal_width=args.nominal_width,
-        cluster_radius=args.cluster_radius,
-        max_match_distance=args.max_match_distance,
-        max_se_ratio=args.max_se_ratio,
-    )
+    report = inspect_grooves(scan, cad, **_groove_options(args))
     print(report.summary())
     paths = report.to_csv(args.out)
     print(f"\nwritten   : {', '.join(str(p) for p in paths)}")
@@ -181,6 +176,88 @@ def _grooves(args: argparse.Namespace) -> int:
         _warn("no contour was matched")
         return 3
     return 0
+
+
+@dataclass(frozen=True)
+class BatchGrooves:
+    """What one scan of `machscan batch grooves` gave (its tables are in its folder)."""
+
+    frames: int
+    fitted: int
+    contours: int
+    problem: str | None
+    folder: str
+
+
+def inspect_groove_file(path: str, cad: list, options: dict, out: str) -> BatchGrooves:
+    """One task of `machscan batch grooves`: the scan at `path` inspected, its tables written to
+    `out`/<scan name>/."""
+    from machscan.inspection import inspect_grooves
+    from machscan.scan import Scan
+
+    p = Path(path)
+    if p.suffix.lower() == ".zarr" or p.is_dir():
+        from machscan.dask import open_scan
+
+        scan = open_scan(p).compute()
+    else:
+        scan = Scan.load(p)
+    report = inspect_grooves(scan, cad, **options)
+    folder = Path(out) / p.stem
+    report.to_csv(folder)
+    problem = report.matching_problem() or (None if report.contours else "no contour was matched")
+    return BatchGrooves(len(report.fits), int(report.fits.ok.sum()), len(report.contours), problem, str(folder))
+
+
+def _batch_grooves(args: argparse.Namespace) -> int:
+    import functools
+
+    from machscan.cad import read_contours
+
+    try:
+        from distributed import Client, LocalCluster
+
+        from machscan.dask import map_files
+    except ImportError:
+        raise ValueError("batch: needs Dask: pip install 'machscan[dask]'") from None
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers: must be at least 1, got {args.workers}")
+    if args.threads < 1:
+        raise ValueError(f"--threads: must be at least 1, got {args.threads}")
+    cad = read_contours(args.cad)
+    task = functools.partial(inspect_groove_file, cad=cad, options=_groove_options(args), out=str(args.out))
+    args.out.mkdir(parents=True, exist_ok=True)
+    if args.scheduler:
+        with Client(args.scheduler) as client:
+            outcomes = map_files(task, args.scans, client=client, threads=args.threads, progress=args.progress)
+    else:
+        workers = args.workers or os.cpu_count() or 1
+        with (
+            LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster,
+            Client(cluster) as client,
+        ):
+            outcomes = map_files(task, args.scans, client=client, threads=args.threads, progress=args.progress)
+    rows = ["scan,ok,frames,fitted,contours,folder,problem"]
+    failed = 0
+    for o in outcomes:
+        r = o.result
+        if o.ok:
+            note = f"; {r.problem}" if r.problem else ""
+            print(f"{o.path}: {r.fitted} of {r.frames} frames fitted, {r.contours} contours{note}")
+            rows.append(f"{o.path},{r.problem is None},{r.frames},{r.fitted},{r.contours},{r.folder},{_csv_text(r.problem)}")
+            failed += r.problem is not None
+        else:
+            _warn(f"{o.path}: {o.error}")
+            rows.append(f"{o.path},False,,,,,{_csv_text(o.error)}")
+            failed += 1
+    table = args.out / "batch.csv"
+    table.write_text("\n".join(rows) + "\n")
+    print(f"\n{len(outcomes) - failed} of {len(outcomes)} scans done without a problem; written {table}")
+    return 3 if failed else 0
+
+
+def _csv_text(text: str | None) -> str:
+    return "" if text is None else '"' + text.replace('"', "'").replace("\n", " ") + '"'
 
 
 def _points(args: argparse.Namespace) -> int:
@@ -562,10 +639,64 @@ def _scan_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
-    from machscan import __version__
+def _groove_arguments(p: argparse.ArgumentParser) -> None:
+    """The groove inspection's options, shared by `grooves` and `batch grooves`."""
     from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
     from machscan.grooves import Template
+
+    p.add_argument(
+        "--window", type=int, default=200, help="readings around the line center fitted per frame (default: %(default)s)"
+    )
+    p.add_argument(
+        "--template",
+        choices=get_args(Template),
+        default=GROOVE_DEFAULTS["template"],
+        help="groove shape fitted: the best of the four section models (auto), one of them, or the "
+        "paper's tanh template (default: %(default)s)",
+    )
+    p.add_argument(
+        "--alpha",
+        type=float,
+        default=GROOVE_DEFAULTS["alpha"],
+        help="tanh template only: shape coefficient, 1/mm (default: %(default)s)",
+    )
+    p.add_argument(
+        "--nominal-width",
+        type=float,
+        default=GROOVE_DEFAULTS["nominal_width"],
+        help="tanh template only: starting groove width, mm (default: %(default)s)",
+    )
+    p.add_argument(
+        "--max-se-ratio",
+        type=float,
+        default=None,
+        help="leave out frames whose width or depth standard error exceeds this many times the "
+        "median (default: keep all; 5 suits the tanh template)",
+    )
+    p.add_argument("--cluster-radius", type=float, default=5.0, help="contour segmentation distance, mm (default: %(default)s)")
+    p.add_argument(
+        "--max-match-distance",
+        type=float,
+        default=10.0,
+        help="largest distance between a scanned contour and its CAD contour, mm (default: %(default)s)",
+    )
+
+
+def _groove_options(args: argparse.Namespace) -> dict:
+    """The keyword arguments of inspect_grooves from the options of `_groove_arguments`."""
+    return dict(
+        window=args.window,
+        template=args.template,
+        alpha=args.alpha,
+        nominal_width=args.nominal_width,
+        cluster_radius=args.cluster_radius,
+        max_match_distance=args.max_match_distance,
+        max_se_ratio=args.max_se_ratio,
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from machscan import __version__
 
     parser = argparse.ArgumentParser(
         prog="machscan",
@@ -587,42 +718,7 @@ def build_parser() -> argparse.ArgumentParser:
     _scan_arguments(gr)
     gr.add_argument("cad", nargs="+", type=Path, help="CAD contours: CSV (contour, x, y, z) or APT/CL files (GOTO points)")
     gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
-    gr.add_argument(
-        "--window", type=int, default=200, help="readings around the line center fitted per frame (default: %(default)s)"
-    )
-    gr.add_argument(
-        "--template",
-        choices=get_args(Template),
-        default=GROOVE_DEFAULTS["template"],
-        help="groove shape fitted: the best of the four section models (auto), one of them, or the "
-        "paper's tanh template (default: %(default)s)",
-    )
-    gr.add_argument(
-        "--alpha",
-        type=float,
-        default=GROOVE_DEFAULTS["alpha"],
-        help="tanh template only: shape coefficient, 1/mm (default: %(default)s)",
-    )
-    gr.add_argument(
-        "--nominal-width",
-        type=float,
-        default=GROOVE_DEFAULTS["nominal_width"],
-        help="tanh template only: starting groove width, mm (default: %(default)s)",
-    )
-    gr.add_argument(
-        "--max-se-ratio",
-        type=float,
-        default=None,
-        help="leave out frames whose width or depth standard error exceeds this many times the "
-        "median (default: keep all; 5 suits the tanh template)",
-    )
-    gr.add_argument("--cluster-radius", type=float, default=5.0, help="contour segmentation distance, mm (default: %(default)s)")
-    gr.add_argument(
-        "--max-match-distance",
-        type=float,
-        default=10.0,
-        help="largest distance between a scanned contour and its CAD contour, mm (default: %(default)s)",
-    )
+    _groove_arguments(gr)
     gr.set_defaults(run=_grooves)
 
     pts = sub.add_parser("points", help="turn a raw scan into a workpiece point cloud (PLY)")
@@ -762,6 +858,28 @@ def build_parser() -> argparse.ArgumentParser:
     gr.add_argument("--spacing", type=float, default=0.5, help="point spacing of the simulated blade, mm (default: %(default)s)")
     gr.add_argument("--seed", type=int, default=0, help="seed of the simulated allowance (default: %(default)s)")
     gr.set_defaults(run=_grind)
+
+    batch = sub.add_parser("batch", help="run an analysis over many scans on a Dask cluster (needs machscan[dask])")
+    jobs = batch.add_subparsers(dest="job", metavar="JOB", required=True)
+    bg = jobs.add_parser("grooves", help="the groove inspection of `machscan grooves` on every scan, one task per file")
+    bg.add_argument("scans", nargs="+", type=Path, help="scans: .zarr folders (machscan.dask.save_scan) or .npz (Scan.save)")
+    bg.add_argument("--cad", nargs="+", type=Path, required=True, help="CAD contours, as for `machscan grooves`")
+    _groove_arguments(bg)
+    bg.add_argument(
+        "--out",
+        type=Path,
+        default=Path("batch"),
+        help="output folder: one folder of tables per scan, batch.csv (default: %(default)s)",
+    )
+    bg.add_argument(
+        "--workers", type=int, default=None, help="worker processes of the local cluster (default: one per core)"
+    )
+    bg.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786) to use instead of a local cluster")
+    bg.add_argument("--threads", type=int, default=1, help="threads each task's kernels use (default: %(default)s)")
+    bg.add_argument(
+        "--progress", action=argparse.BooleanOptionalAction, default=None, help="progress bar (default: on a terminal)"
+    )
+    bg.set_defaults(run=_batch_grooves)
     return parser
 
 

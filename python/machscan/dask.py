@@ -307,7 +307,9 @@ def _voxel_merge(groups: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
 
 
 def _bounds(points: da.Array) -> tuple[da.Array, da.Array]:
-    return points.min(axis=0), points.max(axis=0)
+    """The bounds of the finite points: a non-finite one is refused by its own chunk, by index."""
+    finite = da.isfinite(points)
+    return da.where(finite, points, np.inf).min(axis=0), da.where(finite, points, -np.inf).max(axis=0)
 
 
 def _origin(lo: np.ndarray, hi: np.ndarray, voxel: float) -> np.ndarray:
@@ -429,10 +431,11 @@ def save_scan(scan: Scan | LazyScan, path: str | os.PathLike, *, chunk_frames: i
     n = scan.frames.shape[1]
     for name, width in (("frames", n), ("poses", 6), ("frame_times", None)):
         a = getattr(scan, name)
-        a = a if isinstance(a, da.Array) else da.from_array(np.asarray(a), chunks=chunk_frames)
         chunks = (chunk_frames,) if width is None else (chunk_frames, width)
-        a = a.astype(np.float64).rechunk(chunks)
-        da.to_zarr(a, os.fspath(path), component=name, overwrite=True)
+        if isinstance(a, da.Array):
+            da.to_zarr(a.astype(np.float64).rechunk(chunks), os.fspath(path), component=name, overwrite=True)
+        else:  # in memory already: written directly, not shipped through a scheduler
+            root.create_array(name, data=np.asarray(a, dtype=np.float64), chunks=chunks)
     for name in ("c2_offset", "mount", "axis_times", "axis_samples"):
         value = getattr(scan, name)
         if value is not None:
@@ -537,7 +540,9 @@ def map_files(
     if client is not None:
         from distributed import as_completed
 
-        futures = client.map(_run_file, [func] * len(names), names, [threads] * len(names), pure=False)
+        # The function (with what it carries, e.g. CAD contours) goes to the workers once.
+        (shared,) = client.scatter([func], broadcast=True, hash=False)
+        futures = client.map(_run_file, [shared] * len(names), names, [threads] * len(names), pure=False)
         position = {f.key: k for k, f in enumerate(futures)}
         out: list[FileOutcome | None] = [None] * len(names)
         bar = _progress_bar(len(names), show)
