@@ -391,8 +391,9 @@ class LazyScan:
     def n_frames(self) -> int:
         return int(self.frames.shape[0])
 
-    def compute(self) -> Scan:
-        frames, poses, times = dask.compute(self.frames, self.poses, self.frame_times)
+    def compute(self, **kwargs: Any) -> Scan:
+        """Load the scan (``kwargs`` go to ``dask.compute``)."""
+        frames, poses, times = dask.compute(self.frames, self.poses, self.frame_times, **kwargs)
         return Scan(
             frames=frames,
             poses=poses,
@@ -499,7 +500,9 @@ class FileOutcome:
 
 def _run_file(func: Callable[[str], Any], path: str, threads: int | None) -> FileOutcome:
     try:
-        with thread_limit(threads):
+        # One task is one file on its share of the cores: Dask work inside it (a lazy scan read)
+        # runs in the task, not as new tasks sent back to the cluster.
+        with thread_limit(threads), dask.config.set(scheduler="sync"):
             return FileOutcome(path, func(path))
     except Exception as exc:  # one bad file must not lose the others' results
         return FileOutcome(path, None, f"{type(exc).__name__}: {exc}")
