@@ -82,6 +82,19 @@ def main() -> None:
             t = best(args.repeat, lambda: md.fit_grooves(x, frames).compute())
             tb = best(args.repeat, lambda: md.map_files(fits_of_scan, paths, client=client, progress=False))
             rows.append((f"LocalCluster, {workers} worker{'s' if workers > 1 else ''}", t, tb))
+            if workers == 2:
+                # What a real cluster changes: the cost per task (chunk size) and where the data starts.
+                sweep = []
+                for chunk in (1_000, 5_000, 40_000):
+                    path = os.path.join(tmp, f"long{chunk}.zarr")
+                    md.save_scan(scan, path, chunk_frames=chunk)
+                    f = md.open_scan(path).frames
+                    sweep.append((chunk, best(args.repeat, lambda f=f: md.fit_grooves(x, f).compute())))
+                shipped = best(args.repeat, lambda: md.fit_grooves(x, z).compute())
+    print("2 workers, by chunk size (Zarr chunks read on the workers):")
+    for chunk, t in sweep:
+        print(f"  {chunk:>6,} frames per chunk: {t:6.2f} s, {args.frames / chunk:5.0f} tasks, {args.frames / t:8,.0f} frames/s")
+    print(f"  frames in the client's memory, sent to the workers ({z.nbytes / 1e6:.0f} MB): {shipped:.2f} s")
     print(f"{'':28s} {'fit_grooves':>12s} {'frames/s':>10s} {'batch':>9s}")
     for name, t, tb in rows:
         print(f"{name:28s} {t:10.2f} s {args.frames / t:10,.0f} {tb:7.2f} s")

@@ -215,3 +215,21 @@ def test_thread_limit_checks_its_argument():
         pass
     with pytest.raises(ValueError, match="threads: at most"):
         machscan._core.set_thread_limit(10**9)
+
+
+def test_progress_bars_show_frames_and_files_and_change_nothing(frames, scan, tmp_path, capfd):
+    x, z = frames
+    quiet = machscan.fit_grooves(x, z)
+    shown = machscan.fit_grooves(x, z, progress=True)
+    err = capfd.readouterr().err
+    assert "groove fits" in err and "3.00k/3.00k" in err and "frames/s" in err
+    assert_same_fits(shown, quiet)
+    machscan.fit_grooves(x, z, progress=None)  # stderr is not a terminal here: no bar
+    assert capfd.readouterr().err == ""
+    s, _ = scan
+    md.save_scan(s.select(slice(0, 50)), tmp_path / "p.zarr")
+    out = md.map_files(frames_of, [tmp_path / "p.zarr"] * 3, progress=True, scheduler="threads")
+    assert [o.result for o in out] == [50, 50, 50]
+    assert "100%" in capfd.readouterr().err
+    with pytest.raises(TypeError, match="progress"):
+        machscan.fit_grooves(x, z, progress="yes")  # type: ignore[arg-type]

@@ -131,7 +131,7 @@ def _demo(args: argparse.Namespace) -> int:
         f"{err.outlier_threshold * 1e3:.0f} µm"
     )
     t0 = time.perf_counter()
-    report = inspect_grooves(scan, truth.nominal_polylines)
+    report = inspect_grooves(scan, truth.nominal_polylines, progress=None)
     t_inspect = time.perf_counter() - t0
     print(f"inspection: {t_inspect:.2f} s\n")
     print(report.summary())
@@ -158,7 +158,7 @@ def _grooves(args: argparse.Namespace) -> int:
     scan = _load_scan(args)
     _check_readings(scan)
     cad = read_contours(args.cad)
-    report = inspect_grooves(scan, cad, **_groove_options(args))
+    report = inspect_grooves(scan, cad, **_groove_options(args), progress=args.progress)
     print(report.summary())
     paths = report.to_csv(args.out)
     print(f"\nwritten   : {', '.join(str(p) for p in paths)}")
@@ -695,6 +695,12 @@ def _groove_options(args: argparse.Namespace) -> dict:
     )
 
 
+def _progress_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--progress", action=argparse.BooleanOptionalAction, default=None, help="progress bar on stderr (default: on a terminal)"
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     from machscan import __version__
 
@@ -719,6 +725,7 @@ def build_parser() -> argparse.ArgumentParser:
     gr.add_argument("cad", nargs="+", type=Path, help="CAD contours: CSV (contour, x, y, z) or APT/CL files (GOTO points)")
     gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
     _groove_arguments(gr)
+    _progress_argument(gr)
     gr.set_defaults(run=_grooves)
 
     pts = sub.add_parser("points", help="turn a raw scan into a workpiece point cloud (PLY)")
@@ -876,9 +883,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bg.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786) to use instead of a local cluster")
     bg.add_argument("--threads", type=int, default=1, help="threads each task's kernels use (default: %(default)s)")
-    bg.add_argument(
-        "--progress", action=argparse.BooleanOptionalAction, default=None, help="progress bar (default: on a terminal)"
-    )
+    _progress_argument(bg)
     bg.set_defaults(run=_batch_grooves)
     return parser
 

@@ -49,6 +49,7 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
 
 from machscan import grooves as _grooves
 from machscan import kinematics as _kinematics
+from machscan import progress as _progress
 from machscan.scan import SENTINEL, Profiler, Scan
 from machscan.threads import thread_limit
 
@@ -508,10 +509,6 @@ def _run_file(func: Callable[[str], Any], path: str, threads: int | None) -> Fil
         return FileOutcome(path, None, f"{type(exc).__name__}: {exc}")
 
 
-def _show_progress(progress: bool | None) -> bool:
-    return sys.stderr.isatty() if progress is None else bool(progress)
-
-
 def map_files(
     func: Callable[[str], Any],
     paths: Iterable[str | os.PathLike],
@@ -519,6 +516,7 @@ def map_files(
     client: Any = None,
     threads: int | None = TASK_THREADS,
     progress: bool | None = None,
+    scheduler: str | None = None,
 ) -> list[FileOutcome]:
     """Run ``func(path)`` on every file, one task per file, and collect what each gave.
 
@@ -535,11 +533,15 @@ def map_files(
     threads : int or None
         Threads each task's kernels run on (None: all cores).
     progress : bool, optional
-        A progress bar (files done, rate, time left) on stderr; default: when stderr is a terminal.
+        A progress bar on stderr — files done, rate and time left with a client (tqdm), Dask's own
+        bar otherwise; default: when stderr is a terminal.
+    scheduler : str, optional
+        Without a client: the Dask scheduler to use ("threads", "processes", "sync"); default
+        Dask's current one.
     """
     threads = _task_threads(threads)
     names = [os.fspath(p) for p in paths]
-    show = _show_progress(progress)
+    show = _progress.wanted(progress)
     if client is not None:
         from distributed import as_completed
 
@@ -548,25 +550,18 @@ def map_files(
         futures = client.map(_run_file, [shared] * len(names), names, [threads] * len(names), pure=False)
         position = {f.key: k for k, f in enumerate(futures)}
         out: list[FileOutcome | None] = [None] * len(names)
-        bar = _progress_bar(len(names), show)
-        for future in as_completed(futures):
-            out[position[future.key]] = future.result()
-            bar.update(1)
-        bar.close()
+        with _progress.bar(len(names), "file", show, "files") as bar:
+            for future in as_completed(futures):
+                out[position[future.key]] = future.result()
+                bar.update(1)
         return [o for o in out if o is not None]
     tasks = [delayed(_run_file, pure=False)(func, name, threads) for name in names]
     if show:
         from dask.diagnostics import ProgressBar
 
-        with ProgressBar():
-            return list(dask.compute(*tasks))
-    return list(dask.compute(*tasks))
-
-
-def _progress_bar(total: int, show: bool):
-    from tqdm.auto import tqdm
-
-    return tqdm(total=total, unit="file", disable=not show, file=sys.stderr)
+        with ProgressBar(out=sys.stderr):
+            return list(dask.compute(*tasks, scheduler=scheduler))
+    return list(dask.compute(*tasks, scheduler=scheduler))
 
 
 def outcomes_table(outcomes: Sequence[FileOutcome]) -> str:

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
+from machscan import progress as _progress
 
 __all__ = [
     "CRITERIA_DEFAULTS",
@@ -40,6 +41,9 @@ __all__ = [
 DEFAULTS = _core.groove_defaults()
 #: The fit criteria each method uses where :class:`FitCriteria` leaves them at None.
 CRITERIA_DEFAULTS = _core.fit_criteria_defaults()
+
+#: Fewest frames per block when the fit shows progress: blocks keep every core busy.
+PROGRESS_BLOCK = 2000
 
 #: How a frame's groove is measured: "auto" (the best section model per frame), one section
 #: model ("trapezoid", "v", "round", "u"), or the paper's "tanh" template.
@@ -247,6 +251,7 @@ def fit_grooves(
     min_depth: float = DEFAULTS["min_depth"],
     min_valid: int = DEFAULTS["min_valid"],
     criteria: FitCriteria | None = None,
+    progress: bool | None = False,
 ) -> GrooveFits:
     """Measure the groove in every profiler frame (SPEC G): width, depth and center.
 
@@ -306,6 +311,9 @@ def fit_grooves(
         Fewest valid readings in the window.
     criteria : FitCriteria, optional
         When each fit stops; default each method's own.
+    progress : bool or None
+        Show a progress bar (frames done, rate, time left) on stderr; None: when stderr is a
+        terminal. The frames are then fitted in 50 blocks; the result is the same.
 
     Returns
     -------
@@ -320,7 +328,20 @@ def fit_grooves(
     options = _options(
         template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
     )
-    return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
+    if not _progress.wanted(progress):
+        return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
+    z = np.asarray(z, dtype=np.float64)
+    if z.ndim != 2:  # the core names the shape error
+        return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
+    step = max(PROGRESS_BLOCK, -(-len(z) // 50))
+    parts = []
+    with _progress.bar(len(z), "frames", True, "groove fits") as shown:
+        for start in range(0, len(z), step):
+            parts.append(_core.fit_grooves(x, z[start : start + step], options))
+            shown.update(len(parts[-1]["status"]))
+    if not parts:
+        return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
+    return GrooveFits(**{name: np.concatenate([p[name] for p in parts]) for name in parts[0]}, template=template)
 
 
 @dataclass(frozen=True, eq=False, repr=False)

@@ -405,6 +405,7 @@ def inspect_grooves(
     max_match_distance: float = 10.0,
     bending_degree: int = 4,
     max_se_ratio: float | None = None,
+    progress: bool | None = False,
 ) -> GrooveReport:
     """Measure engraved grooves and their contour error from a raw scan (paper 000).
 
@@ -451,6 +452,9 @@ def inspect_grooves(
         ratio of 5 left out 43 frames of which 5 were off by more than 25 µm); it guards the
         tanh template, whose fit converges to a width the data do not fix when a groove lost
         its flank readings (5 is then a good value).
+    progress : bool or None
+        A progress bar of the groove fits on stderr (:func:`machscan.fit_grooves`); None: when
+        stderr is a terminal.
 
     Returns
     -------
@@ -488,7 +492,9 @@ def inspect_grooves(
     prof = scan.profiler
     x = (np.arange(scan.n_readings) - prof.i0) * prof.pitch
     z = np.where(scan.valid_mask(), scan.frames, np.nan)
-    fits = fit_grooves(x, z, alpha=alpha, nominal_width=nominal_width, window=window, template=template, fit_alpha=fit_alpha)
+    fits = fit_grooves(
+        x, z, alpha=alpha, nominal_width=nominal_width, window=window, template=template, fit_alpha=fit_alpha, progress=progress
+    )
     if max_se_ratio is not None and not max_se_ratio > 0:
         raise ValueError(f"max_se_ratio: must be positive or None, got {max_se_ratio}")
     converged = fits.ok
