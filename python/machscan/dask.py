@@ -68,7 +68,8 @@ __all__ = [
 #: Threads each task's kernels run on, unless told otherwise.
 TASK_THREADS = 1
 #: Frames per chunk when NumPy frames are chunked here and when a scan is written to Zarr:
-#: 4096 frames of 3200 readings are 100 MB, a task of about 0.1 s of groove fitting.
+#: 4096 frames of 3200 readings are 100 MB, and about 0.2 s of groove fitting on one thread —
+#: well above the few ms a task costs the scheduler (BENCHMARKS.md, "Dask").
 CHUNK_FRAMES = 4096
 #: Points per chunk when a NumPy cloud is chunked here.
 CHUNK_POINTS = 1 << 20
@@ -102,6 +103,12 @@ def _groove_dtype(n_readings: int, options: dict[str, Any]) -> np.dtype:
     frames (one source for them: the in-memory result)."""
     empty = _grooves.fit_grooves(np.arange(n_readings, dtype=np.float64), np.empty((0, n_readings)), **options)
     return np.dtype([(f.name, getattr(empty, f.name).dtype) for f in fields(empty) if f.name != "template"])
+
+
+def _valid_readings(block: np.ndarray, profiler: Profiler) -> np.ndarray:
+    """A scan's frames as the groove fit takes them: invalid readings (NaN, the sentinel, out of
+    the valid range) as NaN, as :func:`machscan.inspect_grooves` does."""
+    return np.where(profiler.valid_mask(block), block, np.nan)
 
 
 def _fit_block(block: np.ndarray, x: np.ndarray, options: dict[str, Any], dtype: np.dtype, threads: int | None) -> np.ndarray:
@@ -155,7 +162,8 @@ def fit_grooves(x: Any, frames: Any = None, *, threads: int | None = TASK_THREAD
     Parameters
     ----------
     x : array_like (N,), or a :class:`LazyScan` / :class:`machscan.Scan`
-        Abscissa of the readings, mm; given a scan, its profiler's and its frames.
+        Abscissa of the readings, mm; given a scan, its profiler's, and its frames with the
+        invalid readings (sentinel, out of range) as NaN.
     frames : dask or NumPy array (F, N)
         Readings, mm (NaN: invalid); NumPy arrays are chunked every ``CHUNK_FRAMES`` frames, and
         chunks across the readings are joined.
@@ -177,11 +185,15 @@ def fit_grooves(x: Any, frames: Any = None, *, threads: int | None = TASK_THREAD
     >>> result = fits.compute()       # a machscan.GrooveFits
     """
     threads = _task_threads(threads)
+    if "progress" in kwargs:
+        raise ValueError("progress: not per task; use Dask's bars (dask.diagnostics.ProgressBar, distributed.progress)")
     if isinstance(x, (LazyScan, Scan)):
         if frames is not None:
             raise ValueError("frames: give a scan or x and frames, not both")
         scan = x
-        x, frames = scan.profiler.x, scan.frames
+        profiler = scan.profiler
+        x = profiler.x
+        frames = _frames_array(scan.frames).map_blocks(_valid_readings, profiler, dtype=np.float64)
     elif frames is None:
         raise ValueError("frames: missing (give x and frames, or a scan)")
     x = np.ascontiguousarray(x, dtype=np.float64)
