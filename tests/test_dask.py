@@ -4,6 +4,7 @@ LocalCluster of worker processes; Zarr scans; batches that survive a bad file; t
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
 from dataclasses import fields
 from pathlib import Path
@@ -235,3 +236,23 @@ def test_progress_bars_show_frames_and_files_and_change_nothing(frames, scan, tm
     assert "100%" in capfd.readouterr().err
     with pytest.raises(TypeError, match="progress"):
         machscan.fit_grooves(x, z, progress="yes")  # type: ignore[arg-type]
+
+
+def test_batch_grooves_on_a_running_scheduler_by_address(scan, tmp_path, client):
+    s, truth = scan
+    md.save_scan(s.select(slice(0, 400)), tmp_path / "one.zarr", chunk_frames=100)
+    write_contours_csv(tmp_path / "cad.csv", truth.nominal_polylines)
+    args = ["batch", "grooves", str(tmp_path / "one.zarr"), "--cad", str(tmp_path / "cad.csv")]
+    args += ["--scheduler", client.scheduler.address, "--out", str(tmp_path / "out"), "--no-progress"]
+    code = main(args)
+    rows = (tmp_path / "out" / "batch.csv").read_text().splitlines()
+    assert len(rows) == 2 and str(tmp_path / "one.zarr") in rows[1]
+    assert code in (0, 3) and (rows[1].split(",")[1] == "True") == (code == 0)
+    assert (tmp_path / "out" / "one" / "frames.csv").stat().st_size > 0
+
+
+def test_machscan_dask_is_imported_on_first_use():
+    code = "import sys, machscan; a = 'dask' in sys.modules; machscan.dask.fit_grooves; print(a, 'dask' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "True"]
+    assert "dask" in dir(machscan)

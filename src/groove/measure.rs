@@ -481,6 +481,20 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     fits
 }
 
+/// The same models fitted again after outliers were dropped, each from where it ended: a few
+/// readings fewer move the optimum little, and a fit from the first starts costs again what the
+/// first pass cost (the trapezoid screen keeps its half budget).
+#[inline(always)]
+fn refit_models(fits: &[ModelFit], r: &Readings<'_>, options: &BoundedLmOptions) -> Vec<ModelFit> {
+    let screen = BoundedLmOptions { max_iterations: options.max_iterations.div_ceil(2), ..*options };
+    fits.iter()
+        .map(|f| {
+            let budget = if f.model == SectionModel::Trapezoid && fits.len() > 1 { &screen } else { options };
+            fit_model(f.model, r, f.gamma, &f.q[..f.model.n_params()], budget)
+        })
+        .collect()
+}
+
 fn best_of(fits: &[ModelFit], sigma: f64) -> usize {
     let mut best = 0;
     for (i, f) in fits.iter().enumerate() {
@@ -773,7 +787,7 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
             let keep: Vec<bool> = lam.iter().map(|l| l.abs() <= cut).collect();
             let (u2, v2) = select_pairs(&us, &vs, |i| keep[i]);
             (us, vs) = (u2, v2);
-            fits = fit_models(o.models, &readings(&us, &vs, sin, cos), &start, &o.criteria);
+            fits = refit_models(&fits, &readings(&us, &vs, sin, cos), &o.criteria);
             best = best_of(&fits, sigma);
         }
     }
