@@ -407,17 +407,8 @@ class LazyScan:
     def compute(self, **kwargs: Any) -> Scan:
         """Load the scan (``kwargs`` go to ``dask.compute``)."""
         frames, poses, times = dask.compute(self.frames, self.poses, self.frame_times, **kwargs)
-        return Scan(
-            frames=frames,
-            poses=poses,
-            frame_times=times,
-            profiler=self.profiler,
-            c2_offset=self.c2_offset,
-            mount=self.mount,
-            axis_times=self.axis_times,
-            axis_samples=self.axis_samples,
-            metadata=dict(self.metadata),
-        )
+        stored = {f.name: getattr(self, f.name) for f in fields(self)}
+        return Scan(**stored | dict(frames=frames, poses=poses, frame_times=times, metadata=dict(self.metadata)))
 
     def __repr__(self) -> str:
         f, n = self.frames.shape
