@@ -29,6 +29,9 @@ const STEP: f64 = 1e-6;
 /// over the angles its points span.
 const MAX_ANGLE: f64 = 1.6;
 
+/// Smallest sine of the angle between the section plane and the edge's axis at which the plane
+/// cuts across the edge (as `grinding::MIN_CROSSING` for the row spacing).
+const MIN_AXIS_CROSSING: f64 = 0.2;
 /// Cosine to the middle normal below which a normal belongs to the other side of a thin edge
 /// (more than 120° round).
 const OTHER_SIDE: f64 = -0.5;
@@ -73,8 +76,9 @@ pub(super) struct EdgePatch {
     scale: f64,
     support: SVector<f64, TERMS>,
     allowance: SVector<f64, 6>,
-    /// The normal angles the fitted points span.
+    /// The normal angles and the positions along the axis (patch units) the fitted points span.
     angles: (f64, f64),
+    along: (f64, f64),
 }
 
 impl EdgePatch {
@@ -101,7 +105,7 @@ impl EdgePatch {
         let e2 = axis.cross(&e1);
         let scale = points.iter().map(|p| (p - origin).norm()).fold(0.0, f64::max).max(1e-12);
         let (mut rows, mut arows, mut h, mut a, mut w) = (vec![], vec![], vec![], vec![], vec![]);
-        let mut angles = (f64::INFINITY, f64::NEG_INFINITY);
+        let (mut angles, mut along) = ((f64::INFINITY, f64::NEG_INFINITY), (f64::INFINITY, f64::NEG_INFINITY));
         for ((p, m), &value) in points.iter().zip(normals).zip(allowance) {
             let cut = V3::new(m.dot(&e1), m.dot(&e2), 0.0);
             let Some(cut) = cut.try_normalize(1e-6) else { continue };
@@ -117,13 +121,14 @@ impl EdgePatch {
             a.push(value);
             w.push((-d.norm_squared() / (sigma * sigma)).exp());
             angles = (angles.0.min(phi), angles.1.max(phi));
+            along = (along.0.min(s), along.1.max(s));
         }
         if rows.len() < 2 * TERMS {
             return None;
         }
         let support = solve(&rows, &h, &w)?;
         let allowance = solve(&arows, &a, &w)?;
-        Some(EdgePatch { origin, axis, e1, e2, scale, support, allowance, angles })
+        Some(EdgePatch { origin, axis, e1, e2, scale, support, allowance, angles, along })
     }
 
     /// The point of the cut at s (patch units) with normal angle φ.
@@ -137,6 +142,11 @@ impl EdgePatch {
     /// The point of the patch in the plane {p : (p − q)·n = 0} nearest `q`, with its normal and
     /// allowance: Newton on (s, φ) for "in the plane" and "q lies along the normal".
     pub(super) fn place_in_plane(&self, q: V3, n: V3) -> Option<(V3, V3, f64)> {
+        // A plane along the edge's axis cuts it in a line along the edge, not across it: no point
+        // of the patch is determined there.
+        if n.dot(&self.axis).abs() < MIN_AXIS_CROSSING {
+            return None;
+        }
         let (mut s, mut phi) = ((q - self.origin).dot(&self.axis) / self.scale, 0.0);
         let mut converged = false;
         let (mut ds, mut dphi) = (V3::zeros(), V3::zeros());
@@ -157,8 +167,9 @@ impl EdgePatch {
                 break;
             }
         }
-        // Outside the angles and the length the points span the patch extrapolates.
-        let inside = phi >= self.angles.0 && phi <= self.angles.1 && s.abs() <= 1.0;
+        // Outside the angles and the stretch of the edge the points span the patch extrapolates
+        // (at the end of a scan, an edge's support function says nothing of where it goes on).
+        let inside = phi >= self.angles.0 && phi <= self.angles.1 && s >= self.along.0 && s <= self.along.1;
         if !(converged && inside) {
             return None;
         }

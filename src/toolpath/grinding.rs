@@ -24,7 +24,10 @@
 //!    This is where a path point's position, normal and allowance come from; its curvature across
 //!    the rows comes from the wide fit of step 1.
 //! 3. **Joining.** Open rows alternate direction (a boustrophedon); closed rows all run the same
-//!    way, each starting at the point nearest the end of the row before.
+//!    way, each starting at the point nearest the end of the row before. A row is first cut where
+//!    the wheel could not move straight from one path point to the next without cutting into the
+//!    part (a section that runs off the cloud round a thin edge, where its points could not be
+//!    refined): its pieces are consecutive rows with the same plane offset.
 //! 4. **Feed** (eq 11–15): the removal model r = C·Vb^e₁·Vw^e₂·F^e₃ solved for the feed Vw that
 //!    removes each point's allowance, clamped to the machine's limits.
 //!
@@ -81,6 +84,10 @@ const QUADRIC_CONDITION: f64 = 1e-3;
 /// Default tolerance of the tool centre's straight moves between path points, as a fraction of
 /// the scallop height.
 const DEFAULT_TOLERANCE: f64 = 0.25;
+/// A row is cut between two path points whose straight move strays more than this many times
+/// the tolerance from the arc round them (`Row::pieces`): refinement keeps every other move
+/// within the tolerance.
+const CUT_STRAY: f64 = 2.0;
 /// Cosine of the largest angle (15°) between a local fit's normal and its nearest points' normals.
 const FIT_AGREEMENT: f64 = 0.966;
 /// Newton iterations putting a point on the local quadric within its plane.
@@ -173,7 +180,8 @@ pub struct GrindingPaths {
     pub feed: Vec<f64>,
     /// False where the surface is concave tighter than the tool.
     pub tool_fits: Vec<bool>,
-    /// Per row: plane offset along the unit section normal, and whether it closes up.
+    /// Per row: plane offset along the unit section normal (the pieces of a cut row share it), and
+    /// whether it closes up.
     pub row_offsets: Vec<f64>,
     pub row_closed: Vec<bool>,
 }
@@ -350,6 +358,8 @@ struct Cloud<'a> {
     wide: Vec<usize>,
     wide_index: PointIndex,
     fit_radius: f64,
+    /// How far off the surface a chain point may stand in for a failed fit: the scallop height.
+    fallback_reach: f64,
 }
 
 impl Cloud<'_> {
@@ -441,11 +451,16 @@ impl Cloud<'_> {
         };
         // Where the surface turns within the patch (a trailing edge a few point spacings round)
         // a fit says nothing reliable: it must agree with the nearest points' own normals, or q
-        // itself stands in — a point of the section's chain, on the surface to within the chord
-        // between two cloud points — with its nearest points' normal and allowance.
+        // itself stands in — a point of the section's chain — with its nearest points' normal and
+        // allowance, if it lies within the scallop height of the nearest point's tangent plane (a
+        // slab point projected onto a plane the surface grazes lies off the surface: no point).
         match fitted() {
             Some(fit) if fit.1.dot(&self.nearby(fit.0).0) >= FIT_AGREEMENT => Some(fit),
             _ => {
+                let (nearest, _) = self.index.nearest(&q.into());
+                if (q - self.p(nearest)).dot(&self.normals[nearest]).abs() > self.fallback_reach {
+                    return None;
+                }
                 let (normal, allowance) = self.nearby(q);
                 Some((q, normal, allowance))
             }
@@ -602,13 +617,7 @@ fn row_points(
             at.push((total, first));
         }
     }
-    // The centre between two points on an arc of radius ρ whose normals turn by θ strays
-    // (R + ρ)(1 − cos θ/2) ≈ (R + ρ)θ²/8 from the chord, with ρθ the contact points' distance:
-    // from the end points alone, so the fits' noise does not drive the halving.
-    let strays = |a: &(V3, V3, f64), b: &(V3, V3, f64)| {
-        let theta = a.1.angle(&b.1);
-        (tool_radius * theta + (b.0 - a.0).norm()) * theta / 8.0 > tolerance
-    };
+    let strays = |a: &(V3, V3, f64), b: &(V3, V3, f64)| centre_stray(a.0, a.1, b.0, b.1, tool_radius) > tolerance;
     let min_gap = 1e-4 * spacing;
     let mut out: Vec<(V3, V3, f64)> = Vec::with_capacity(at.len());
     for pair in at.windows(2) {
@@ -641,11 +650,61 @@ fn row_points(
     out
 }
 
+/// How far the tool centre strays from the straight line between two path points (contact
+/// points `a`, `b` with normals `na`, `nb`): on an arc of radius ρ whose normals turn by θ the
+/// centre strays (R + ρ)(1 − cos θ/2) ≈ (R + ρ)θ²/8 from the chord, with ρθ the contact points'
+/// distance — from the end points alone, so the fits' noise does not drive the halving.
+fn centre_stray(a: V3, na: V3, b: V3, nb: V3, tool_radius: f64) -> f64 {
+    let theta = na.angle(&nb);
+    (tool_radius * theta + (b - a).norm()) * theta / 8.0
+}
+
 /// One row: (point, normal, curvature across the rows, allowance) per path point, and whether
 /// it closes up.
 struct Row {
     points: Vec<(V3, V3, f64, f64)>,
     closed: bool,
+}
+
+impl Row {
+    /// The row in pieces the wheel can follow: cut between two path points where its centre,
+    /// moving straight, would stray more than `limit` from the arc round them — where the points
+    /// could not be refined (a section that runs off the cloud round a thin edge, a corner): a
+    /// straight move there would cut through the edge. A closed row cut once becomes one open
+    /// piece starting after the cut.
+    fn pieces(self, tool_radius: f64, limit: f64) -> Vec<Row> {
+        let n = self.points.len();
+        let links = if self.closed { n } else { n.saturating_sub(1) };
+        let cut: Vec<usize> = (0..links)
+            .filter(|&k| {
+                let (a, b) = (&self.points[k], &self.points[(k + 1) % n]);
+                centre_stray(a.0, a.1, b.0, b.1, tool_radius) > limit
+            })
+            .collect();
+        if cut.is_empty() {
+            return vec![self];
+        }
+        let mut points = self.points;
+        let mut ends: Vec<usize> = cut.iter().map(|&k| k + 1).collect();
+        if self.closed {
+            // Start after the first cut; the last piece then ends at it.
+            let first = ends[0] % n;
+            points.rotate_left(first);
+            ends = ends.iter().map(|&e| (e + n - first) % n).filter(|&e| e > 0).collect();
+            ends.push(n);
+        } else {
+            ends.push(n);
+        }
+        let mut out = Vec::with_capacity(ends.len());
+        let mut start = 0;
+        for end in ends {
+            if end > start {
+                out.push(Row { points: points[start..end].to_vec(), closed: false });
+            }
+            start = end;
+        }
+        out
+    }
 }
 
 fn check_inputs(cloud: Stock, o: &GrindingOptions) -> Result<V3> {
@@ -706,7 +765,7 @@ pub fn grinding_paths(
     let wide_points: Vec<[f64; 3]> = wide.iter().map(|&i| points[i]).collect();
     let wide_index = PointIndex::new(&wide_points)?;
     let normals: Vec<V3> = normals.iter().map(|&v| V3::from(v).normalize()).collect();
-    let cloud = Cloud { points, normals, allowance, index, wide, wide_index, fit_radius };
+    let cloud = Cloud { points, normals, allowance, index, wide, wide_index, fit_radius, fallback_reach: h };
 
     // 1. Row offsets from the samples' plane steps.
     let mut samples: Vec<(f64, f64)> = cloud
@@ -727,13 +786,13 @@ pub fn grinding_paths(
     let mut by_offset: Vec<usize> = (0..points.len()).collect();
     by_offset.sort_by(|&a, &b| offsets[a].total_cmp(&offsets[b]));
     let sorted: Vec<f64> = by_offset.iter().map(|&i| offsets[i]).collect();
-    let built: Vec<Option<Row>> = rows
+    let built: Vec<Vec<Row>> = rows
         .par_iter()
         .map(|&d| {
             let a = sorted.partition_point(|&x| x < d - 0.5 * thickness);
             let b = sorted.partition_point(|&x| x <= d + 0.5 * thickness);
             if b - a < 2 {
-                return Ok(None);
+                return Ok(Vec::new());
             }
             let slab: Vec<[f64; 3]> =
                 by_offset[a..b].iter().map(|&i| (cloud.p(i) - (offsets[i] - d) * n).into()).collect();
@@ -745,14 +804,14 @@ pub fn grinding_paths(
                 .map(|(on, normal, value)| (on, normal, cloud.across(on, n).map_or(0.0, |(k, _)| k), value))
                 .collect();
             let row = Row { points, closed: chain.closed };
-            Ok((!row.points.is_empty()).then_some(row))
+            Ok(if row.points.is_empty() { Vec::new() } else { row.pieces(r, CUT_STRAY * tolerance) })
         })
         .collect::<Result<_>>()?;
 
     // 3. Joining.
     let mut out = GrindingPaths::default();
     let mut open_rows = 0usize;
-    for (row, d) in built.into_iter().zip(rows).filter_map(|(row, d)| row.map(|row| (row, d))) {
+    for (row, d) in built.into_iter().zip(rows).flat_map(|(pieces, d)| pieces.into_iter().map(move |row| (row, d))) {
         let mut points = row.points;
         if row.closed {
             if let Some(end) = out.points.last().map(|&p| V3::from(p)) {
@@ -984,6 +1043,28 @@ mod tests {
         // Alternating open rows.
         let first: Vec<f64> = (0..2).map(|r| g.points[g.row.iter().position(|&x| x == r).unwrap()][0]).collect();
         assert!(first[0] < 1.0 && first[1] > 39.0, "{first:?}");
+    }
+
+    #[test]
+    fn rows_are_cut_where_the_wheel_cannot_move_straight() {
+        // Points every 0.1 mm along x with normal +y, then across a thin edge to normal −y.
+        let point = |x: f64, up: bool| {
+            (V3::new(x, if up { 0.5 } else { -0.5 }, 0.0), V3::new(0.0, if up { 1.0 } else { -1.0 }, 0.0), 0.0, 0.3)
+        };
+        let mut points: Vec<_> = (0..10).map(|k| point(0.1 * k as f64, true)).collect();
+        points.extend((0..10).rev().map(|k| point(0.1 * k as f64, false)));
+        let open = Row { points: points.clone(), closed: false }.pieces(10.0, 0.005);
+        assert_eq!(open.iter().map(|p| p.points.len()).collect::<Vec<_>>(), vec![10, 10]);
+        assert!(open.iter().all(|p| !p.closed));
+        // Closed: the two turns (at the far end and back at the start) cut it into the two sides.
+        let closed = Row { points: points.clone(), closed: true }.pieces(10.0, 0.005);
+        assert_eq!(closed.len(), 2);
+        assert_eq!(closed[0].points[0].0, points[10].0);
+        assert_eq!(closed[1].points[0].0, points[0].0);
+        // One side alone, closed: nothing to cut but the closing move... which turns nothing.
+        let side = Row { points: points[..10].to_vec(), closed: true }.pieces(10.0, 0.005);
+        assert_eq!(side.len(), 1);
+        assert!(side[0].closed);
     }
 
     #[test]
