@@ -368,7 +368,7 @@ class GrindingPaths:
     tool_fits : ndarray of bool, shape (M,)
         False where the surface is concave with a radius no larger than the tool's: the tool cannot reach there.
     row_offsets : ndarray, shape (rows,)
-        Each row's plane: offset along the unit section normal, mm.
+        Each row's plane: offset along the unit section normal, mm (non-decreasing; the pieces of a cut row share it).
     row_closed : ndarray of bool, shape (rows,)
         Whether the row closes round the part (a blade section) or runs edge to edge.
     tool_radius, scallop_height : float
@@ -431,8 +431,12 @@ def grinding_paths(
     (:func:`step_over`), so rows close up on convex stretches and open out on concave ones. Curvature comes from a
     quadric fitted over ``fit_radius`` (the scale of a step, so scan noise does not turn into curvature). Each row's
     points are put in order by :func:`bead_chain`, resampled every ``spacing`` and put back on the surface within
-    their plane; open rows alternate direction, closed rows (blade sections) run the same way. The feed at each
-    point removes its allowance under ``removal_model``.
+    their plane — round an edge of a few point spacings' radius by a fit of the edge's cross-sections, which follows it
+    between scan lines. Open rows alternate direction, closed rows (blade sections) run the same way. Where the wheel
+    could not move straight from one path point to the next without cutting into the part (a plane that runs off the
+    cloud round a thin edge, or grazes the surface), the row is cut there: its pieces are consecutive rows with the same
+    offset. Rows are meant to cross the surface; planes that graze it (along a blade's span) leave it unground there.
+    The feed at each point removes its allowance under ``removal_model``.
 
     Parameters
     ----------
