@@ -33,7 +33,7 @@ from __future__ import annotations
 import functools
 import os
 import sys
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, fields
 from typing import Any
 
@@ -566,7 +566,3 @@ def map_files(
             return list(dask.compute(*tasks, scheduler=scheduler))
     return list(dask.compute(*tasks, scheduler=scheduler))
 
-
-def outcomes_table(outcomes: Sequence[FileOutcome]) -> str:
-    """One line per file: ok, or the error."""
-    return "\n".join(f"{o.path}: {'ok' if o.ok else o.error}" for o in outcomes)

@@ -328,19 +328,16 @@ def fit_grooves(
     options = _options(
         template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
     )
-    if not _progress.wanted(progress):
+    frames = np.asarray(z, dtype=np.float64) if _progress.wanted(progress) else None
+    if frames is None or frames.ndim != 2 or len(frames) == 0:  # the core names a shape error
         return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
-    z = np.asarray(z, dtype=np.float64)
-    if z.ndim != 2:  # the core names the shape error
-        return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
+    z = frames
     step = max(PROGRESS_BLOCK, -(-len(z) // 50))
     parts = []
     with _progress.bar(len(z), "frames", True, "groove fits") as shown:
         for start in range(0, len(z), step):
             parts.append(_core.fit_grooves(x, z[start : start + step], options))
             shown.update(len(parts[-1]["status"]))
-    if not parts:
-        return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
     return GrooveFits(**{name: np.concatenate([p[name] for p in parts]) for name in parts[0]}, template=template)
 
 

@@ -39,7 +39,8 @@ use super::edge::EdgePatch;
 use super::scallop::step_over;
 use crate::error::{check_finite, check_finite_points, check_positive, Error, Result};
 use crate::spatial::PointIndex;
-use nalgebra::{Matrix6, SMatrix, SVector, Vector3, Vector6};
+use nalgebra::allocator::Allocator;
+use nalgebra::{Const, DefaultAllocator, DimDiff, DimSub, Matrix6, SMatrix, SVector, Vector3, Vector6, U1};
 use rayon::prelude::*;
 use std::collections::HashSet;
 
@@ -48,7 +49,8 @@ type V3 = Vector3<f64>;
 /// Nearest cloud points a path point's position, normal and allowance are fitted to (of twice as
 /// many candidates, those on the same side of a thin edge).
 const LOCAL_POINTS: usize = 24;
-/// Nearest cloud points of an edge patch (`edge.rs`): a few scan lines' worth of an edge's tip.
+/// Nearest cloud points of an edge patch (`edge.rs`): a few scan lines' worth of an edge's tip
+/// (taken from the first query of a local fit, `2 × LOCAL_POINTS` points).
 const EDGE_POINTS: usize = 40;
 /// Cubic fields fitted over a local patch: the height, the allowance and the three components of
 /// the normal.
@@ -203,6 +205,30 @@ struct Patch {
     scale: f64,
 }
 
+/// How well a least-squares normal matrix determines its terms: the smallest eigenvalue of the
+/// matrix scaled to a unit diagonal (1 for independent terms, 0 when one is a combination of the
+/// others — a scan's points on too few lines).
+fn determinacy<const K: usize>(m: &SMatrix<f64, K, K>) -> f64
+where
+    Const<K>: DimSub<U1>,
+    DefaultAllocator: Allocator<DimDiff<Const<K>, U1>>,
+{
+    let scaled: [f64; K] = std::array::from_fn(|k| 1.0 / m[(k, k)].max(f64::MIN_POSITIVE).sqrt());
+    let mut unit = *m;
+    for i in 0..K {
+        for j in 0..K {
+            unit[(i, j)] *= scaled[i] * scaled[j];
+        }
+    }
+    unit.symmetric_eigenvalues().min()
+}
+
+/// Two unit vectors completing `w` (unit) to a right-handed frame (u, v, w).
+fn tangent_frame(w: V3) -> (V3, V3) {
+    let u = if w.x.abs() < 0.9 { V3::x() } else { V3::y() }.cross(&w).normalize();
+    (u, w.cross(&u))
+}
+
 fn cubic_terms(x: f64, y: f64) -> SVector<f64, 10> {
     SVector::<f64, 10>::from([1.0, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y])
 }
@@ -213,8 +239,7 @@ impl Patch {
     /// (`sigma` ∞: unweighted). None when the points do not span the fields.
     fn fit(origin: V3, normal: V3, points: &[V3], values: Option<&[[f64; CHANNELS]]>, sigma: f64) -> Option<Patch> {
         let w = normal.normalize();
-        let u = if w.x.abs() < 0.9 { V3::x() } else { V3::y() }.cross(&w).normalize();
-        let v = w.cross(&u);
+        let (u, v) = tangent_frame(w);
         // Lengths scaled by the patch size inside the fits, for conditioning.
         let scale = points.iter().map(|p| (p - origin).norm()).fold(0.0, f64::max).max(1e-12);
         let (mut ata, mut atb) = (Matrix6::zeros(), Vector6::zeros());
@@ -241,9 +266,7 @@ impl Patch {
                 // The cubic terms need the patch to span four lines of points across every
                 // direction; a scan's points lie on lines, and across fewer a cubic is not
                 // determined (y³ is a multiple of y on three lines). Then the fields are quadrics.
-                let scaled = SVector::<f64, 10>::from_fn(|k, _| 1.0 / cta[(k, k)].max(f64::MIN_POSITIVE).sqrt());
-                let normalized = SMatrix::<f64, 10, 10>::from_fn(|i, j| cta[(i, j)] * scaled[i] * scaled[j]);
-                if normalized.symmetric_eigenvalues().min() < CUBIC_CONDITION {
+                if determinacy(&cta) < CUBIC_CONDITION {
                     for k in 6..10 {
                         cta.row_mut(k).fill(0.0);
                         cta.column_mut(k).fill(0.0);
@@ -390,13 +413,10 @@ impl Cloud<'_> {
         near.into_iter().filter(|&i| self.normals[i].dot(&reference) > cosine).collect()
     }
 
-    /// How well `near` determine a quadric height field over the plane of their mean normal: the
-    /// smallest eigenvalue of the Jacobi-scaled normal matrix (1 for ideally spread points, 0
-    /// when a term is a combination of the others — all points on one or two lines).
+    /// How well `near` determine a quadric height field over the plane of their mean normal
+    /// (`determinacy`: 0 when all points lie on one or two lines).
     fn quadric_condition(&self, near: &[usize]) -> f64 {
-        let w = self.mean_normal(near);
-        let u = if w.x.abs() < 0.9 { V3::x() } else { V3::y() }.cross(&w).normalize();
-        let v = w.cross(&u);
+        let (u, v) = tangent_frame(self.mean_normal(near));
         let c: V3 = near.iter().map(|&i| self.p(i)).sum::<V3>() / near.len() as f64;
         let scale = near.iter().map(|&i| (self.p(i) - c).norm()).fold(0.0, f64::max).max(1e-12);
         let mut m = Matrix6::zeros();
@@ -406,18 +426,21 @@ impl Cloud<'_> {
             let row = Vector6::new(1.0, x, y, x * x, x * y, y * y);
             m += row * row.transpose();
         }
-        let scaled = Vector6::from_fn(|k, _| 1.0 / m[(k, k)].max(f64::MIN_POSITIVE).sqrt());
-        Matrix6::from_fn(|i, j| m[(i, j)] * scaled[i] * scaled[j]).symmetric_eigenvalues().min()
+        determinacy(&m)
     }
 
     /// The local fit at q: (point on the surface in the plane (n, q), normal, allowance).
     fn local(&self, q: V3, n: V3) -> Option<(V3, V3, f64)> {
-        if let Some(fit) = self.edge(q, n) {
+        // One neighbour query serves the edge test and the first height-field patch.
+        let mut found = self.index.knn(&q.into(), 2 * LOCAL_POINTS);
+        if let Some(fit) = self.edge(q, n, &found[..EDGE_POINTS.min(found.len())]) {
             return Some(fit);
         }
         let mut k = LOCAL_POINTS;
         let near = loop {
-            let found = self.index.knn(&q.into(), 2 * k);
+            if k > LOCAL_POINTS {
+                found = self.index.knn(&q.into(), 2 * k);
+            }
             let mut near = self.within_turn(found.iter().map(|&(i, _)| i).collect(), LOCAL_TURN);
             near.truncate(k);
             if near.len() < LOCAL_POINTS / 2 {
@@ -467,10 +490,10 @@ impl Cloud<'_> {
         }
     }
 
-    /// The fit at q of an edge patch, where the normals of q's nearest points turn by more than
-    /// a height field follows (`LOCAL_TURN`); None elsewhere or where the patch does not fit.
-    fn edge(&self, q: V3, n: V3) -> Option<(V3, V3, f64)> {
-        let found = self.index.knn(&q.into(), EDGE_POINTS);
+    /// The fit at q of an edge patch over `found` (q's nearest points, nearest first, with squared
+    /// distances), where their normals turn by more than a height field follows (`LOCAL_TURN`);
+    /// None elsewhere or where the patch does not fit.
+    fn edge(&self, q: V3, n: V3, found: &[(usize, f64)]) -> Option<(V3, V3, f64)> {
         let reference = self.normals[found.first()?.0];
         if found.iter().all(|&(i, _)| self.normals[i].dot(&reference) >= LOCAL_TURN) {
             return None;
