@@ -834,6 +834,17 @@ impl<'a> Run<'a> {
             return; // rays along the edge never enter the face beyond
         }
         let (t0, t1) = (t0.max(0.0), t1.min(l));
+        // Rule 1 already here, with the edge ends' distances as they are now: a window the ends
+        // beat is never merged or queued.
+        let slack = self.slack(sigma + l);
+        let (da, db) = (self.w.d[m.start(h) as usize], self.w.d[m.start(3 * (h / 3) + (h + 1) % 3) as usize]);
+        let Some(t0) = cut_front(sx, sy, sigma, da, t0, t1, slack) else {
+            return;
+        };
+        let Some(back) = cut_front(l - sx, sy, sigma, db, l - t1, l - t0, slack) else {
+            return;
+        };
+        let t1 = l - back;
         if !(t1 - t0 > MIN_WIDTH * l) {
             return;
         }
