@@ -526,6 +526,7 @@ def isometric_match(
     *,
     jacobian: str,
     method: str,
+    spacing: float | str | None,
     max_edge: float | None,
     max_iterations: int,
     tolerance: float,

@@ -1,8 +1,9 @@
 //! Bindings of `crate::matching`.
 use super::convert::{count, enter, points_to_numpy, to_numpy, F64Array};
 use super::mesh::surface;
+use crate::error::Error;
 use crate::matching::{isometric_match as run_isometric_match, Jacobian, MatchOptions, Surface};
-use crate::mesh::{surface_faces, GeodesicMethod};
+use crate::mesh::{surface_mesh, GeodesicMethod, Spacing};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -11,7 +12,8 @@ use pyo3::types::PyDict;
 #[pyfunction]
 #[pyo3(signature = (
     theoretical_points, theoretical_faces, actual_points, actual_faces, theoretical_locating,
-    actual_locating, theoretical_matching, actual_initial, *, jacobian, method, max_edge, max_iterations, tolerance
+    actual_locating, theoretical_matching, actual_initial, *, jacobian, method, spacing, max_edge, max_iterations,
+    tolerance
 ))]
 #[allow(clippy::too_many_arguments)]
 fn isometric_match<'py>(
@@ -26,6 +28,7 @@ fn isometric_match<'py>(
     actual_initial: Option<&Bound<'py, PyAny>>,
     jacobian: &str,
     method: &str,
+    spacing: &Bound<'py, PyAny>,
     max_edge: Option<f64>,
     max_iterations: i64,
     tolerance: f64,
@@ -36,6 +39,21 @@ fn isometric_match<'py>(
     let al = F64Array::points(actual_locating, "actual_locating")?;
     let tm = F64Array::points(theoretical_matching, "theoretical_matching")?;
     let ai = actual_initial.map(|a| F64Array::points(a, "actual_initial")).transpose()?;
+    let spacing = if spacing.is_none() {
+        Spacing::Full
+    } else if let Ok(word) = spacing.extract::<String>() {
+        if word != "auto" {
+            return Err(
+                Error::invalid("spacing", format!("expected 'auto', a spacing in mm or None, got {word:?}")).into()
+            );
+        }
+        Spacing::Auto
+    } else {
+        let mm = spacing
+            .extract::<f64>()
+            .map_err(|_| Error::invalid("spacing", "expected 'auto', a spacing in mm or None"))?;
+        Spacing::fixed(mm)?
+    };
     let options = MatchOptions {
         jacobian: Jacobian::parse(jacobian)?,
         method: GeodesicMethod::parse(method)?,
@@ -46,11 +64,11 @@ fn isometric_match<'py>(
         (tp.rows::<3>()?, ap.rows::<3>()?, tl.rows::<3>()?, al.rows::<3>()?, tm.rows::<3>()?);
     let air = ai.as_ref().map(|a| a.rows::<3>()).transpose()?;
     let r = enter(py, || {
-        let tf = surface_faces("theoretical_points", tpr, tf, max_edge)?;
-        let af = surface_faces("actual_points", apr, af, max_edge)?;
+        let (tv, tf) = surface_mesh("theoretical_points", tpr, tf, max_edge, spacing)?;
+        let (av, af) = surface_mesh("actual_points", apr, af, max_edge, spacing)?;
         run_isometric_match(
-            Surface { vertices: tpr, faces: &tf },
-            Surface { vertices: apr, faces: &af },
+            Surface { vertices: &tv, faces: &tf },
+            Surface { vertices: &av, faces: &af },
             tlr,
             alr,
             tmr,
