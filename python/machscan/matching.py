@@ -92,9 +92,9 @@ def isometric_match(
     """Match theoretical points onto the scanned, bent surface by their geodesic distances (SPEC S4; paper
     002 §3.3, eq 10–16).
 
-    Both surfaces are meshed (points by :func:`machscan.delaunay_xy`, thinned first as ``spacing`` says; a
-    ``(vertices, faces)`` pair or a :class:`machscan.io.TriangleMesh` as given) and the locating and matching points inserted as vertices
-    (:func:`machscan.insert_points`). V₁ holds the theoretical geodesic distances from each matching point pᵢ to
+    Both surfaces are meshed (points by :func:`machscan.delaunay_xy`, thinned as ``spacing`` says; a
+    ``(vertices, faces)`` pair or a :class:`machscan.io.TriangleMesh` as given) and the locating and matching
+    points inserted as vertices (:func:`machscan.insert_points`). V₁ holds the theoretical geodesic distances from each matching point pᵢ to
     r₁, r₂ and to every other pⱼ (``2n + n(n−1)/2`` of them); V₂ the same on the actual surface. Each
     iteration solves ``(JᵀJ + u·I) δ = −Jᵀ(V₂ − V₁)`` for the x, y moves of the actual matching points, puts
     them back on the actual surface at their new x, y (the surfaces are height fields over xy), and keeps the

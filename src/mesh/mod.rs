@@ -86,6 +86,9 @@ impl Spacing {
     }
 }
 
+/// Vertices and triangles.
+pub type OwnedMesh = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
 /// A surface argument as a mesh for geodesic work: a mesh as given, or scan points meshed by
 /// `delaunay_xy` (long edges beyond `max_edge` left out) and thinned as `spacing` says
 /// (`thin_xy`; the thinned points' triangles kept where they lie over that mesh). Errors name
@@ -96,7 +99,7 @@ pub fn surface_mesh(
     faces: Option<Vec<[u32; 3]>>,
     max_edge: Option<f64>,
     spacing: Spacing,
-) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
+) -> Result<OwnedMesh> {
     let given = faces.is_some();
     let full = surface_faces(name, points, faces, max_edge)?;
     if given {
