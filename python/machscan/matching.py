@@ -98,8 +98,7 @@ def isometric_match(
     from each matching point pᵢ to r₁, r₂ and to every other pⱼ (``2n + n(n−1)/2`` of them); V₂ the same on
     the actual surface. Each iteration solves ``(JᵀJ + u·I) δ = −Jᵀ(V₂ − V₁)`` for the x, y moves of the
     actual matching points, puts them back on the actual surface at their new x, y (the surfaces are height
-    fields over xy), and keeps the
-    step when T fell (u ÷ 5, else u × 5; u starts at 0.001).
+    fields over xy), and keeps the step when T fell (u ÷ 5, else u × 5; u starts at 0.001).
 
     Parameters
     ----------
