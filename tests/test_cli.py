@@ -327,7 +327,7 @@ def test_compensate_simulate_then_from_its_files_equals_the_library(tmp_path, ca
     # The simulated skin writes its inputs; the file-based command on them gives the same CL file, and both
     # equal the library's match and compensation of the same data.
     sim = tmp_path / "sim"
-    assert main(["compensate", "--simulate", "--out", str(sim), "--spacing", "6", "--jacobian", "gradient"]) == 0
+    assert main(["compensate", "--simulate", "--out", str(sim), "--scan-spacing", "6", "--jacobian", "gradient"]) == 0
     out = capsys.readouterr().out
     assert "truth" in out and "less" in out
     files = tmp_path / "files"
@@ -382,6 +382,9 @@ def test_compensate_names_a_missing_argument_and_a_bad_table(tmp_path, capsys):
     ]
     assert main(["compensate", *args]) == 2
     assert "--locating" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:
+        main(["compensate", "--simulate", "--mesh-spacing", "fine"])
+    assert exit_.value.code == 2 and "--mesh-spacing" in capsys.readouterr().err
 
 
 def test_grind_writes_the_path_table_and_report_from_an_allowance_file(tmp_path, capsys):

@@ -540,6 +540,7 @@ def _run_compensation(args, theoretical, scan, locating, matching, toolpath, tru
         initial,
         jacobian=args.jacobian,
         method=args.method,
+        spacing=args.mesh_spacing,
         max_edge=args.max_edge,
     )
     t1 = time.perf_counter()
@@ -593,6 +594,16 @@ def _run_compensation(args, theoretical, scan, locating, matching, toolpath, tru
     return 0
 
 
+def _mesh_spacing(text: str) -> float | str | None:
+    """``--mesh-spacing``: "auto", "all" (every point) or a spacing in mm."""
+    if text in ("auto", "all"):
+        return None if text == "all" else text
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected auto, all or a spacing in mm, got {text!r}") from None
+
+
 def _compensate_simulated(args: argparse.Namespace) -> int:
     from machscan.io import Toolpath, write_points, write_toolpath
     from machscan.synth import BentSkin, misplacement
@@ -600,7 +611,7 @@ def _compensate_simulated(args: argparse.Namespace) -> int:
     skin = BentSkin(pose=misplacement(args.seed, translation=1.0, rotation=np.deg2rad(0.5)))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    theoretical, scan = skin.grid(args.spacing), skin.scan(args.spacing, 0.005, seed=args.seed)
+    theoretical, scan = skin.grid(args.scan_spacing), skin.scan(args.scan_spacing, 0.005, seed=args.seed)
     r = skin.locating()
     locating = np.column_stack([r, skin.actual(r)[0]])
     matching = skin.matching_grid()
@@ -615,7 +626,7 @@ def _compensate_simulated(args: argparse.Namespace) -> int:
     _write_table(out / "matching.csv", "x,y,z", matching)
     write_toolpath(out / "theoretical.cl", tools, axes=up, feeds=toolpath.feeds, segments=toolpath.segments)
     print(
-        f"synthetic skin: 300 × 200 mm bent to R = 1000 mm, misplaced 1 mm / 0.5°, scanned at {args.spacing:g} mm "
+        f"synthetic skin: 300 × 200 mm bent to R = 1000 mm, misplaced 1 mm / 0.5°, scanned at {args.scan_spacing:g} mm "
         f"with 5 µm noise; inputs in {out}\n"
     )
     return _run_compensation(args, theoretical, scan, locating, matching, toolpath, truth=skin.actual(tools))
@@ -828,10 +839,17 @@ def build_parser() -> argparse.ArgumentParser:
     co.add_argument("--max-edge", type=float, default=None, help="trim mesh edges longer than this, mm")
     co.add_argument("--simulate", action="store_true", help="run on the built-in bent skin and compare with its truth")
     co.add_argument(
-        "--spacing",
+        "--mesh-spacing",
+        type=_mesh_spacing,
+        default=matching["spacing"],
+        help="surfaces thinned to this xy spacing for the matching's geodesics, mm; auto (about 2,000 vertices) or all "
+        "(default: %(default)s)",
+    )
+    co.add_argument(
+        "--scan-spacing",
         type=float,
-        default=3.0,
-        help="scan spacing of the simulated skin, mm (default: %(default)s; exact geodesics on finer scans take minutes)",
+        default=1.3,
+        help="scan spacing of the simulated skin, mm (default: %(default)s)",
     )
     co.add_argument("--seed", type=int, default=0, help="seed of the simulated misplacement and noise (default: %(default)s)")
     co.set_defaults(run=_compensate)
