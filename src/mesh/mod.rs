@@ -17,7 +17,7 @@ pub use geodesic_exact::geodesic_exact;
 pub use geodesic_heat::{geodesic_heat, HeatSolver};
 pub use insert::{insert_points, Inserted, Landing};
 pub use locate::{XyLanding, XyLocator};
-pub use thin::thin_xy;
+pub use thin::{thin_xy, xy_area};
 
 use crate::error::{Error, Result};
 
@@ -105,17 +105,14 @@ pub fn surface_mesh(
     if given {
         return Ok((points.to_vec(), full));
     }
-    let area: f64 = full
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| points[i as usize]);
-            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
-        })
-        .sum();
     let spacing = match spacing {
         Spacing::Full => None,
-        Spacing::Fixed(s) => Some(s),
+        Spacing::Fixed(s) => {
+            Spacing::fixed(s)?;
+            Some(s)
+        }
         Spacing::Auto => {
+            let area = xy_area(points, &full);
             let (wanted, data) = ((area / GEODESIC_VERTICES as f64).sqrt(), (area / points.len() as f64).sqrt());
             (wanted > 1.5 * data).then_some(wanted)
         }

@@ -58,6 +58,17 @@ pub fn thin_xy(points: &[[f64; 3]], faces: &[[u32; 3]], spacing: f64) -> Vec<usi
     (0..points.len()).filter(|&i| keep[i]).collect()
 }
 
+/// The area of the mesh's xy projection.
+pub fn xy_area(points: &[[f64; 3]], faces: &[[u32; 3]]) -> f64 {
+    faces
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| points[i as usize]);
+            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
+        })
+        .sum()
+}
+
 /// The boundary vertices kept along each boundary loop of the mesh (module notes).
 fn outline_kept(points: &[[f64; 3]], faces: &[[u32; 3]], spacing: f64) -> Vec<usize> {
     // Boundary edges: used by one face only, directed as in that face.
@@ -145,13 +156,7 @@ mod tests {
         // The coarse mesh covers the same outline: its xy area is the full one.
         let coarse: Vec<[f64; 3]> = kept.iter().map(|&i| v[i]).collect();
         let faces = delaunay_xy(&coarse, None).unwrap();
-        let area: f64 = faces
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| coarse[i as usize]);
-                0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
-            })
-            .sum();
+        let area = xy_area(&coarse, &faces);
         assert!((area - 2400.0).abs() < 1e-9, "{area}");
     }
 
@@ -175,13 +180,7 @@ mod tests {
         for end in [[40.0, 20.0], [20.0, 40.0], [0.0, 0.0]] {
             assert!(coarse.iter().any(|p| p[0] == end[0] && p[1] == end[1]), "{end:?}");
         }
-        let area: f64 = faces
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| coarse[i as usize]);
-                0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
-            })
-            .sum();
+        let area = xy_area(&coarse, &faces);
         assert!((area - 1200.0).abs() < 0.5, "{area}");
     }
 }
