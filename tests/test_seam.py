@@ -155,6 +155,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
             None,
             jacobian="gradient",
             method="fmm",
+            spacing="auto",
             max_edge=None,
             max_iterations=1,
             tolerance=1e-3,

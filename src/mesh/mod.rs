@@ -76,6 +76,14 @@ pub enum Spacing {
 pub const GEODESIC_VERTICES: usize = 2000;
 
 impl Spacing {
+    /// The word form: "auto".
+    pub fn parse(word: &str) -> Result<Self> {
+        match word {
+            "auto" => Ok(Spacing::Auto),
+            _ => Err(Error::invalid("spacing", format!("expected 'auto', a spacing in mm or None, got {word:?}"))),
+        }
+    }
+
     /// A spacing of `mm`, checked.
     pub fn fixed(mm: f64) -> Result<Self> {
         if mm.is_finite() && mm > 0.0 {

@@ -42,12 +42,7 @@ fn isometric_match<'py>(
     let spacing = if spacing.is_none() {
         Spacing::Full
     } else if let Ok(word) = spacing.extract::<String>() {
-        if word != "auto" {
-            return Err(
-                Error::invalid("spacing", format!("expected 'auto', a spacing in mm or None, got {word:?}")).into()
-            );
-        }
-        Spacing::Auto
+        Spacing::parse(&word)?
     } else {
         let mm = spacing
             .extract::<f64>()
