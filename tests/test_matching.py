@@ -107,8 +107,7 @@ def test_mesh_input_and_a_given_start_give_the_same_match(part):
 
 def test_thinning_keeps_the_outline_for_points_at_the_edge():
     # Locating and matching points 2 mm inside the edge of a 1 mm scan thinned to a 2.2 mm spacing: still on
-    # the mesh, still right. (Closer than about 1 mm, LM's trial steps leave the surface and are refused, thinned
-    # or not: the match stalls.)
+    # the mesh, still right. (Closer than about 1 mm the match can stall, thinned or not: see BENCHMARKS.md.)
     skin = BentSkin(length=120.0, width=80.0, radius=400.0, pose=misplacement(2, translation=1.0, rotation=0.01))
     theoretical, scan = skin.grid(1.0), skin.scan(1.0, 0.002, seed=1)
     r, grid = skin.locating(margin=2.0), skin.matching_grid(4, 4, margin=2.0)
