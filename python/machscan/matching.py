@@ -127,8 +127,11 @@ def isometric_match(
         on a radius R shortens a path by a relative (h/R)²/24. :func:`machscan.compensate_toolpath` uses the
         full scan either way.
     max_edge : float, optional
-        Long-edge trim when meshing point surfaces, mm (:func:`machscan.delaunay_xy`); a thinned surface's
-        triangles are those over that mesh, so a concave outline stays concave.
+        Long-edge trim when meshing point surfaces, mm (:func:`machscan.delaunay_xy`); by default 4 × the
+        median edge, since the long triangles Delaunay adds across an inward-bowing stretch of the outline (the
+        edge of a bent, tilted part bows by tens of µm in xy) are shortcuts for geodesics between points near
+        the edge. ``float("inf")`` keeps every triangle. A thinned surface's triangles are those over this mesh,
+        so a concave outline stays concave.
     max_iterations : int
         Each try of a step counts, accepted or not.
     tolerance : float

@@ -31,8 +31,8 @@ impl HasPosition for Vertex {
 pub fn delaunay_xy(points: &[[f64; 3]], max_edge: Option<f64>) -> Result<Vec<[u32; 3]>> {
     check_finite_points("points", points)?;
     if let Some(m) = max_edge {
-        if !(m.is_finite() && m > 0.0) {
-            return Err(Error::invalid("max_edge", format!("must be a length > 0 mm, got {m}")));
+        if !(m > 0.0) {
+            return Err(Error::invalid("max_edge", format!("must be a length > 0 mm (inf: no trim), got {m}")));
         }
     }
     if points.len() > u32::MAX as usize {
