@@ -61,17 +61,11 @@ pub fn delaunay_xy(points: &[[f64; 3]], max_edge: Option<f64>) -> Result<Vec<[u3
             format!("cannot be triangulated: {e:?} (coordinates beyond ±1e150 or below 1e-140 in magnitude)"),
         )
     })?;
-    let faces: Vec<[u32; 3]> = triangulation
-        .inner_faces()
-        .map(|f| f.vertices().map(|v| v.data().index))
-        .filter(|t| match max_edge {
-            None => true,
-            Some(m) => (0..3).all(|k| {
-                let (a, b) = (points[t[k] as usize], points[t[(k + 1) % 3] as usize]);
-                (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>() <= m * m
-            }),
-        })
-        .collect();
+    let faces: Vec<[u32; 3]> = triangulation.inner_faces().map(|f| f.vertices().map(|v| v.data().index)).collect();
+    let faces = match max_edge {
+        Some(m) => without_long_edges(points, faces, m),
+        None => faces,
+    };
     if triangulation.num_inner_faces() == 0 {
         return Err(Error::invalid(
             "points",
@@ -82,6 +76,17 @@ pub fn delaunay_xy(points: &[[f64; 3]], max_edge: Option<f64>) -> Result<Vec<[u3
         ));
     }
     Ok(faces)
+}
+
+/// The triangles none of whose edges is longer than `max_edge` in 3D.
+pub fn without_long_edges(points: &[[f64; 3]], faces: Vec<[u32; 3]>, max_edge: f64) -> Vec<[u32; 3]> {
+    faces.into_iter().filter(|t| (0..3).all(|k| edge_length(points, t[k], t[(k + 1) % 3]) <= max_edge)).collect()
+}
+
+/// The 3D length of the edge a–b.
+pub fn edge_length(points: &[[f64; 3]], a: u32, b: u32) -> f64 {
+    let (p, q) = (points[a as usize], points[b as usize]);
+    (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>().sqrt()
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@ pub mod locate;
 pub mod thin;
 
 pub use closest::{closest_points, Closest, TriangleBvh};
-pub use delaunay::delaunay_xy;
+pub use delaunay::{delaunay_xy, edge_length, without_long_edges};
 pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod};
 pub use geodesic_exact::geodesic_exact;
 pub use geodesic_heat::{geodesic_heat, HeatSolver};
@@ -20,6 +20,7 @@ pub use locate::{XyLanding, XyLocator};
 pub use thin::{thin_xy, xy_area};
 
 use crate::error::{Error, Result};
+use std::borrow::Cow;
 
 /// Faces whose indices all name one of the vertices.
 fn check_faces(vertices: usize, faces: &[[u32; 3]]) -> Result<()> {
@@ -83,15 +84,6 @@ impl Spacing {
             _ => Err(Error::invalid("spacing", format!("expected 'auto', a spacing in mm or None, got {word:?}"))),
         }
     }
-
-    /// A spacing of `mm`, checked.
-    pub fn fixed(mm: f64) -> Result<Self> {
-        if mm.is_finite() && mm > 0.0 {
-            Ok(Spacing::Fixed(mm))
-        } else {
-            Err(Error::invalid("spacing", format!("must be a positive finite number of mm, got {mm}")))
-        }
-    }
 }
 
 /// The long-edge trim of `surface_mesh` when no `max_edge` is given: this many times the
@@ -101,44 +93,43 @@ impl Spacing {
 /// 120 mm skin bent to R 400 mm and tilted 0.01 rad, enough to stall the matching.
 pub const EDGE_TRIM: f64 = 4.0;
 
-fn edge(points: &[[f64; 3]], a: u32, b: u32) -> f64 {
-    let (p, q) = (points[a as usize], points[b as usize]);
-    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-}
-
 /// The median length of the triangles' edges (each inner edge counted twice).
 fn median_edge(points: &[[f64; 3]], faces: &[[u32; 3]]) -> f64 {
     let mut lengths: Vec<f64> =
-        faces.iter().flat_map(|t| (0..3).map(move |k| edge(points, t[k], t[(k + 1) % 3]))).collect();
+        faces.iter().flat_map(|t| (0..3).map(move |k| edge_length(points, t[k], t[(k + 1) % 3]))).collect();
     let mid = lengths.len() / 2;
     *lengths.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
-/// Vertices and triangles.
-pub type OwnedMesh = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+/// Vertices (the given points when none were dropped) and triangles.
+pub type SurfaceMesh<'a> = (Cow<'a, [[f64; 3]]>, Vec<[u32; 3]>);
 
 /// A surface argument as a mesh for geodesic work: a mesh as given, or scan points meshed by
 /// `delaunay_xy` (triangles with an edge beyond `max_edge` left out; without it, beyond
 /// `EDGE_TRIM` × the median edge) and thinned as `spacing` says (`thin_xy`; the thinned points'
 /// triangles kept where they lie over that mesh). Errors name the argument.
-pub fn surface_mesh(
+pub fn surface_mesh<'a>(
     name: &str,
-    points: &[[f64; 3]],
+    points: &'a [[f64; 3]],
     faces: Option<Vec<[u32; 3]>>,
     max_edge: Option<f64>,
     spacing: Spacing,
-) -> Result<OwnedMesh> {
+) -> Result<SurfaceMesh<'a>> {
+    if let Spacing::Fixed(mm) = spacing {
+        if !(mm.is_finite() && mm > 0.0) {
+            return Err(Error::invalid("spacing", format!("must be a positive finite number of mm, got {mm}")));
+        }
+    }
     let given = faces.is_some();
     let full = surface_faces(name, points, faces, max_edge)?;
     if given {
-        return Ok((points.to_vec(), full));
+        return Ok((Cow::Borrowed(points), full));
     }
     let full = match max_edge {
         Some(_) => full,
         None => {
             let trim = EDGE_TRIM * median_edge(points, &full);
-            let kept: Vec<[u32; 3]> =
-                full.into_iter().filter(|t| (0..3).all(|k| edge(points, t[k], t[(k + 1) % 3]) <= trim)).collect();
+            let kept = without_long_edges(points, full, trim);
             if kept.is_empty() {
                 return Err(Error::invalid(name, "no triangle is left after the long-edge trim: give max_edge"));
             }
@@ -147,10 +138,7 @@ pub fn surface_mesh(
     };
     let spacing = match spacing {
         Spacing::Full => None,
-        Spacing::Fixed(s) => {
-            Spacing::fixed(s)?;
-            Some(s)
-        }
+        Spacing::Fixed(s) => Some(s),
         Spacing::Auto => {
             let area = xy_area(points, &full);
             let (wanted, data) = ((area / GEODESIC_VERTICES as f64).sqrt(), (area / points.len() as f64).sqrt());
@@ -158,7 +146,7 @@ pub fn surface_mesh(
         }
     };
     let Some(s) = spacing else {
-        return Ok((points.to_vec(), full));
+        return Ok((Cow::Borrowed(points), full));
     };
     let kept: Vec<[f64; 3]> = thin_xy(points, &full, s).into_iter().map(|i| points[i]).collect();
     // The thinned points' triangles that lie over the full mesh: a concave outline stays concave
@@ -174,7 +162,7 @@ pub fn surface_mesh(
     if faces.is_empty() {
         return Err(Error::invalid(name, "the thinned surface has no triangles: give a smaller spacing"));
     }
-    Ok((kept, faces))
+    Ok((Cow::Owned(kept), faces))
 }
 
 /// Meshes with known geodesics, shared by the geodesic tests.

@@ -47,7 +47,7 @@ fn isometric_match<'py>(
         let mm = spacing
             .extract::<f64>()
             .map_err(|_| Error::invalid("spacing", "expected 'auto', a spacing in mm or None"))?;
-        Spacing::fixed(mm)?
+        Spacing::Fixed(mm)
     };
     let options = MatchOptions {
         jacobian: Jacobian::parse(jacobian)?,
