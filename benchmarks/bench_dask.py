@@ -52,7 +52,11 @@ def main() -> None:
     x = parts[0].x
     z = np.concatenate([p.z for p in parts])
     z = np.tile(z, (math.ceil(args.frames / len(z)), 1))[: args.frames]
-    tmp = tempfile.mkdtemp(prefix="bench_dask_")
+    with tempfile.TemporaryDirectory(prefix="bench_dask_") as tmp:
+        run(args, x, z, tmp)
+
+
+def run(args, x, z, tmp) -> None:
     profiler = machscan.Profiler(readings=len(x), pitch=float(x[1] - x[0]))
     scan = machscan.Scan(z, np.zeros((len(z), 6)), np.arange(len(z)) * 1e-4, profiler, (0.0, 0.0, 100.0), np.zeros(6))
     md.save_scan(scan, os.path.join(tmp, "long.zarr"), chunk_frames=args.chunk)
