@@ -369,6 +369,17 @@ def test_toolpath_errors_name_file_and_line(tmp_path):
     (tmp_path / "b.apt").write_text("PARTNO/X" + chr(10) + "GOTO/1,2,oops" + chr(10))
     with pytest.raises(ValueError, match=r"b[.]apt: line 2"):
         io.read_toolpath(tmp_path / "b.apt")
+    # Numbers Rust and Python would read, but no machine can go to.
+    for k, text in enumerate(["GOTO/1,2,nan", "GOTO/inf,0,3", "GOTO/1,2,3,0,0,1e400", "FEDRAT/-5\nGOTO/1,1,1"]):
+        (tmp_path / f"n{k}.apt").write_text("PARTNO/X\n" + text + "\n")
+        with pytest.raises(ValueError, match=rf"n{k}[.]apt: line 2"):
+            io.read_toolpath(tmp_path / f"n{k}.apt")
+    pts = np.zeros((3, 3))
+    for feeds in ([-1.0, 5.0, 5.0], [5.0, np.inf, 5.0], [5.0, np.nan, 5.0]):
+        with pytest.raises(ValueError, match="feeds"):
+            io.write_toolpath(tmp_path / "f.cl", pts, feeds=feeds)
+    io.write_toolpath(tmp_path / "f.cl", pts, feeds=[np.nan, 5.0, 5.0])  # no feed before the first: as read
+    assert np.isnan(io.read_toolpath(tmp_path / "f.cl").feeds[0])
 
 
 @pytest.mark.parametrize("name, nv, nf", [("flat_triangular_mesh.txt", 121, 200), ("hedgehog_mesh.txt", 300, 596)])

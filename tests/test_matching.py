@@ -151,6 +151,10 @@ def test_bad_arguments_are_refused_by_name(part):
         (dict(spacing=0.0), "spacing"),
         (dict(spacing="fine"), "spacing"),
         (dict(spacing=float("nan")), "spacing"),
+        (dict(theoretical_locating=loc[[0, 0]]), "theoretical_locating: r1 and r2 coincide"),
+        (dict(actual_locating=loc[[1, 1]]), "actual_locating: r1 and r2 coincide"),
+        # The quadratic Jacobian's fit is not defined on points along one line (the gradient one is).
+        (dict(theoretical_matching=np.c_[np.linspace(-15, 15, 8), np.zeros(8), np.zeros(8)]), "one line or conic"),
     ]
     for change, name in cases:
         with pytest.raises(ValueError, match=name):
@@ -159,3 +163,9 @@ def test_bad_arguments_are_refused_by_name(part):
     bad[2, 0] = np.nan
     with pytest.raises(ValueError, match="theoretical_matching"):
         machscan.isometric_match(t, t, loc, loc, bad)
+
+
+def test_bent_skin_refuses_a_spacing_that_is_not_positive():
+    for spacing in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="spacing"):
+            BentSkin().scan(spacing)

@@ -117,3 +117,8 @@ def test_bad_arguments_are_refused_by_name(skin):
     bad[3, 1] = np.nan
     with pytest.raises(ValueError, match="tool_points"):
         machscan.compensate_toolpath(bad, tm, am, scan)
+    # A bad tool axis is named by its column as given, (x, y, z, i, j, k).
+    with_axes = np.hstack([tools, np.tile([0.0, 0.0, 1.0], (len(tools), 1))])
+    with_axes[2, 4] = np.nan
+    with pytest.raises(ValueError, match=r"tool_points: .* row 2, column 4"):
+        machscan.compensate_toolpath(with_axes, tm, am, scan)

@@ -352,7 +352,8 @@ class Toolpath:
 def read_toolpath(path: str | os.PathLike[str]) -> Toolpath:
     """Read an APT/CL file: ``GOTO/x, y, z[, i, j, k]`` points, ``FEDRAT`` feeds, segments split
     at ``RAPID``; ``$`` continues a statement, ``$$`` starts a comment, other statements are
-    skipped. Errors name the file and line.
+    skipped. Errors name the file and line, also for values no machine can take (``nan``, ``inf``,
+    1e400, a feed ≤ 0).
 
     Examples
     --------
@@ -369,7 +370,9 @@ def write_toolpath(
     segments: ArrayLike | None = None,
 ) -> None:
     """Write an APT/CL toolpath: ``GOTO/x,y,z[,i,j,k]`` per point (shortest round-trip numbers),
-    ``FEDRAT`` whenever the feed changes, ``RAPID`` where the segment label changes.
+    ``FEDRAT`` whenever the feed changes, ``RAPID`` where the segment label changes. Feeds are
+    positive; NaN only before the first feed (as :func:`read_toolpath` gives points before any
+    ``FEDRAT``).
 
     Examples
     --------

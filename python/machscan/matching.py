@@ -105,9 +105,11 @@ def isometric_match(
     theoretical_points, actual_points : array_like (N, 3), or (vertices, faces)
         The theoretical surface (e.g. sampled from CAD) and the scan of the clamped part, mm.
     theoretical_locating, actual_locating : array_like, shape (2, 3)
-        r₁, r₂ on the theoretical surface and as measured on the machine.
+        r₁, r₂ on the theoretical surface and as measured on the machine; apart in x, y.
     theoretical_matching : array_like, shape (n, 3)
-        p₁ … pₙ, e.g. a grid over the part (n ≥ 7 for the quadratic Jacobian, ≥ 3 otherwise).
+        p₁ … pₙ, e.g. a grid over the part (n ≥ 7 for the quadratic Jacobian, ≥ 3 otherwise). The quadratic
+        Jacobian fits a quadratic in x, y to the points other than each one, so those must not lie on one line
+        or conic (a ValueError says so; the gradient Jacobian has no such need).
     actual_initial : array_like, shape (n, 3), optional
         Where the actual matching points start (their x, y); by default the theoretical ones moved by the x, y
         rigid motion that takes r₁, r₂ to r′₁, r′₂.

@@ -164,13 +164,17 @@ def geodesic_distances(
     face, bending only at saddle and boundary vertices. Equals pygeodesic (Kirsanov's MMP) to 1e-9.
 
     ``method="fmm"``: fast marching with the virtual-source update (the point in the triangle's
-    plane at the two known distances; exact on flat parts of the mesh, so a flat plate measures
-    Euclidean distances to 1e-9), the edge update where that point's line misses the triangle.
+    plane at the two known distances; exact where that point is seen through the triangle, so a
+    regular flat grid measures Euclidean distances to 1e-9), the edge update where that point's
+    line misses the triangle (a flat plate of random points meshed by :func:`delaunay_xy`: 0.1–0.4 %
+    mean, up to a few % at single vertices).
 
     ``method="heat"``: the heat method (Crane, Weischedel & Wardetzky): heat flowed from the source
     for a short time t = h² (h the mean edge), its normalised gradient, and the Poisson equation whose
     solution has that gradient; on the intrinsic Delaunay triangulation of the mesh (edges flipped
-    along the surface, so that obtuse triangles do not spoil the Laplacian). Both sparse systems are
+    along the surface, so that obtuse triangles do not spoil the Laplacian; on an open mesh that of
+    its tufted cover, so that boundary edges are flipped too, as potpourri3d does). Mean errors seen:
+    0.45–0.85 % on the bunny, 1–2 % on a random flat plate. Both sparse systems are
     factored once (faer's Cholesky) and serve every source, which makes it the fastest for many
     sources on one mesh. Beyond ~700 mean edges from a source the heat underflows and distances there
     are not reliable.
@@ -195,4 +199,7 @@ def geodesic_distances(
     src = np.atleast_1d(np.asarray(sources))
     if src.ndim != 1 or (src.size and not np.issubdtype(src.dtype, np.integer)):
         raise ValueError(f"sources: expected vertex indices (S,), got {src.dtype} of shape {src.shape}")
+    if src.size and (int(src.min()) < 0 or int(src.max()) > np.iinfo(np.int64).max):
+        bad = int(src.min()) if int(src.min()) < 0 else int(src.max())
+        raise ValueError(f"sources: {bad} is not a vertex index")
     return _core.geodesic_distances(vertices, faces, [int(s) for s in src], method=method)

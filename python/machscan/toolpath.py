@@ -71,7 +71,8 @@ class CompensatedToolpath:
         side) when none were given.
     inside : ndarray of bool, shape (M,)
         False where the point's foot lies outside the xy hull of the theoretical matching points: it was
-        extrapolated, and is only as good as the mapping beyond the last matching points.
+        extrapolated, and is only as good as the mapping beyond the last matching points; beyond the scan it
+        lands on the scan's edge (the surface is not extended).
     offsets : ndarray, shape (M,)
         Each tool point's offset from the theoretical surface along its normal, mm (negative below it).
     """

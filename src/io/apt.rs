@@ -48,9 +48,10 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
         let numbers = |what: &str| -> Result<Vec<f64>> {
             args.split(|c: char| c == ',' || c.is_whitespace())
                 .filter(|t| !t.is_empty())
-                .map(|t| {
-                    t.parse::<f64>()
-                        .map_err(|_| Error::format(path, format!("line {start_line}: {what}: {t:?} is not a number")))
+                .map(|t| match t.parse::<f64>() {
+                    // Rust reads "nan", "inf" and 1e400 as numbers; no machine can go there.
+                    Ok(v) if v.is_finite() => Ok(v),
+                    _ => Err(Error::format(path, format!("line {start_line}: {what}: {t:?} is not a finite number"))),
                 })
                 .collect()
         };
@@ -79,6 +80,12 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
                 feed = *v
                     .last()
                     .ok_or_else(|| Error::format(path, format!("line {start_line}: FEDRAT without a feed")))?;
+                if !(feed.is_finite() && feed > 0.0) {
+                    return Err(Error::format(
+                        path,
+                        format!("line {start_line}: FEDRAT {feed}: a feed is a positive number"),
+                    ));
+                }
             }
             "RAPID" => rapid = true,
             _ => {}
@@ -131,6 +138,15 @@ pub fn write_apt(
     }
     if let Some(s) = segments {
         crate::error::check_finite("segments", s, 1)?;
+    }
+    if let Some(f) = feeds {
+        // NaN stands for "no feed yet" (as read before the first FEDRAT); once a FEDRAT is
+        // written a CL file keeps it, so a NaN after a feed could not be written back.
+        let first = f.iter().position(|v| !v.is_nan()).unwrap_or(n);
+        if let Some(i) = (first..n).find(|&i| !(f[i].is_finite() && f[i] > 0.0)) {
+            let why = if f[i].is_nan() { "NaN (no feed) after a feed was given" } else { "not a positive finite feed" };
+            return Err(Error::invalid("feeds", format!("point {i}: {} is {why}", f[i])));
+        }
     }
     let io = |e: std::io::Error| Error::io(path, "write", &e);
     let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);

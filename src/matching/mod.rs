@@ -317,6 +317,60 @@ fn jacobian(g: &[Vec<Vector2<f64>>], n: usize) -> DMatrix<f64> {
     jac
 }
 
+/// Eq 12–13 fit a quadratic in x, y to the distances at the matching points other than the
+/// source; the fit is only defined when those points do not lie on one line or conic. Checked
+/// on the theoretical points (the actual ones are their near-isometric images): a degenerate fit
+/// would give zero gradients and a match that stalls without saying why.
+fn check_quadratic_fit(matching: &[[f64; 3]]) -> Result<()> {
+    let n = matching.len();
+    let (cx, cy) =
+        (matching.iter().map(|p| p[0]).sum::<f64>() / n as f64, matching.iter().map(|p| p[1]).sum::<f64>() / n as f64);
+    let s = matching.iter().map(|p| (p[0] - cx).abs().max((p[1] - cy).abs())).fold(0.0, f64::max).max(1e-300);
+    for skip in 0..n {
+        let rows: Vec<[f64; 6]> = (0..n)
+            .filter(|&j| j != skip)
+            .map(|j| {
+                let (x, y) = ((matching[j][0] - cx) / s, (matching[j][1] - cy) / s);
+                [1.0, x, y, x * x, x * y, y * y]
+            })
+            .collect();
+        // The normal matrix's Cholesky pivots, by hand: direct, where an SVD iterates (nalgebra's
+        // does not stop on some exactly rank-deficient matrices). A pivot below 1e-14 of the
+        // largest diagonal is a singular value ratio below ~1e-7: the points lie on a conic.
+        let mut m = [[0.0f64; 6]; 6];
+        for r in &rows {
+            for i in 0..6 {
+                for j in 0..6 {
+                    m[i][j] += r[i] * r[j];
+                }
+            }
+        }
+        let hi = (0..6).map(|i| m[i][i]).fold(0.0, f64::max);
+        let mut lo = f64::INFINITY;
+        for k in 0..6 {
+            let pivot = m[k][k];
+            lo = lo.min(pivot);
+            if !(pivot > 1e-14 * hi) {
+                break;
+            }
+            let row_k = m[k];
+            for row in m.iter_mut().skip(k + 1) {
+                let f = row[k] / pivot;
+                for (x, y) in row.iter_mut().zip(&row_k).skip(k + 1) {
+                    *x -= f * y;
+                }
+            }
+        }
+        if !(lo > 1e-14 * hi) {
+            return Err(Error::invalid(
+                "theoretical_matching",
+                format!("the points other than point {skip} lie on one line or conic in x, y, so the quadratic Jacobian (eq 12–13) is not defined: spread them, or use jacobian='gradient'"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The x, y rigid motion that takes the theoretical locating points to the actual ones: where
 /// the matching points start when none are given.
 fn start_by_locating(t_loc: &[[f64; 3]; 2], a_loc: &[[f64; 3]; 2], t_match: &[[f64; 3]]) -> Vec<[f64; 2]> {
@@ -368,6 +422,16 @@ pub fn isometric_match(
             ));
         }
     }
+    for (name, p) in [("theoretical_locating", theoretical_locating), ("actual_locating", actual_locating)] {
+        // The start and the frame of eq 11 need the direction r1 → r2 in xy.
+        let scale = p.iter().flatten().fold(1.0f64, |m, c| m.max(c.abs()));
+        if (p[1][0] - p[0][0]).hypot(p[1][1] - p[0][1]) <= 1e-9 * scale {
+            return Err(Error::invalid(name, "r1 and r2 coincide in x, y: the two locating points must be apart"));
+        }
+    }
+    if options.jacobian == Jacobian::Quadratic {
+        check_quadratic_fit(theoretical_matching)?;
+    }
     if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
         return Err(Error::invalid(
             "tolerance",
@@ -408,8 +472,15 @@ pub fn isometric_match(
         Ok(Some((f, d, field, p)))
     };
     let Some((mut f, mut d, mut field, mut points)) = evaluate(&xy)? else {
-        let what = if actual_initial.is_some() { "actual_initial" } else { "actual_locating" };
-        return Err(Error::invalid(what, "a starting matching point lies outside the actual surface's xy outline"));
+        let i = xy.iter().position(|p| locator.locate(p[0], p[1]).is_none()).unwrap_or(0);
+        let [x, y] = xy[i];
+        return Err(match actual_initial {
+            Some(_) => Error::invalid("actual_initial", format!("point {i} ({x:.3}, {y:.3}) lies outside the actual surface's xy outline")),
+            None => Error::invalid(
+                "theoretical_matching",
+                format!("point {i}, moved by the rigid motion of the locating points to ({x:.3}, {y:.3}), lies outside the actual surface's xy outline (check it lies on the part, and actual_locating)"),
+            ),
+        });
     };
     let norm = |f: &[f64]| f.iter().map(|v| v * v).sum::<f64>().sqrt();
     let worst = |f: &[f64]| f.iter().fold(0.0, |m: f64, v| m.max(v.abs()));

@@ -29,7 +29,7 @@ pub mod grinding;
 pub mod scallop;
 pub mod spline;
 
-use crate::error::{check_finite_points, check_positive, Error, Result};
+use crate::error::{check_finite, check_finite_points, check_positive, Error, Result};
 use crate::mesh::{delaunay_xy, TriangleBvh, XyLocator};
 use crate::spatial::PointIndex;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
@@ -199,11 +199,17 @@ pub fn compensate_toolpath(
     actual_faces: &[[u32; 3]],
     options: CompensateOptions,
 ) -> Result<Compensated> {
-    check_finite_points("tool_points", tool_points)?;
+    match tool_axes {
+        // As the user gave them, (x, y, z, i, j, k) rows: a bad axis is named by its column.
+        Some(a) => {
+            let rows: Vec<f64> = tool_points.iter().zip(a).flat_map(|(p, x)| p.iter().chain(x).copied()).collect();
+            check_finite("tool_points", &rows, 6)?;
+        }
+        None => check_finite_points("tool_points", tool_points)?,
+    }
     check_finite_points("theoretical_matching", theoretical_matching)?;
     check_finite_points("actual_matching", actual_matching)?;
     if let Some(a) = tool_axes {
-        check_finite_points("tool_points", a)?;
         if let Some(i) = a.iter().position(|x| (Vector3::from(*x).norm() - 1.0).abs() > 1e-6) {
             return Err(Error::invalid(
                 "tool_points",

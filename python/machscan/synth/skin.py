@@ -89,6 +89,8 @@ class BentSkin:
     def grid(self, spacing: float, *, margin: float = 0.0) -> NDArray[np.float64]:
         """Theoretical points ``(x, y, 0)`` on a grid of about ``spacing`` over the plate, ``margin``
         inside its edges."""
+        if not (np.isfinite(spacing) and spacing > 0):
+            raise ValueError(f"spacing: must be a positive finite number of mm, got {spacing}")
         nx = max(2, round((self.length - 2 * margin) / spacing) + 1)
         ny = max(2, round((self.width - 2 * margin) / spacing) + 1)
         x = np.linspace(-self.length / 2 + margin, self.length / 2 - margin, nx)
