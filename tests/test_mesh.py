@@ -241,6 +241,8 @@ def test_geodesic_distances_mark_unreached_vertices_and_refuse_bad_input():
         machscan.geodesic_distances(v, [[0, 1, 2]], [-1])
     with pytest.raises(ValueError, match="sources"):
         machscan.geodesic_distances(v, [[0, 1, 2]], [2**63])
+    with pytest.raises(ValueError, match="faces: expected vertex indices, got booleans"):
+        machscan.geodesic_distances(v, np.array([[True, False, True]]), [0])
     for method in ("fmm", "heat"):
         d = machscan.geodesic_distances(v, [[0, 1, 2]], [0, 3], method=method)
         assert np.isinf(d[0, 3]) and np.isinf(d[1, :3]).all() and d[1, 3] == 0, method

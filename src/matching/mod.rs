@@ -613,7 +613,9 @@ mod tests {
     fn bad_input_is_refused_by_name() {
         let (v, f) = plate(20.0, 20.0, 2.0, 0.0, [0.0, 0.0]);
         let s = Surface { vertices: &v, faces: &f };
-        let m: Vec<[f64; 3]> = (0..8).map(|k| [2.0 + 2.0 * k as f64, 3.0 + k as f64, 0.0]).collect();
+        // A 3 × 3 grid: without any one of its points the rest fix a quadratic (eq 12–13).
+        let m: Vec<[f64; 3]> = (0..9).map(|k| [4.0 + 6.0 * (k % 3) as f64, 4.0 + 6.0 * (k / 3) as f64, 0.0]).collect();
+        let line: Vec<[f64; 3]> = (0..8).map(|k| [2.0 + 2.0 * k as f64, 3.0 + k as f64, 0.0]).collect();
         let loc = [[1.0, 1.0, 0.0], [19.0, 19.0, 0.0]];
         let opts = MatchOptions {
             jacobian: Jacobian::Quadratic,
@@ -624,6 +626,11 @@ mod tests {
         let e = |r: Result<IsometricMatch>| r.unwrap_err().to_string();
         assert!(e(isometric_match(s, s, &loc[..1], &loc, &m, None, opts)).contains("theoretical_locating"));
         assert!(e(isometric_match(s, s, &loc, &loc, &m[..5], None, opts)).contains("theoretical_matching"));
+        assert!(e(isometric_match(s, s, &loc, &loc, &line, None, opts)).contains("one line or conic"));
+        let same = [loc[0], loc[0]];
+        assert!(
+            e(isometric_match(s, s, &same, &loc, &m, None, opts)).contains("theoretical_locating: r1 and r2 coincide")
+        );
         assert!(e(isometric_match(s, s, &loc, &loc, &m, Some(&m[..3]), opts)).contains("actual_initial"));
         let far: Vec<[f64; 3]> = m.iter().map(|p| [p[0] + 100.0, p[1], 0.0]).collect();
         assert!(e(isometric_match(s, s, &loc, &loc, &m, Some(&far), opts)).contains("actual_initial"));

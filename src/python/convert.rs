@@ -128,6 +128,19 @@ pub struct F64Array<'py> {
 }
 
 impl<'py> F64Array<'py> {
+    /// An array of vertex indices (faces, triangles): as `extract`, but booleans are refused — a
+    /// mask given where indices belong would silently become vertices 0 and 1.
+    pub fn indices(obj: &Bound<'py, PyAny>, name: &str, spec: &[Dim], what: &str) -> PyResult<Self> {
+        let py = obj.py();
+        if let Ok(arr) = numpy_module(py)?.call_method1("asarray", (obj,)) {
+            if arr.getattr("dtype")?.getattr("kind")?.extract::<String>()? == "b" {
+                return Err(PyValueError::new_err(format!("{name}: expected vertex indices, got booleans (a mask?)")));
+            }
+            return Self::extract(&arr, name, spec, what);
+        }
+        Self::extract(obj, name, spec, what)
+    }
+
     /// `obj` as float64 of the shape `spec`; `what` describes the columns in messages (e.g. "with
     /// columns X, Y, Z, A, C, C2").
     pub fn extract(obj: &Bound<'py, PyAny>, name: &str, spec: &[Dim], what: &str) -> PyResult<Self> {

@@ -50,7 +50,7 @@ fn delaunay_xy<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, max_edge: Optio
 /// A mesh argument: vertices and the triangles' vertex indices.
 fn mesh<'py>(vertices: &Bound<'py, PyAny>, faces: &Bound<'py, PyAny>) -> PyResult<(F64Array<'py>, Vec<[u32; 3]>)> {
     let v = F64Array::points(vertices, "vertices")?;
-    let f = F64Array::extract(faces, "faces", &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+    let f = F64Array::indices(faces, "faces", &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
     let tri = triangle_indices("faces", f.values()?)?;
     Ok((v, tri))
 }
@@ -64,7 +64,7 @@ pub(super) fn surface<'py>(
     let v = F64Array::points(points, name)?;
     let tri = match faces {
         Some(f) => {
-            let f = F64Array::extract(f, name, &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+            let f = F64Array::indices(f, name, &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
             Some(triangle_indices(name, f.values()?)?)
         }
         None => None,
