@@ -169,3 +169,17 @@ def test_bent_skin_refuses_a_spacing_that_is_not_positive():
     for spacing in (0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="spacing"):
             BentSkin().scan(spacing)
+
+
+def test_a_gap_inside_the_scan_is_bridged_not_walked_round():
+    # A clamp's 12 mm shadow in the scan, no matching point in it. Trimming every long triangle (the default
+    # until review) left a hole the geodesics went round: E 1.8 mm, stalled, 0.23 mm RMS off. The default now
+    # peels long triangles from the outline only.
+    skin = BentSkin(length=120.0, width=80.0, radius=400.0, pose=misplacement(5, translation=1.0, rotation=np.deg2rad(0.5)))
+    uv = skin.grid(1.3)
+    scan = skin.scan(1.3, 0.005, seed=2)
+    scan = scan[np.hypot(uv[:, 0] - 12.0, uv[:, 1] - 7.0) > 6.0]
+    r, grid = skin.locating(), skin.matching_grid(5, 5)
+    m = machscan.isometric_match(skin.grid(1.3), scan, r, skin.actual(r)[0], grid, jacobian="gradient")
+    assert m.converged and m.max_error[-1] < 0.002, m
+    assert rms(m.points - skin.actual(grid)[0]) < 0.010

@@ -129,11 +129,13 @@ def isometric_match(
         on a radius R shortens a path by a relative (h/R)²/24. :func:`machscan.compensate_toolpath` uses the
         full scan either way.
     max_edge : float, optional
-        Long-edge trim when meshing point surfaces, mm (:func:`machscan.delaunay_xy`); by default 4 × the
-        median edge, since the long triangles Delaunay adds across an inward-bowing stretch of the outline (the
-        edge of a bent, tilted part bows by tens of µm in xy) are shortcuts for geodesics between points near
-        the edge. ``float("inf")`` keeps every triangle. A thinned surface's triangles are those over this mesh,
-        so a concave outline stays concave.
+        Long-edge trim when meshing point surfaces, mm: every triangle with a longer edge is left out
+        (:func:`machscan.delaunay_xy`). By default only triangles with an outline edge beyond 4 × the median edge
+        are peeled off, from the outline inwards: the long triangles Delaunay adds across an inward-bowing
+        stretch of the outline (the edge of a bent, tilted part bows by tens of µm in xy) are shortcuts for
+        geodesics between points near the edge, while a gap inside the scan (a clamp's shadow) stays bridged, as
+        the part is there. ``float("inf")`` keeps every triangle. A thinned surface's triangles are those over
+        this mesh, so a concave outline stays concave.
     max_iterations : int
         Each try of a step counts, accepted or not.
     tolerance : float

@@ -11,7 +11,7 @@ pub mod locate;
 pub mod thin;
 
 pub use closest::{closest_points, Closest, TriangleBvh};
-pub use delaunay::{delaunay_xy, edge_length, without_long_edges};
+pub use delaunay::{delaunay_xy, edge_length, peel_long_edges};
 pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod};
 pub use geodesic_exact::geodesic_exact;
 pub use geodesic_heat::{geodesic_heat, HeatSolver};
@@ -86,11 +86,14 @@ impl Spacing {
     }
 }
 
-/// The long-edge trim of `surface_mesh` when no `max_edge` is given: this many times the
-/// median edge. Delaunay's hull adds long, thin triangles across every inward-bowing stretch of
-/// the outline (the edge of a bent part that is tilted bows by tens of µm in xy), and their
-/// straight edges are shortcuts for geodesics between points near the edge: 0.15 mm on a
-/// 120 mm skin bent to R 400 mm and tilted 0.01 rad, enough to stall the matching.
+/// The long-edge trim of `surface_mesh` when no `max_edge` is given: triangles with an outline
+/// edge beyond this many times the median edge are peeled off (`peel_long_edges`). Delaunay's
+/// hull adds long, thin triangles across every inward-bowing stretch of the outline (the edge
+/// of a bent part that is tilted bows by tens of µm in xy), and their straight edges are
+/// shortcuts for geodesics between points near the edge: 0.15 mm on a 120 mm skin bent to
+/// R 400 mm and tilted 0.01 rad, enough to stall the matching. Gaps inside the scan stay
+/// bridged: trimming every long edge made geodesics go round a clamp's 12 mm shadow and the
+/// match stalled at E 1.8 mm (found in review, 2026-11-23).
 pub const EDGE_TRIM: f64 = 4.0;
 
 /// The median length of the triangles' edges (each inner edge counted twice).
@@ -129,7 +132,7 @@ pub fn surface_mesh<'a>(
         Some(_) => full,
         None => {
             let trim = EDGE_TRIM * median_edge(points, &full);
-            let kept = without_long_edges(points, full, trim);
+            let kept = peel_long_edges(points, full, trim);
             if kept.is_empty() {
                 return Err(Error::invalid(name, "no triangle is left after the long-edge trim: give max_edge"));
             }

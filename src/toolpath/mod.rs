@@ -139,13 +139,31 @@ impl ActualSurface<'_> {
         self.quadric(on_mesh, triangle_normal).unwrap_or((on_mesh, triangle_normal))
     }
 
-    /// A quadric height field over the plane of the scan points within `radius` of `q` (the
-    /// 12 nearest if fewer), `q` put on it along the plane's normal.
+    /// A quadric height field over the plane of the scan points within `radius` of `q` (over a
+    /// gap, within a wider radius that surrounds `q`), `q` put on it along the plane's normal.
     fn quadric(&self, q: Vector3<f64>, guess: Vector3<f64>) -> Option<(Vector3<f64>, Vector3<f64>)> {
         let mut near: Vec<usize> = Vec::new();
         self.index.for_each_within(&q.into(), self.radius, |i| near.push(i));
         if near.len() < QUADRIC_POINTS {
-            near = self.index.knn(&q.into(), QUADRIC_POINTS).into_iter().map(|(i, _)| i).collect();
+            // q is over a gap in the scan (a clamp's shadow): widen until the points are enough
+            // and lie around q, not on one side of it — a fit to one side extrapolates its slope
+            // across the gap (2.4° over a 16 mm gap with the 12 nearest points).
+            let mut r = self.radius;
+            while r < 16.0 * self.radius {
+                r *= 1.5;
+                near.clear();
+                self.index.for_each_within(&q.into(), r, |i| near.push(i));
+                if near.len() >= QUADRIC_POINTS {
+                    let c =
+                        near.iter().map(|&i| Vector3::from(self.vertices[i])).sum::<Vector3<f64>>() / near.len() as f64;
+                    if (c - q).norm() < 0.5 * r {
+                        break;
+                    }
+                }
+            }
+            if near.len() < QUADRIC_POINTS {
+                near = self.index.knn(&q.into(), QUADRIC_POINTS).into_iter().map(|(i, _)| i).collect();
+            }
         }
         let pts: Vec<Vector3<f64>> = near.iter().map(|&i| Vector3::from(self.vertices[i])).collect();
         let centroid = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
