@@ -262,13 +262,7 @@ impl Field {
 /// no part of a smooth surface), differentiated at each matching point.
 fn quadratic_gradients(d: &Distances, xy: &[[f64; 2]]) -> Vec<Vec<Vector2<f64>>> {
     let n = xy.len();
-    // Centred and scaled, so that the normal equations are well conditioned in mm.
-    let (cx, cy) = (xy.iter().map(|p| p[0]).sum::<f64>() / n as f64, xy.iter().map(|p| p[1]).sum::<f64>() / n as f64);
-    let s = xy.iter().map(|p| (p[0] - cx).abs().max((p[1] - cy).abs())).fold(0.0, f64::max).max(1e-12);
-    let basis = |p: [f64; 2]| {
-        let (x, y) = ((p[0] - cx) / s, (p[1] - cy) / s);
-        Vector6::new(1.0, x, y, x * x, x * y, y * y)
-    };
+    let q = QuadraticFrame::new(xy);
     (0..n + 2)
         .map(|a| {
             let (mut m, mut b) = (Matrix6::zeros(), Vector6::zeros());
@@ -276,19 +270,45 @@ fn quadratic_gradients(d: &Distances, xy: &[[f64; 2]]) -> Vec<Vec<Vector2<f64>>>
                 if a == j + 2 {
                     continue;
                 }
-                let phi = basis(p);
+                let phi = q.basis(p);
                 m += phi * phi.transpose();
                 b += phi * d.d[a][j];
             }
             let c = m.try_inverse().map_or(Vector6::zeros(), |mi| mi * b);
             xy.iter()
                 .map(|&p| {
-                    let (x, y) = ((p[0] - cx) / s, (p[1] - cy) / s);
-                    Vector2::new(c[1] + 2.0 * c[3] * x + c[4] * y, c[2] + c[4] * x + 2.0 * c[5] * y) / s
+                    let (x, y) = q.local(p);
+                    Vector2::new(c[1] + 2.0 * c[3] * x + c[4] * y, c[2] + c[4] * x + 2.0 * c[5] * y) / q.s
                 })
                 .collect()
         })
         .collect()
+}
+
+/// The frame of eq 12–13's quadratic: x, y centred on the points and scaled by their extent, so
+/// that the normal equations are well conditioned in mm.
+struct QuadraticFrame {
+    cx: f64,
+    cy: f64,
+    s: f64,
+}
+
+impl QuadraticFrame {
+    fn new(xy: &[[f64; 2]]) -> Self {
+        let n = xy.len() as f64;
+        let (cx, cy) = (xy.iter().map(|p| p[0]).sum::<f64>() / n, xy.iter().map(|p| p[1]).sum::<f64>() / n);
+        let s = xy.iter().map(|p| (p[0] - cx).abs().max((p[1] - cy).abs())).fold(0.0, f64::max).max(1e-12);
+        QuadraticFrame { cx, cy, s }
+    }
+
+    fn local(&self, p: [f64; 2]) -> (f64, f64) {
+        ((p[0] - self.cx) / self.s, (p[1] - self.cy) / self.s)
+    }
+
+    fn basis(&self, p: [f64; 2]) -> Vector6<f64> {
+        let (x, y) = self.local(p);
+        Vector6::new(1.0, x, y, x * x, x * y, y * y)
+    }
 }
 
 /// The Jacobian of V (eq 11 order) with respect to (x₁, y₁, …, xₙ, yₙ), from the gradients
@@ -322,29 +342,15 @@ fn jacobian(g: &[Vec<Vector2<f64>>], n: usize) -> DMatrix<f64> {
 /// on the theoretical points (the actual ones are their near-isometric images): a degenerate fit
 /// would give zero gradients and a match that stalls without saying why.
 fn check_quadratic_fit(matching: &[[f64; 3]]) -> Result<()> {
-    let n = matching.len();
-    let (cx, cy) =
-        (matching.iter().map(|p| p[0]).sum::<f64>() / n as f64, matching.iter().map(|p| p[1]).sum::<f64>() / n as f64);
-    let s = matching.iter().map(|p| (p[0] - cx).abs().max((p[1] - cy).abs())).fold(0.0, f64::max).max(1e-300);
-    for skip in 0..n {
-        let rows: Vec<[f64; 6]> = (0..n)
-            .filter(|&j| j != skip)
-            .map(|j| {
-                let (x, y) = ((matching[j][0] - cx) / s, (matching[j][1] - cy) / s);
-                [1.0, x, y, x * x, x * y, y * y]
-            })
-            .collect();
+    let xy: Vec<[f64; 2]> = matching.iter().map(|p| [p[0], p[1]]).collect();
+    let q = QuadraticFrame::new(&xy);
+    for skip in 0..xy.len() {
+        let rows: Vec<Vector6<f64>> = (0..xy.len()).filter(|&j| j != skip).map(|j| q.basis(xy[j])).collect();
         // The normal matrix's Cholesky pivots, by hand: direct, where an SVD iterates (nalgebra's
         // does not stop on some exactly rank-deficient matrices). A pivot below 1e-14 of the
         // largest diagonal is a singular value ratio below ~1e-7: the points lie on a conic.
-        let mut m = [[0.0f64; 6]; 6];
-        for r in &rows {
-            for i in 0..6 {
-                for j in 0..6 {
-                    m[i][j] += r[i] * r[j];
-                }
-            }
-        }
+        let normal = rows.iter().fold(Matrix6::zeros(), |m, r| m + r * r.transpose());
+        let mut m: [[f64; 6]; 6] = std::array::from_fn(|i| std::array::from_fn(|j| normal[(i, j)]));
         let hi = (0..6).map(|i| m[i][i]).fold(0.0, f64::max);
         let mut lo = f64::INFINITY;
         for k in 0..6 {
