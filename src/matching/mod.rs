@@ -345,11 +345,13 @@ fn check_quadratic_fit(matching: &[[f64; 3]]) -> Result<()> {
     let xy: Vec<[f64; 2]> = matching.iter().map(|p| [p[0], p[1]]).collect();
     let q = QuadraticFrame::new(&xy);
     for skip in 0..xy.len() {
-        let rows: Vec<Vector6<f64>> = (0..xy.len()).filter(|&j| j != skip).map(|j| q.basis(xy[j])).collect();
         // The normal matrix's Cholesky pivots, by hand: direct, where an SVD iterates (nalgebra's
         // does not stop on some exactly rank-deficient matrices). A pivot below 1e-14 of the
         // largest diagonal is a singular value ratio below ~1e-7: the points lie on a conic.
-        let normal = rows.iter().fold(Matrix6::zeros(), |m, r| m + r * r.transpose());
+        let normal = (0..xy.len())
+            .filter(|&j| j != skip)
+            .map(|j| q.basis(xy[j]))
+            .fold(Matrix6::zeros(), |m, r| m + r * r.transpose());
         let mut m: [[f64; 6]; 6] = std::array::from_fn(|i| std::array::from_fn(|j| normal[(i, j)]));
         let hi = (0..6).map(|i| m[i][i]).fold(0.0, f64::max);
         let mut lo = f64::INFINITY;

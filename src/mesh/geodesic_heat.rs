@@ -269,10 +269,15 @@ impl Intrinsic {
         // The back copy of face (a, b, c) is (b, a, c): halfedge k of the front runs along the
         // same edge as halfedge [0, 2, 1][k] of the back, the other way.
         let back = |h: usize| 3 * (f + h / 3) + [0, 2, 1][h % 3];
-        let mut tri = self.tri.clone();
-        tri.extend(self.tri.iter().map(|t| [t[1], t[0], t[2]]));
-        let mut len = self.len.clone();
-        len.extend(self.len.chunks_exact(3).flat_map(|l| [l[0], l[2], l[1]]));
+        let (mut tri, mut len) = (self.tri, self.len);
+        tri.extend_from_within(..);
+        len.extend_from_within(..);
+        for t in &mut tri[f..] {
+            *t = [t[1], t[0], t[2]];
+        }
+        for l in len[3 * f..].chunks_exact_mut(3) {
+            l.swap(1, 2);
+        }
         let mut twin = vec![NONE; 2 * self.twin.len()];
         for (h, &t) in self.twin.iter().enumerate() {
             if t != NONE {

@@ -30,7 +30,7 @@ pub mod scallop;
 pub mod spline;
 
 use crate::error::{check_finite, check_finite_points, check_positive, Error, Result};
-use crate::mesh::{delaunay_xy, TriangleBvh, XyLocator};
+use crate::mesh::{delaunay_xy, median_edge, TriangleBvh, XyLocator};
 use crate::spatial::PointIndex;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
@@ -190,20 +190,6 @@ impl ActualSurface<'_> {
         let point = q + c[0] * w;
         (point.iter().all(|x| x.is_finite()) && n.iter().all(|x| x.is_finite())).then_some((point, upward(n)))
     }
-}
-
-fn median_edge(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> f64 {
-    let mut e: Vec<f64> = faces
-        .iter()
-        .step_by((faces.len() / 20_000).max(1))
-        .flat_map(|f| (0..3).map(move |k| (f[k], f[(k + 1) % 3])))
-        .map(|(a, b)| (Vector3::from(vertices[a as usize]) - Vector3::from(vertices[b as usize])).norm())
-        .collect();
-    if e.is_empty() {
-        return 0.0;
-    }
-    let m = e.len() / 2;
-    *e.select_nth_unstable_by(m, f64::total_cmp).1
 }
 
 /// Compensates the tool points (module docs). `tool_axes` is one unit axis per tool point, or
