@@ -241,8 +241,9 @@ def generated_meshes():
 
 
 def test_exact_geodesics_equal_pygeodesic_on_meshes_of_other_kinds():
-    # The issue's 1e-9, in the parts' units (mm; the sphere and torus are 100-160 mm across). Measured, largest difference over the part's size: bumpy sphere 1.4e-15, torus 3.7e-15, terrain
-    # 7.8e-16, bent skin scan 5.2e-13 (1.6e-10 mm on the 300 mm skin, whose scan has near-flat fans).
+    # The issue's 1e-9, in the parts' units (mm; the sphere and torus are 100-160 mm across). Measured,
+    # largest difference over the part's size: bumpy sphere 1.4e-15, torus 3.7e-15, terrain 7.8e-16,
+    # bent skin scan 5.2e-13 (1.6e-10 mm on the 300 mm skin, whose scan has near-flat fans).
     for name, (v, f) in generated_meshes().items():
         v, f = np.asarray(v, float), np.asarray(f, np.int64)
         sources = [0, len(v) // 2]

@@ -58,6 +58,12 @@ impl Front {
         Some(top.1)
     }
 
+    /// Puts `item` in slot i and records where its vertex is.
+    fn place(&mut self, i: usize, item: (f64, u32)) {
+        self.heap[i] = item;
+        self.at[item.1 as usize] = i as u32;
+    }
+
     fn up(&mut self, mut i: usize) {
         let item = self.heap[i];
         while i > 0 {
@@ -65,12 +71,10 @@ impl Front {
             if !Self::before(item, self.heap[parent]) {
                 break;
             }
-            self.heap[i] = self.heap[parent];
-            self.at[self.heap[i].1 as usize] = i as u32;
+            self.place(i, self.heap[parent]);
             i = parent;
         }
-        self.heap[i] = item;
-        self.at[item.1 as usize] = i as u32;
+        self.place(i, item);
     }
 
     fn down(&mut self, mut i: usize) {
@@ -90,12 +94,10 @@ impl Front {
             if !Self::before(self.heap[best], item) {
                 break;
             }
-            self.heap[i] = self.heap[best];
-            self.at[self.heap[i].1 as usize] = i as u32;
+            self.place(i, self.heap[best]);
             i = best;
         }
-        self.heap[i] = item;
-        self.at[item.1 as usize] = i as u32;
+        self.place(i, item);
     }
 }
 
