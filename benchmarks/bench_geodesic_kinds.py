@@ -1,10 +1,11 @@
 """Geodesic distances on meshes of other kinds than the bunny, side by side with the reference libraries
 (issue #10 §2): a closed sphere (icosphere, 40,962 vertices) smooth and with 1 % radial bumps (saddles
 everywhere), a torus, a rough open terrain meshed by delaunay_xy, and the issue's bent-skin scan at 1.3 mm
-(36,000 points, open). One source per mesh (a third of the way through the vertex list), one thread for
-the exact method's comparison (pygeodesic has no parallel path). For each: exact vs pygeodesic (time and
-largest difference), fast marching vs potpourri3d (time, mean relative error against the exact distances),
-the heat method vs potpourri3d (mean relative error).
+(36,000 points, open). One source per mesh (a third of the way through the vertex list), best of
+--repeat runs for every library, one thread unless RAYON_NUM_THREADS says otherwise (pygeodesic and
+potpourri3d have no parallel path; with one source only machscan's per-call set-up runs in parallel).
+For each: exact vs pygeodesic (time and largest difference), fast marching vs potpourri3d (time, mean
+relative error against the exact distances), the heat method vs potpourri3d (mean relative error).
 
     python benchmarks/bench_geodesic_kinds.py [--repeat 3]
 """
@@ -54,7 +55,7 @@ def compare(name, v, f, repeat):
     reference = exact.geodesicDistances(np.array([src]), None)[0]
     ours = machscan.geodesic_distances(v, f, [src])[0]
     t_ours = best(lambda: machscan.geodesic_distances(v, f, [src]), repeat)
-    t_ref = best(lambda: exact.geodesicDistances(np.array([src]), None), 1)
+    t_ref = best(lambda: exact.geodesicDistances(np.array([src]), None), repeat)
 
     def error(d):
         return np.mean(np.abs(d - reference)) / np.mean(reference)

@@ -195,6 +195,7 @@ def test_exact_geodesic_on_the_given_bunny_is_the_published_value_and_inf_off_th
     vertices, faces = bunny_mesh
     d = machscan.geodesic_distances(vertices, faces, [14558])[0]
     assert d[13039] == pytest.approx(0.22686869313968416, abs=1e-9)
+    assert d[13039] == pytest.approx(0.2268686936169974, abs=1e-12)
     unused = np.setdiff1d(np.arange(len(vertices)), faces)
     assert len(unused) == 1113 and np.isinf(d[unused]).all() and np.isfinite(np.delete(d, unused)).all()
 
@@ -220,8 +221,9 @@ def test_exact_geodesics_equal_pygeodesic_on_the_shared_test_meshes(shared_data,
 
 def generated_meshes():
     """Meshes of kinds the shared data lacks, each (vertices, faces): a closed smooth surface with
-    1 % bumps (saddles everywhere), a torus (negative curvature inside), a rough open terrain and a scan
-    of the bent skin meshed by delaunay_xy (open, with the hull's slivers at its outline)."""
+    1 % bumps (saddles everywhere), a torus (negative curvature inside), a rough open terrain of random
+    points meshed by delaunay_xy (with the hull's slivers at its outline) and a scan of the bent skin
+    meshed by delaunay_xy (open, a regular grid over xy)."""
     trimesh = pytest.importorskip("trimesh")
     from machscan.synth import BentSkin
 
@@ -318,6 +320,9 @@ def test_geodesic_distances_mark_unreached_vertices_and_refuse_bad_input():
         machscan.geodesic_distances(v, [[0, 1, 2]], [2**63])
     with pytest.raises(ValueError, match="faces: expected vertex indices, got booleans"):
         machscan.geodesic_distances(v, np.array([[True, False, True]]), [0])
+    for bad in (0.5, -1, np.nan, 2.0**32):
+        with pytest.raises(ValueError, match=r"faces: row 1 holds .*, which is not a vertex index"):
+            machscan.geodesic_distances(v, np.array([[0, 1, 2], [0, 1, bad]]), [0])
     for method in ("fmm", "heat"):
         d = machscan.geodesic_distances(v, [[0, 1, 2]], [0, 3], method=method)
         assert np.isinf(d[0, 3]) and np.isinf(d[1, :3]).all() and d[1, 3] == 0, method

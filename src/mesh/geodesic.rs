@@ -315,22 +315,44 @@ mod tests {
 
     #[test]
     fn the_front_takes_vertices_out_by_distance_once_each_after_moves() {
-        // Against a sort of the final distances: random distances, a third of them lowered
-        // later (in place), ties broken by the smaller index.
-        let n = 500;
-        let mut d: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64).collect();
+        // Against a reference: the vertex of least (distance, index) among those queued and not
+        // yet taken out, by brute force. Vertices are queued, moved down in place (a third of
+        // them) and added in between the pops, as marching does.
+        let n = 600;
+        let mut d = vec![f64::INFINITY; n];
+        let mut queued = vec![false; n];
         let mut front = Front::new(n);
-        for (v, &x) in d.iter().enumerate() {
+        fn set(front: &mut Front, d: &mut [f64], queued: &mut [bool], v: usize, x: f64) {
+            d[v] = x;
+            queued[v] = true;
             front.set(v as u32, x);
         }
-        for v in (0..n).step_by(3) {
-            d[v] -= ((v * 31) % 17) as f64 + 0.5;
-            front.set(v as u32, d[v]);
+        for v in 0..n / 2 {
+            set(&mut front, &mut d, &mut queued, v, ((v * 7919) % 101) as f64);
         }
-        let mut expected: Vec<u32> = (0..n as u32).collect();
-        expected.sort_by(|&a, &b| d[a as usize].total_cmp(&d[b as usize]).then(a.cmp(&b)));
-        let got: Vec<u32> = std::iter::from_fn(|| front.pop()).collect();
-        assert_eq!(got, expected);
+        let mut next = n / 2;
+        for step in 0..n {
+            let expected = (0..n).filter(|&v| queued[v]).min_by(|&a, &b| d[a].total_cmp(&d[b]).then(a.cmp(&b)));
+            let got = front.pop();
+            assert_eq!(got.map(|v| v as usize), expected, "step {step}");
+            let Some(v) = got else { break };
+            queued[v as usize] = false;
+            // Lower a queued vertex (never below the one just taken out) and queue a new one.
+            if let Some(u) = (0..n).filter(|&u| queued[u]).nth(step % 7) {
+                if step % 3 == 0 {
+                    let lower = d[v as usize].max(d[u] - ((step * 31) % 17) as f64 - 0.5);
+                    if lower < d[u] {
+                        set(&mut front, &mut d, &mut queued, u, lower);
+                    }
+                }
+            }
+            if next < n {
+                let x = d[v as usize] + ((next * 13) % 29) as f64;
+                set(&mut front, &mut d, &mut queued, next, x);
+                next += 1;
+            }
+        }
+        assert!(front.pop().is_none() && queued.iter().all(|&q| !q));
     }
 
     #[test]

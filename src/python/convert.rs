@@ -261,9 +261,9 @@ pub fn indices_to_numpy<'py, I: Copy + TryInto<i64>>(py: Python<'py>, v: Vec<I>)
     to_numpy(py, v, &[n])
 }
 
-/// Triangle vertex indices given as numbers: whole, ≥ 0 and below 2^32. Checked in one pass
-/// over all values first (it vectorises; meshes of a million faces are common), the offending
-/// row looked up only for the message.
+/// Triangle vertex indices given as numbers: whole, ≥ 0 and below 2^32 − 1. Checked in one
+/// tight pass over all values first (meshes of a million faces are common), the offending row
+/// named in the message.
 pub fn triangle_indices(name: &str, values: &[f64]) -> PyResult<Vec<[u32; 3]>> {
     let index = |v: f64| v >= 0.0 && v < u32::MAX as f64 && (v as u32) as f64 == v;
     if let Some(i) = values.iter().position(|&v| !index(v)) {
