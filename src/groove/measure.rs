@@ -440,11 +440,12 @@ struct Start {
 
 /// Fits the candidate models; starts: the trapezoid from the flank-line start, the sharp V
 /// from its first four values, the round-bottomed V from the V result with its tip slightly
-/// rounded, the U from [`fit_u`]'s circle.
+/// rounded (fitted before the V: from the start, no deeper than its depth, since steep walls
+/// meet far below the groove), the U from [`fit_u`]'s circle.
 ///
-/// Among several models the order follows the start's shape (steep walls or a floor: the U
-/// first, then the trapezoid; else the V first), and a model that fits the readings rules out
-/// those that cannot compete with it:
+/// Among several models the order follows the start's shape (steep walls: the U, then the
+/// round V for drafted walls; a floor: the U, then the trapezoid; else the V first), and a
+/// model that fits the readings rules out those that cannot compete with it:
 /// - a trapezoid fitting to the noise with a clear floor rules out the V's, with a clear tip
 ///   the U;
 /// - a U with walls (its circle's center below the surface) fitting to the noise, and better
@@ -453,7 +454,8 @@ struct Start {
 /// - a U fitting well rules out the trapezoid, and, when the V was not fitted before it (the
 ///   start did not look like a V), the V's;
 /// - a V fitting well rules out the trapezoid and the U (the round V stays: a V's depth is the
-///   Akaike-weighted mean of the two).
+///   Akaike-weighted mean of the two);
+/// - a round V fitting well, the V not fitted before it, rules out the trapezoid and the V.
 ///
 /// "To the noise": χ² within 3 standard deviations of its expectation; "well": within one (a
 /// model that fits that closely leaves a competitor with three more parameters nothing the AIC
@@ -474,8 +476,13 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     let well = |cost: f64| chi2(cost) <= m + (2.0 * m).sqrt();
     let [xl, xr, tl, tr, d0, _] = s.p0;
     let floor0 = (xr - xl) - (tl + tr) * d0;
-    let order =
-        if tl.max(tr) < 0.2 || floor0 > 0.2 * (xr - xl) { [U, Trapezoid, V, Round] } else { [V, U, Trapezoid, Round] };
+    let order = if tl.max(tr) < 0.2 {
+        [U, Round, Trapezoid, V]
+    } else if floor0 > 0.2 * (xr - xl) {
+        [U, Trapezoid, V, Round]
+    } else {
+        [V, U, Trapezoid, Round]
+    };
     let mut fits: Vec<ModelFit> = Vec::with_capacity(4);
     let mut t_cost = f64::INFINITY;
     let mut v_q = None;
@@ -526,7 +533,12 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
             Round => {
                 let [xl, xr, tl, tr, ..] = v_q.unwrap_or(s.p0);
                 let sharp = (xr - xl) / (tl + tr);
-                fit_model(Round, r, 0.0, &[xl, xr, tl, tr, R_START * sharp], options)
+                let d = if v_q.is_some() { R_START * sharp } else { s.p0[4].min(R_START * sharp) };
+                let f = fit_model(Round, r, 0.0, &[xl, xr, tl, tr, d], options);
+                if several && v_q.is_none() && well(f.cost) {
+                    (want[index(Trapezoid)], want[index(V)]) = (false, false);
+                }
+                f
             }
         };
         fits.push(fit);
