@@ -815,9 +815,12 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
     };
     // Up to three trims at 3σ of the first line's residuals (σ by MAD: robust already, so it is
     // not re-estimated per trim); once the kept readings stay the same, so does the line. σ is
-    // then the MAD of the final line's residuals over all surface readings.
-    let cut = 3.0 * mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), &mut scratch).max(1e-4);
-    let mut kept_before: Vec<bool> = Vec::new();
+    // then the MAD of the final line's residuals over all surface readings (the first one's
+    // when no reading was trimmed: most frames, and two selections saved).
+    let first_sigma = mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), &mut scratch).max(1e-4);
+    let cut = 3.0 * first_sigma;
+    let first_line = (k2, b2);
+    let mut kept_before: Vec<bool> = vec![true; sx.len()];
     for _ in 0..3 {
         let keep: Vec<bool> = sx.iter().zip(&sz).map(|(&x, &z)| (z - (k2 * x + b2)).abs() < cut).collect();
         if keep == kept_before || keep.iter().filter(|&&k| k).count() < 6 {
@@ -827,7 +830,11 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
         (k2, b2) = line;
         kept_before = keep;
     }
-    let sigma = mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), &mut scratch).max(1e-4);
+    let sigma = if (k2, b2) == first_line {
+        first_sigma
+    } else {
+        mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), &mut scratch).max(1e-4)
+    };
     let lv = level(&px, &pz, k2, b2);
     let v3 = median3(&lv.v);
     let depth0 = -v3[ib];

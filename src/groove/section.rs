@@ -386,7 +386,7 @@ impl Beams {
         // Every piece lies in −D ≤ v ≤ 0, so the hit is at most (D + |v|)/cos along the beam
         // and at most |sin| times that sideways: pieces farther than that cannot be hit, and
         // are not tried. (Exact pruning; should rounding still miss, every piece is tried.)
-        let reach = self.sn.abs() * (self.pieces.d + v.abs()) / self.cs + 1e-9;
+        let reach = self.sn.abs() * (self.pieces.d + v.abs()) * self.inv_cs + 1e-9;
         let hit = self.hit_pieces(u, v, reach);
         if hit.lambda > f64::NEG_INFINITY {
             return hit;
