@@ -20,23 +20,14 @@ import resource
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 import open3d
 from scipy.spatial import cKDTree
+from timing import best_time
 
 import machscan
-
-
-def best(fn, repeat=3):
-    t = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        t.append(time.perf_counter() - t0)
-    return min(t)
 
 
 def row(name, ms, ref, ref_name="open3d"):
@@ -86,25 +77,26 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as d:
         print("reading 1 M points:")
         for name, path in files(Path(d), p1m).items():
-            ms = best(lambda path=path: machscan.read_points(path))
-            o3 = best(lambda path=path: open3d.io.read_point_cloud(str(path)))
+            ms = best_time(lambda path=path: machscan.read_points(path))
+            o3 = best_time(lambda path=path: open3d.io.read_point_cloud(str(path)))
             assert np.allclose(machscan.read_points(path), np.asarray(open3d.io.read_point_cloud(str(path)).points))
             row(name, ms, o3)
     pc1m = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p1m))
     print("filters:")
-    row("voxel grid, 1 M points", best(lambda: machscan.voxel_downsample(p1m, 1.0)), best(lambda: pc1m.voxel_down_sample(1.0)))
+    row("voxel grid, 1 M points", best_time(lambda: machscan.voxel_downsample(p1m, 1.0)),
+        best_time(lambda: pc1m.voxel_down_sample(1.0)))
     p200 = scanned_surface(200_000, seed=1)
     pc200 = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p200))
-    row("statistical outliers, 200 k, k=20", best(lambda: machscan.remove_statistical_outliers(p200, 20, 2.0)),
-        best(lambda: pc200.remove_statistical_outlier(20, 2.0)))
-    row("radius outliers, 200 k, r=2", best(lambda: machscan.remove_radius_outliers(p200, 2.0, 5)),
-        best(lambda: pc200.remove_radius_outlier(5, 2.0)))
+    row("statistical outliers, 200 k, k=20", best_time(lambda: machscan.remove_statistical_outliers(p200, 20, 2.0)),
+        best_time(lambda: pc200.remove_statistical_outlier(20, 2.0)))
+    row("radius outliers, 200 k, r=2", best_time(lambda: machscan.remove_radius_outliers(p200, 2.0, 5)),
+        best_time(lambda: pc200.remove_radius_outlier(5, 2.0)))
 
     def o3_normals():
         c = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p200))
         c.estimate_normals(open3d.geometry.KDTreeSearchParamKNN(20))
 
-    row("normals k=20, 200 k", best(lambda: machscan.estimate_normals(p200, k=20)), best(o3_normals))
+    row("normals k=20, 200 k", best_time(lambda: machscan.estimate_normals(p200, k=20)), best_time(o3_normals))
 
     def o3_knn():
         nns = open3d.core.nns.NearestNeighborSearch(open3d.core.Tensor(p200))
@@ -112,9 +104,9 @@ def main() -> None:
         return nns.knn_search(open3d.core.Tensor(p200), 20)
 
     print("neighbor search (tree built in the call):")
-    row("k-nearest graph k=20, 200 k", best(lambda: machscan.knn_graph(p200, 20)), best(o3_knn))
-    row("k-nearest graph k=20, 200 k", best(lambda: machscan.knn_graph(p200, 20)),
-        best(lambda: cKDTree(p200).query(p200, 20, workers=-1)), "scipy cKDTree (2 workers)")
+    row("k-nearest graph k=20, 200 k", best_time(lambda: machscan.knn_graph(p200, 20)), best_time(o3_knn))
+    row("k-nearest graph k=20, 200 k", best_time(lambda: machscan.knn_graph(p200, 20)),
+        best_time(lambda: cKDTree(p200).query(p200, 20, workers=-1)), "scipy cKDTree (2 workers)")
     if args.memory:
         subprocess.run([sys.executable, __file__, "--memory-child", "10000000"], check=True)
 

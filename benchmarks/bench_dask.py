@@ -13,23 +13,14 @@ import argparse
 import math
 import os
 import tempfile
-import time
 
 import numpy as np
 from distributed import Client, LocalCluster
+from timing import best_time
 
 import machscan
 import machscan.dask as md
 from machscan.synth.grooves import groove_frames
-
-
-def best(repeat, f):
-    t = math.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        f()
-        t = min(t, time.perf_counter() - t0)
-    return t
 
 
 def fits_of_scan(path: str) -> int:
@@ -71,8 +62,8 @@ def run(args, x, z, tmp) -> None:
         paths.append(path)
 
     ref = machscan.fit_grooves(x, z)
-    t_memory = best(args.repeat, lambda: machscan.fit_grooves(x, z))
-    t_batch_memory = best(args.repeat, lambda: [fits_of_scan(p) for p in paths])
+    t_memory = best_time(lambda: machscan.fit_grooves(x, z), args.repeat)
+    t_batch_memory = best_time(lambda: [fits_of_scan(p) for p in paths], args.repeat)
     rows = [("in memory, all cores", t_memory, t_batch_memory)]
     for workers in (1, 2):
         with (
@@ -83,8 +74,8 @@ def run(args, x, z, tmp) -> None:
             got = lazy.compute()
             assert np.array_equal(got.width, ref.width, equal_nan=True)
             client.run(lambda: machscan.fit_grooves(x, z[:100]))  # warm the workers' imports
-            t = best(args.repeat, lambda: md.fit_grooves(x, frames).compute())
-            tb = best(args.repeat, lambda: md.map_files(fits_of_scan, paths, client=client, progress=False))
+            t = best_time(lambda: md.fit_grooves(x, frames).compute(), args.repeat)
+            tb = best_time(lambda: md.map_files(fits_of_scan, paths, client=client, progress=False), args.repeat)
             rows.append((f"LocalCluster, {workers} worker{'s' if workers > 1 else ''}", t, tb))
             if workers == 2:
                 # What a real cluster changes: the cost per task (chunk size) and where the data starts.
@@ -93,8 +84,8 @@ def run(args, x, z, tmp) -> None:
                     path = os.path.join(tmp, f"long{chunk}.zarr")
                     md.save_scan(scan, path, chunk_frames=chunk)
                     f = md.open_scan(path).frames
-                    sweep.append((chunk, best(args.repeat, lambda f=f: md.fit_grooves(x, f).compute())))
-                shipped = best(args.repeat, lambda: md.fit_grooves(x, z).compute())
+                    sweep.append((chunk, best_time(lambda f=f: md.fit_grooves(x, f).compute(), args.repeat)))
+                shipped = best_time(lambda: md.fit_grooves(x, z).compute(), args.repeat)
     print("2 workers, by chunk size (Zarr chunks read on the workers):")
     for chunk, t in sweep:
         print(f"  {chunk:>6,} frames per chunk: {t:6.2f} s, {args.frames / chunk:5.0f} tasks, {args.frames / t:8,.0f} frames/s")

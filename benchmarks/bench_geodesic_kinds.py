@@ -12,7 +12,6 @@ relative error against the exact distances), the heat method vs potpourri3d (mea
 
 import argparse
 import os
-import time
 
 os.environ.setdefault("RAYON_NUM_THREADS", "1")
 
@@ -20,18 +19,10 @@ import numpy as np
 import potpourri3d
 import pygeodesic.geodesic as pygeodesic
 import trimesh
+from timing import best_time
 
 import machscan
 from machscan.synth import BentSkin
-
-
-def best(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def kinds():
@@ -54,8 +45,8 @@ def compare(name, v, f, repeat):
     exact = pygeodesic.PyGeodesicAlgorithmExact(v, f)
     reference = exact.geodesicDistances(np.array([src]), None)[0]
     ours = machscan.geodesic_distances(v, f, [src])[0]
-    t_ours = best(lambda: machscan.geodesic_distances(v, f, [src]), repeat)
-    t_ref = best(lambda: exact.geodesicDistances(np.array([src]), None), repeat)
+    t_ours = best_time(lambda: machscan.geodesic_distances(v, f, [src]), repeat)
+    t_ref = best_time(lambda: exact.geodesicDistances(np.array([src]), None), repeat)
 
     def error(d):
         return np.mean(np.abs(d - reference)) / np.mean(reference)
@@ -65,8 +56,8 @@ def compare(name, v, f, repeat):
     marching = potpourri3d.MeshFastMarchingDistanceSolver(v, f)
     fmm_ours = machscan.geodesic_distances(v, f, [src], method="fmm")[0]
     fmm_ref = np.asarray(marching.compute_distance([[(f0, bary)]], [[0.0]], False)).ravel()
-    t_fmm = best(lambda: machscan.geodesic_distances(v, f, [src], method="fmm"), repeat)
-    t_fmm_ref = best(lambda: marching.compute_distance([[(f0, bary)]], [[0.0]], False), repeat)
+    t_fmm = best_time(lambda: machscan.geodesic_distances(v, f, [src], method="fmm"), repeat)
+    t_fmm_ref = best_time(lambda: marching.compute_distance([[(f0, bary)]], [[0.0]], False), repeat)
     heat_ours = machscan.geodesic_distances(v, f, [src], method="heat")[0]
     heat_ref = potpourri3d.MeshHeatMethodDistanceSolver(v, f).compute_distance(src)
     print(

@@ -11,23 +11,15 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from timing import timed
+
 import machscan
 from kinematics_reference import scan_to_wcs_np
-
-
-def best_of(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), float(np.median(times)), out
 
 
 def main() -> None:
@@ -48,10 +40,10 @@ def main() -> None:
     c2, mount = (12.5, -3.0, 165.0), (0.004, -0.003, 0.002, 42.0, 1.5, -118.0)
     vr = (-10.0, 10.0)
 
-    ms_best, ms_med, (p1, i1) = best_of(
+    ms_best, ms_med, (p1, i1) = timed(
         lambda: machscan.scan_to_wcs(frames, axes, 0.025, c2, mount, valid_range=vr), args.repeat
     )
-    np_best, np_med, (p2, i2) = best_of(
+    np_best, np_med, (p2, i2) = timed(
         lambda: scan_to_wcs_np(frames, axes, 0.025, c2, mount, valid_range=vr), max(2, args.repeat // 2)
     )
     assert np.array_equal(i1, i2) and np.allclose(p1, p2, rtol=0, atol=1e-9), "results differ"

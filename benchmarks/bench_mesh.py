@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 from pathlib import Path
 
 import numpy as np
@@ -24,17 +23,9 @@ import potpourri3d
 import pygeodesic.geodesic as pygeodesic
 import trimesh
 from scipy.spatial import Delaunay
+from timing import best_time
 
 import machscan
-
-
-def best(f, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:
@@ -47,8 +38,8 @@ def main() -> None:
     rng = np.random.default_rng(0)
     xy = rng.uniform(0, 300, (200_000, 2))
     pts = np.column_stack([xy, 0.001 * (xy[:, 0] - 150) ** 2])
-    ours = best(lambda: machscan.delaunay_xy(pts), args.repeat)
-    ref = best(lambda: Delaunay(xy), args.repeat)
+    ours = best_time(lambda: machscan.delaunay_xy(pts), args.repeat)
+    ref = best_time(lambda: Delaunay(xy), args.repeat)
     print(f"Delaunay 200k points: machscan {ours * 1e3:.0f} ms, scipy {ref * 1e3:.0f} ms -> {ref / ours:.1f}x")
     m = machscan.read_mesh(args.bunny)
     v, f = np.asarray(m.vertices, dtype=np.float64), np.asarray(m.triangles)
@@ -56,8 +47,8 @@ def main() -> None:
     q = rng.uniform(lo - 0.01, hi + 0.01, (10_000, 3))
     mesh = trimesh.Trimesh(v, f, process=False)
     trimesh.proximity.closest_point(mesh, q[:10])  # trimesh's tree, built once, outside the timing
-    ours = best(lambda: machscan.closest_points(v, f, q), args.repeat)
-    ref = best(lambda: trimesh.proximity.closest_point(mesh, q), 1)
+    ours = best_time(lambda: machscan.closest_points(v, f, q), args.repeat)
+    ref = best_time(lambda: trimesh.proximity.closest_point(mesh, q), 1)
     print(
         f"closest points, 10k queries on the bunny: machscan {ours * 1e3:.1f} ms (tree built in the call), "
         f"trimesh {ref * 1e3:.0f} ms -> {ref / ours:.0f}x"
@@ -70,8 +61,8 @@ def main() -> None:
     solver = potpourri3d.MeshFastMarchingDistanceSolver(vu, fu)
     f0 = int(np.flatnonzero((fu == src).any(axis=1))[0])
     bary = [float(fu[f0][k] == src) for k in range(3)]
-    ours = best(lambda: machscan.geodesic_distances(vu, fu, [src], method="fmm"), args.repeat)
-    ref = best(lambda: solver.compute_distance([[(f0, bary)]], [[0.0]], False), args.repeat)
+    ours = best_time(lambda: machscan.geodesic_distances(vu, fu, [src], method="fmm"), args.repeat)
+    ref = best_time(lambda: solver.compute_distance([[(f0, bary)]], [[0.0]], False), args.repeat)
     print(
         f"fast marching, one source on the bunny: machscan {ours * 1e3:.1f} ms, potpourri3d {ref * 1e3:.1f} ms "
         f"-> {ref / ours:.1f}x"
@@ -82,15 +73,15 @@ def main() -> None:
         solver = potpourri3d.MeshHeatMethodDistanceSolver(vu, fu)
         return [solver.compute_distance(s) for s in twenty]
 
-    ours = best(lambda: machscan.geodesic_distances(vu, fu, twenty, method="heat"), args.repeat)
-    ref = best(pp3d_heat, args.repeat)
+    ours = best_time(lambda: machscan.geodesic_distances(vu, fu, twenty, method="heat"), args.repeat)
+    ref = best_time(pp3d_heat, args.repeat)
     print(
         f"heat method, 20 sources on the bunny (factorization included): machscan {ours * 1e3:.0f} ms, "
         f"potpourri3d {ref * 1e3:.0f} ms -> {ref / ours:.1f}x"
     )
     exact = pygeodesic.PyGeodesicAlgorithmExact(vu, fu)
-    ours = best(lambda: machscan.geodesic_distances(vu, fu, [src], method="exact"), args.repeat)
-    ref = best(lambda: exact.geodesicDistances(np.array([src]), None), 1)
+    ours = best_time(lambda: machscan.geodesic_distances(vu, fu, [src], method="exact"), args.repeat)
+    ref = best_time(lambda: exact.geodesicDistances(np.array([src]), None), 1)
     print(
         f"exact geodesics, one source on the bunny: machscan {ours * 1e3:.0f} ms, pygeodesic {ref * 1e3:.0f} ms "
         f"-> {ref / ours:.1f}x"
@@ -98,10 +89,10 @@ def main() -> None:
     # Eight sources: one machscan call (sources in parallel, all cores, and on one thread) against eight
     # pygeodesic calls (it has no parallel path).
     eight = np.array([int(s) for s in np.linspace(0, len(vu) - 1, 8)])
-    ours = best(lambda: machscan.geodesic_distances(vu, fu, eight, method="exact"), args.repeat)
+    ours = best_time(lambda: machscan.geodesic_distances(vu, fu, eight, method="exact"), args.repeat)
     with machscan.thread_limit(1):
-        ours_1 = best(lambda: machscan.geodesic_distances(vu, fu, eight, method="exact"), args.repeat)
-    ref = best(lambda: [exact.geodesicDistances(np.array([s]), None) for s in eight], 1)
+        ours_1 = best_time(lambda: machscan.geodesic_distances(vu, fu, eight, method="exact"), args.repeat)
+    ref = best_time(lambda: [exact.geodesicDistances(np.array([s]), None) for s in eight], 1)
     print(
         f"exact geodesics, 8 sources on the bunny: machscan {ours:.2f} s ({os.cpu_count()} threads), {ours_1:.2f} s "
         f"(1 thread); pygeodesic {ref:.2f} s -> {ref / ours:.1f}x, {ref / ours_1:.1f}x on one thread"
