@@ -457,10 +457,10 @@ struct Start {
 ///   Akaike-weighted mean of the two);
 /// - a round V fitting well, the V not fitted before it, rules out the trapezoid and the V.
 ///
-/// "To the noise": χ² within 3 standard deviations of its expectation; "well": within one (a
-/// model that fits that closely leaves a competitor with three more parameters nothing the AIC
-/// would take). Measured on the benchmark's shapes against fitting all four (`BENCHMARKS.md`):
-/// the same accuracy within the medians' scatter, 30–60 % less work.
+/// "To the noise": χ² within 3 standard deviations of its expectation; "well": within one, so
+/// close that a skipped model would rarely have been the AIC's choice. Measured on the
+/// benchmark's shapes against the order before (trapezoid, U, V's; `BENCHMARKS.md`): the same
+/// medians within their scatter over seeds, a quarter to three fifths less fitting work.
 #[inline(always)]
 fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &BoundedLmOptions) -> Vec<ModelFit> {
     use SectionModel::{Round, Trapezoid, U, V};
@@ -474,6 +474,8 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     let chi2 = |cost: f64| 2.0 * cost / (s.sigma * s.sigma);
     let to_noise = |cost: f64| chi2(cost) <= m + 3.0 * (2.0 * m).sqrt();
     let well = |cost: f64| chi2(cost) <= m + (2.0 * m).sqrt();
+    // The start's flank cotangents and the floor they leave at its depth: walls steeper than
+    // about 79° (cotangent 0.2), or a floor over a fifth of the width, do not look like a V.
     let [xl, xr, tl, tr, d0, _] = s.p0;
     let floor0 = (xr - xl) - (tl + tr) * d0;
     let order = if tl.max(tr) < 0.2 {
