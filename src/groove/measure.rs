@@ -451,8 +451,10 @@ struct Start {
 /// - a U with walls (its circle's center below the surface) fitting to the noise, and better
 ///   than a trapezoid fitted before it, rules out every other model (a V's rounded tip can fit
 ///   a wall-less U to the noise, hence the walls);
-/// - a U fitting well rules out the trapezoid, and, when the V was not fitted before it (the
-///   start did not look like a V), the V's;
+/// - a U fitting well rules out the trapezoid and, when no V was fitted before it (the start
+///   did not look like a V), the round V, which comes back only if the V then beats the U by
+///   AIC (a shallow arc and a flat V look alike; with steep start walls the V is ruled out
+///   too);
 /// - a V fitting well rules out the trapezoid and the U (the round V stays: a V's depth is the
 ///   Akaike-weighted mean of the two);
 /// - a round V fitting well, the V not fitted before it, rules out the trapezoid and the V.
@@ -478,16 +480,21 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     // about 79° (cotangent 0.2), or a floor over a fifth of the width, do not look like a V.
     let [xl, xr, tl, tr, d0, _] = s.p0;
     let floor0 = (xr - xl) - (tl + tr) * d0;
-    let order = if tl.max(tr) < 0.2 {
+    let steep = tl.max(tr) < 0.2;
+    let order = if steep {
         [U, Round, Trapezoid, V]
     } else if floor0 > 0.2 * (xr - xl) {
         [U, Trapezoid, V, Round]
     } else {
         [V, U, Trapezoid, Round]
     };
+    let allowed = want;
     let mut fits: Vec<ModelFit> = Vec::with_capacity(4);
     let mut t_cost = f64::INFINITY;
     let mut v_q = None;
+    // The criterion of a U that fitted well before any V: the round V is then fitted only if
+    // the V beats it (a shallow arc and a flat V can look alike).
+    let mut u_first = None;
     for model in order {
         if !want[index(model)] {
             continue;
@@ -519,7 +526,12 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 if several && well(u.cost) {
                     want[index(Trapezoid)] = false;
                     if v_q.is_none() {
-                        (want[index(V)], want[index(Round)]) = (false, false);
+                        want[index(Round)] = false;
+                        if steep {
+                            want[index(V)] = false;
+                        } else {
+                            u_first = Some(u.criterion(s.sigma));
+                        }
                     }
                 }
                 u
@@ -529,6 +541,9 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 v_q = Some(v.q);
                 if several && well(v.cost) {
                     (want[index(Trapezoid)], want[index(U)]) = (false, false);
+                }
+                if u_first.is_some_and(|c| v.criterion(s.sigma) < c) {
+                    want[index(Round)] = allowed[index(Round)];
                 }
                 v
             }
