@@ -466,10 +466,9 @@ struct Start {
 #[inline(always)]
 fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &BoundedLmOptions) -> Vec<ModelFit> {
     use SectionModel::{Round, Trapezoid, U, V};
-    let index = |m: SectionModel| SectionModel::ALL.iter().position(|a| *a == m).unwrap_or(0);
     let mut want = [false; 4];
     for &m in models {
-        want[index(m)] = true;
+        want[m.index()] = true;
     }
     let several = models.len() > 1;
     let m = r.u.len() as f64;
@@ -496,7 +495,7 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     // the V beats it (a shallow arc and a flat V can look alike).
     let mut u_first = None;
     for model in order {
-        if !want[index(model)] {
+        if !want[model.index()] {
             continue;
         }
         let fit = match model {
@@ -513,9 +512,9 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                     let p = t.pieces();
                     let floor = p.cr - p.cl;
                     if floor > 0.2 * (p.xr - p.xl) {
-                        (want[index(V)], want[index(Round)]) = (false, false);
+                        (want[V.index()], want[Round.index()]) = (false, false);
                     } else if floor < 0.0125 && p.r < 0.0125 {
-                        want[index(U)] = false;
+                        want[U.index()] = false;
                     }
                 }
                 t_cost = t.cost;
@@ -527,11 +526,11 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                     want = [false; 4];
                 }
                 if several && well(u.cost) {
-                    want[index(Trapezoid)] = false;
+                    want[Trapezoid.index()] = false;
                     if v_q.is_none() {
-                        want[index(Round)] = false;
+                        want[Round.index()] = false;
                         if steep {
-                            want[index(V)] = false;
+                            want[V.index()] = false;
                         } else {
                             u_first = Some(u.criterion(s.sigma));
                         }
@@ -543,10 +542,10 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 let v = fit_model(V, r, 0.0, &s.p0[..4], options);
                 v_q = Some(v.q);
                 if several && well(v.cost) {
-                    (want[index(Trapezoid)], want[index(U)]) = (false, false);
+                    (want[Trapezoid.index()], want[U.index()]) = (false, false);
                 }
                 if u_first.is_some_and(|c| v.criterion(s.sigma) < c) {
-                    want[index(Round)] = allowed[index(Round)];
+                    want[Round.index()] = allowed[Round.index()];
                 }
                 v
             }
@@ -556,7 +555,7 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 let d = if v_q.is_some() { R_START * sharp } else { s.p0[4].min(R_START * sharp) };
                 let f = fit_model(Round, r, 0.0, &[xl, xr, tl, tr, d], options);
                 if several && v_q.is_none() && well(f.cost) {
-                    (want[index(Trapezoid)], want[index(V)]) = (false, false);
+                    (want[Trapezoid.index()], want[V.index()]) = (false, false);
                 }
                 f
             }

@@ -52,6 +52,11 @@ pub enum SectionModel {
 impl SectionModel {
     pub const ALL: [SectionModel; 4] = [SectionModel::Trapezoid, SectionModel::V, SectionModel::Round, SectionModel::U];
 
+    /// The model's position in [`SectionModel::ALL`], for per-model arrays.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
     pub fn n_params(self) -> usize {
         match self {
             SectionModel::Trapezoid => 6,
@@ -474,6 +479,13 @@ impl Beams {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn index_is_the_position_in_all() {
+        for (i, m) in SectionModel::ALL.iter().enumerate() {
+            assert_eq!(m.index(), i, "{m:?}");
+        }
+    }
 
     fn q_of(model: SectionModel) -> Vec<f64> {
         match model {
