@@ -573,7 +573,8 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 let sharp = (xr - xl) / (tl + tr);
                 let k = (1.0 + tl * tl).sqrt() + (1.0 + tr * tr).sqrt() - (tl + tr);
                 let rounded = ((xr - xl) - k * R_START_PITCH * s.pitch) / (tl + tr);
-                let d = if v_q.is_some() { rounded.clamp(0.5 * sharp, sharp) } else { s.p0[4].min(rounded) };
+                // (max/min rather than clamp: neither panics on a NaN.)
+                let d = if v_q.is_some() { rounded.max(0.5 * sharp).min(sharp) } else { s.p0[4].min(rounded) };
                 let f = fit_model(Round, r, 0.0, &[xl, xr, tl, tr, d], options);
                 if several && v_q.is_none() && well(f.cost) {
                     (want[Trapezoid.index()], want[V.index()]) = (false, false);
