@@ -260,6 +260,18 @@ def test_bad_input_raises_value_error(call, name):
     assert str(exc.value).startswith(name), str(exc.value)
 
 
+def test_one_frame_may_be_given_as_a_1d_array():
+    z = straight_v_frames(3, seed=4)
+    every = machscan.fit_grooves(X, z)
+    for k in range(3):
+        one = machscan.fit_grooves(X, list(z[k]))
+        assert len(one) == 1
+        for a in ("x0", "depth", "width", "status", "model"):
+            assert np.array_equal(getattr(one, a), getattr(every, a)[k : k + 1])
+    with pytest.raises(ValueError, match=r"^z"):
+        machscan.fit_grooves(X, z[0, :150])
+
+
 def test_parallel_equals_sequential():
     script = textwrap.dedent(
         """

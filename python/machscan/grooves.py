@@ -290,8 +290,9 @@ def fit_grooves(
     ----------
     x : array_like, shape (N,)
         Abscissa of each reading along the laser line, mm (shared by all frames).
-    z : array_like, shape (F, N)
-        Readings (heights), mm; NaN marks an invalid reading.
+    z : array_like, shape (F, N) or (N,)
+        Readings (heights), mm; NaN marks an invalid reading. One frame may be given as (N,):
+        the result then has length 1.
     alpha : float
         The tanh template's shape coefficient, mm⁻¹ (paper: 20).
     nominal_width : float
@@ -331,6 +332,8 @@ def fit_grooves(
     options = _options(
         template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
     )
+    if np.ndim(z) == 1:  # one frame
+        z = np.asarray(z, dtype=np.float64)[np.newaxis, :]
     frames = np.asarray(z, dtype=np.float64) if _progress.wanted(progress) else None
     if frames is None or frames.ndim != 2 or len(frames) == 0:  # the core names a shape error
         return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
