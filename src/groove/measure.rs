@@ -573,8 +573,10 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 let sharp = (xr - xl) / (tl + tr);
                 let k = (1.0 + tl * tl).sqrt() + (1.0 + tr * tr).sqrt() - (tl + tr);
                 let rounded = ((xr - xl) - k * R_START_PITCH * s.pitch) / (tl + tr);
-                // (max/min rather than clamp: neither panics on a NaN.)
+                // (max/min rather than clamp: neither panics on a NaN.) Flanks that do not
+                // meet below the surface (an overhang in the start) leave the start's depth.
                 let d = if v_q.is_some() { rounded.max(0.5 * sharp).min(sharp) } else { s.p0[4].min(rounded) };
+                let d = if d.is_finite() && d > 0.0 { d } else { s.p0[4] };
                 let f = fit_model(Round, r, 0.0, &[xl, xr, tl, tr, d], options);
                 if several && v_q.is_none() && well(f.cost) {
                     (want[Trapezoid.index()], want[V.index()]) = (false, false);
