@@ -476,9 +476,7 @@ fn reading_pitch(x: &[f64]) -> f64 {
 ///   too);
 /// - a V fitting well rules out the trapezoid and the U (the round V stays: a V's depth is the
 ///   Akaike-weighted mean of the two);
-/// - a round V fitting well, the V not fitted before it, rules out the trapezoid and the V;
-/// - a trapezoid fitting no better than the U before it rules out the sharp V (a trapezoid
-///   without a floor), and the round V starts from the trapezoid's flanks.
+/// - a round V fitting well, the V not fitted before it, rules out the trapezoid and the V.
 ///
 /// "To the noise": χ² within 3 standard deviations of its expectation; "well": within one, so
 /// close that a skipped model would rarely have been the AIC's choice. Measured on the
@@ -512,8 +510,6 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     let mut fits: Vec<ModelFit> = Vec::with_capacity(4);
     let mut t_cost = f64::INFINITY;
     let mut v_q = None;
-    // The trapezoid's parameters when it ruled out the V: the round V's start.
-    let mut t_q: Option<[f64; 6]> = None;
     // The criterion of a U that fitted well before any V: the round V is then fitted only if
     // the V beats it (a shallow arc and a flat V can look alike).
     let mut u_first = None;
@@ -539,14 +535,6 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                     } else if floor < 0.0125 && p.r < 0.0125 {
                         want[U.index()] = false;
                     }
-                }
-                // The sharp V is a trapezoid without a floor: a trapezoid that fitted no better
-                // than the U before it says the V cannot beat that U either (on U's with drafted
-                // walls a tenth of the LM iterations went into such V's). The round V then
-                // starts from the trapezoid's flanks.
-                if several && fits.iter().any(|f| f.model == U && f.cost <= t.cost) {
-                    want[V.index()] = false;
-                    t_q = Some(t.q);
                 }
                 t_cost = t.cost;
                 t
@@ -581,13 +569,13 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 v
             }
             Round => {
-                let [xl, xr, tl, tr, ..] = v_q.or(t_q).unwrap_or(s.p0);
+                let [xl, xr, tl, tr, ..] = v_q.unwrap_or(s.p0);
                 let sharp = (xr - xl) / (tl + tr);
                 let k = (1.0 + tl * tl).sqrt() + (1.0 + tr * tr).sqrt() - (tl + tr);
                 let rounded = ((xr - xl) - k * R_START_PITCH * s.pitch) / (tl + tr);
                 // (max/min rather than clamp: neither panics on a NaN.) Flanks that do not
                 // meet below the surface (an overhang in the start) leave the start's depth.
-                let d = if v_q.or(t_q).is_some() { rounded.max(0.5 * sharp).min(sharp) } else { s.p0[4].min(rounded) };
+                let d = if v_q.is_some() { rounded.max(0.5 * sharp).min(sharp) } else { s.p0[4].min(rounded) };
                 let d = if d.is_finite() && d > 0.0 { d } else { s.p0[4] };
                 let f = fit_model(Round, r, 0.0, &[xl, xr, tl, tr, d], options);
                 if several && v_q.is_none() && well(f.cost) {
