@@ -462,8 +462,9 @@ fn reading_pitch(x: &[f64]) -> f64 {
 
 /// Fits the candidate models; starts: the trapezoid from the flank-line start, the sharp V
 /// from its first four values, the round-bottomed V from the V result with its tip rounded to
-/// half the reading pitch ([`R_START_PITCH`]; fitted before the V: from the start, no deeper
-/// than its depth, since steep walls meet far below the groove), the U from [`fit_u`]'s circle.
+/// half the reading pitch where the start looks like a V ([`R_START_PITCH`]; after a floor,
+/// barely rounded, [`R_START_FLOOR`]; fitted before the V: from the start, no deeper than its
+/// depth, since steep walls meet far below the groove), the U from [`fit_u`]'s circle.
 ///
 /// Among several models the order follows the start's shape (steep walls: the U, then the
 /// round V for drafted walls; a floor: the U, then the trapezoid; else the V first), and a
