@@ -581,7 +581,7 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 // must start where it can move; after a floor it is a fallback, and rounded
                 // from the start it took the trapezoid's place on flat-bottomed (tanh) grooves
                 // for 12 % more iterations.
-                let tip = if floor { (1.0 - R_START_FLOOR) * sharp * (tl + tr) / k } else { R_START_PITCH * s.pitch };
+                let tip = if floor { (1.0 - R_START_FLOOR) * (xr - xl) / k } else { R_START_PITCH * s.pitch };
                 let rounded = ((xr - xl) - k * tip) / (tl + tr);
                 // (max/min rather than clamp: neither panics on a NaN.) Flanks that do not
                 // meet below the surface (an overhang in the start) leave the start's depth.
