@@ -385,13 +385,16 @@ impl Seg {
         self.sigma + hyp(t - self.x, self.y)
     }
 
-    /// Its least distance on [lo, hi] (lo ≤ hi); `at` is convex.
-    fn least(&self, lo: f64, hi: f64) -> f64 {
-        self.at(self.x.max(lo).min(hi))
-    }
-
-    fn most(&self, lo: f64, hi: f64) -> f64 {
-        self.at(lo).max(self.at(hi))
+    /// Its least distance on [lo, hi] (lo ≤ hi) given its values `at_lo`, `at_hi` at the ends:
+    /// `at` is convex, least at x.
+    fn least(&self, lo: f64, hi: f64, at_lo: f64, at_hi: f64) -> f64 {
+        if self.x <= lo {
+            at_lo
+        } else if self.x >= hi {
+            at_hi
+        } else {
+            self.sigma + self.y.abs()
+        }
     }
 
     /// The same piece in the frame of the edge's other direction.
@@ -469,35 +472,46 @@ impl Radix {
 /// Queue items: the windows waiting on a side (its half-edge), or a vertex to emit.
 const EVENT: u64 = 1 << 63;
 
-/// Smallest distance a window carries: σ plus the distance from s to the segment.
-fn smallest(sigma: f64, sx: f64, sy: f64, b0: f64, b1: f64) -> f64 {
-    let dx = if sx < b0 {
-        b0 - sx
-    } else if sx > b1 {
-        sx - b1
-    } else {
-        0.0
-    };
-    sigma + hyp(dx, sy)
-}
-
-/// Rule 1 for the vertex at x = 0 known at `dv`: the new start of [b0, b1], None when the vertex
-/// beats the whole window.
-fn cut_front(sx: f64, sy: f64, sigma: f64, dv: f64, b0: f64, b1: f64, slack: f64) -> Option<f64> {
-    if !dv.is_finite() {
-        return Some(b0);
+/// Rule 1 at both ends of an edge of length `l` for the window (sx, sy, σ) on [b0, b1]: vertex
+/// A (at x = 0) is known at `da`, B (at x = l) at `db`. Since f(x) − x does not increase, A wins
+/// a prefix, cut off by solving f(x) − x = d(A): x = (sx² + sy² − k²) / (2(k + sx)), k = d(A) − σ;
+/// B a suffix alike. Returns the part left, [b0, b1], with the distances f(b0), f(b1) the window
+/// carries at its ends (four of the tests need them, so each is taken once), or None when the
+/// ends beat all of it.
+#[allow(clippy::too_many_arguments)]
+fn cut_ends(sx: f64, sy: f64, sigma: f64, l: f64, da: f64, db: f64, b0: f64, b1: f64, slack: f64) -> Option<[f64; 4]> {
+    let f = |x: f64| sigma + hyp(x - sx, sy);
+    let (mut b0, mut b1) = (b0, b1);
+    let (mut f0, mut f1) = (f(b0), f(b1));
+    if da.is_finite() {
+        let dv = da + slack;
+        if f1 - b1 > dv {
+            return None;
+        }
+        if f0 - b0 > dv {
+            let k = dv - sigma;
+            let x = (sx * sx + sy * sy - k * k) / (2.0 * (k + sx));
+            if x.is_finite() {
+                b0 = x.clamp(b0, b1);
+                f0 = f(b0);
+            }
+        }
     }
-    let dv = dv + slack;
-    // f(x) − x falls with x: the vertex wins on a prefix.
-    if sigma + hyp(b1 - sx, sy) - b1 > dv {
-        return None;
+    if db.is_finite() {
+        let dv = db + slack;
+        if f0 - (l - b0) > dv {
+            return None;
+        }
+        if f1 - (l - b1) > dv {
+            let (rx, k) = (l - sx, dv - sigma);
+            let x = (rx * rx + sy * sy - k * k) / (2.0 * (k + rx));
+            if x.is_finite() {
+                b1 = l - x.clamp(l - b1, l - b0);
+                f1 = f(b1);
+            }
+        }
     }
-    if sigma + hyp(b0 - sx, sy) - b0 <= dv {
-        return Some(b0);
-    }
-    let k = dv - sigma;
-    let x = (sx * sx + sy * sy - k * k) / (2.0 * (k + sx));
-    Some(if x.is_finite() { x.clamp(b0, b1) } else { b0 })
+    Some([b0, b1, f0, f1])
 }
 
 /// μ or ν of the module notes, kept on the edge; None when rounding made it meaningless.
@@ -544,7 +558,10 @@ fn crossings(w: &Seg, o: &Seg, lo: f64, hi: f64) -> ([f64; 2], usize) {
                 break;
             }
             t -= step;
-            if step.abs() <= 1e-15 * reach {
+            // Newton converges quadratically from the quadratic's root: after a step this small
+            // the root is good to rounding. (Near a double root, where it converges slowly, the
+            // two windows are equal to second order there, so the place of the cut is moot.)
+            if step.abs() <= 1e-9 * reach {
                 break;
             }
         }
@@ -562,17 +579,37 @@ fn crossings(w: &Seg, o: &Seg, lo: f64, hi: f64) -> ([f64; 2], usize) {
 /// How `w` and `o` share (lo, hi): the sub-intervals, in order, each with whether `w` keeps it,
 /// which it does where w − o ≤ `bar`; passed to `take` as (from, to, w keeps).
 fn share(w: &Seg, o: &Seg, lo: f64, hi: f64, bar: f64, mut take: impl FnMut(f64, f64, bool)) {
-    if w.most(lo, hi) - o.least(lo, hi) <= bar {
+    // Each window's most and least on [lo, hi] from its values at the ends (f is convex).
+    let (w0, w1, o0, o1) = (w.at(lo), w.at(hi), o.at(lo), o.at(hi));
+    if w0.max(w1) - o.least(lo, hi, o0, o1) <= bar {
         return take(lo, hi, true);
     }
-    if w.least(lo, hi) - o.most(lo, hi) > bar {
+    if w.least(lo, hi, w0, w1) - o0.max(o1) > bar {
         return take(lo, hi, false);
     }
     let (roots, n) = crossings(w, o, lo, hi);
+    // Between crossings w − o keeps its sign, so the first and last sub-intervals are decided
+    // by the ends' values where those are clearly away from the bar; near it (the end may be a
+    // crossing itself), and for the middle one, by the value at the middle.
+    let clear = 2.0 * bar.abs();
+    let decide = |from: f64, to: f64, end: f64| {
+        if (end - bar).abs() > clear {
+            end <= bar
+        } else {
+            let mid = 0.5 * (from + to);
+            w.at(mid) - o.at(mid) <= bar
+        }
+    };
     let mut from = lo;
-    for &to in roots[..n].iter().chain(std::iter::once(&hi)) {
-        let mid = 0.5 * (from + to);
-        take(from, to, w.at(mid) - o.at(mid) <= bar);
+    for (k, &to) in roots[..n].iter().chain(std::iter::once(&hi)).enumerate() {
+        let keeps = if k == 0 {
+            decide(from, to, w0 - o0)
+        } else if k == n {
+            decide(from, to, w1 - o1)
+        } else {
+            decide(from, to, f64::NAN)
+        };
+        take(from, to, keeps);
         from = to;
     }
 }
@@ -609,7 +646,11 @@ struct Work {
     queue: Option<Radix>,
     ids: u64,
     out: Vec<Seg>,
-    mine: Vec<Seg>,
+    /// Emptied piece lists, last emptied first: a side takes one when its first window comes,
+    /// and gives it back once its windows have crossed. So only the sides on the front hold
+    /// storage, and the storage they get was in use a moment ago (still in cache), where a list
+    /// of its own per side cost a fifth of the time in allocation and first touches of memory.
+    spare: Vec<Vec<Seg>>,
     pieces: Vec<(f64, f64)>,
     kept: Vec<(f64, f64)>,
 }
@@ -629,7 +670,11 @@ impl<'a> Run<'a> {
         w.side.truncate(nh);
         for side in &mut w.side {
             side.best = (f64::INFINITY, 0.0);
-            side.env.clear();
+            if side.env.capacity() > 0 {
+                let mut env = std::mem::take(&mut side.env);
+                env.clear();
+                w.spare.push(env);
+            }
             side.queued = u64::MAX;
         }
         w.side.resize_with(nh, || Side { best: (f64::INFINITY, 0.0), env: Vec::new(), queued: u64::MAX });
@@ -746,34 +791,25 @@ impl<'a> Run<'a> {
         if side.queued != key.to_bits() {
             return; // a later entry of this side stands for it
         }
-        // Cut since queued: back in the queue at its true rank.
-        let least = side.env.iter().map(|s| s.least(s.b0, s.b1)).fold(f64::INFINITY, f64::min);
-        if least > key + self.slack(key) {
-            self.w.side[h].queued = self.queue.push(least, h as u64);
-            return;
-        }
+        // The side is due at `key`, its least distance when queued: a merge only ever replaces
+        // a piece by a shorter one, so that least has not grown since.
         self.w.side[h].queued = u64::MAX;
-        let mut mine = std::mem::take(&mut self.w.mine);
-        mine.clear();
-        std::mem::swap(&mut mine, &mut self.w.side[h].env);
+        let mut mine = std::mem::take(&mut self.w.side[h].env);
         let face = m.faces[h / 3];
         let (a, b) = (face[h % 3] as usize, face[(h + 1) % 3] as usize);
         let l = m.half[h].len;
-        let slack = self.slack(least + l);
+        let slack = self.slack(key + l);
         let (da, db) = (self.w.d[a], self.w.d[b]);
         for s in &mine {
-            let Some(b0) = cut_front(s.x, s.y, s.sigma, da, s.b0, s.b1, slack) else {
+            let Some([b0, b1, ..]) = cut_ends(s.x, s.y, s.sigma, l, da, db, s.b0, s.b1, slack) else {
                 continue;
             };
-            let Some(back) = cut_front(l - s.x, s.y, s.sigma, db, l - s.b1, l - b0, slack) else {
-                continue;
-            };
-            let b1 = l - back;
             if b1 - b0 > MIN_WIDTH * l {
                 self.cross(h, b0, b1, s.x, s.y, s.sigma);
             }
         }
-        self.w.mine = mine;
+        mine.clear();
+        self.w.spare.push(mine);
     }
 
     /// Sends the part [b0, b1] of a window on `h` (in h's frame) across h's face: reaches the
@@ -838,17 +874,20 @@ impl<'a> Run<'a> {
         // beat is never merged or queued.
         let slack = self.slack(sigma + l);
         let (da, db) = (self.w.d[m.start(h) as usize], self.w.d[m.start(3 * (h / 3) + (h + 1) % 3) as usize]);
-        let Some(t0) = cut_front(sx, sy, sigma, da, t0, t1, slack) else {
+        let Some([t0, t1, f0, f1]) = cut_ends(sx, sy, sigma, l, da, db, t0, t1, slack) else {
             return;
         };
-        let Some(back) = cut_front(l - sx, sy, sigma, db, l - t1, l - t0, slack) else {
-            return;
-        };
-        let t1 = l - back;
         if !(t1 - t0 > MIN_WIDTH * l) {
             return;
         }
-        let least = smallest(sigma, sx, sy, t0, t1);
+        // The smallest distance the window carries: at the end nearer s, or straight across.
+        let least = if sx < t0 {
+            f0
+        } else if sx > t1 {
+            f1
+        } else {
+            sigma - sy
+        };
         let slack = self.slack(least + l);
         for (t, same) in m.others(h) {
             self.w.ids += 1;
@@ -858,68 +897,85 @@ impl<'a> Run<'a> {
             }
             self.w.pieces.clear();
             self.w.pieces.push((w.b0, w.b1));
-            self.cut_by_other_sides(t, &w, slack);
-            if self.merge(t, &w, slack) && self.queue.due(least) < self.w.side[t].queued {
+            if m.half[h].mate == MANY {
+                for (u, same) in m.others(t) {
+                    self.cut_by_side(u, same, &w, l, slack);
+                }
+            } else {
+                // On a manifold edge the one other side of t is h, the side w comes from.
+                self.cut_by_side(h, same, &w, l, slack);
+            }
+            if self.merge(t, &w, l, slack) && self.queue.due(least) < self.w.side[t].queued {
                 self.w.side[t].queued = self.queue.push(least, t as u64);
             }
         }
     }
 
-    /// Rule 3 across the edge: cuts `self.w.pieces` (of `w`, on side `h`) where a window waiting
-    /// on another side of the edge beats `w` by more than `slack`.
-    fn cut_by_other_sides(&mut self, h: usize, w: &Seg, slack: f64) {
-        let m = self.m;
-        let l = m.half[h].len;
-        for (u, same) in m.others(h) {
-            let ww = &mut *self.w;
-            let list = &ww.side[u].env;
-            if list.is_empty() || ww.pieces.is_empty() {
-                continue;
-            }
-            let (lo, hi) = (ww.pieces[0].0, ww.pieces[ww.pieces.len() - 1].1);
-            let range = if same { overlapping(list, lo, hi) } else { overlapping(list, l - hi, l - lo) };
-            for o in &list[range] {
-                let o = if same { *o } else { o.mirrored(l) };
-                ww.kept.clear();
-                for &(p0, p1) in &ww.pieces {
-                    let (a, b) = (p0.max(o.b0), p1.min(o.b1));
-                    if !(a < b) {
-                        ww.kept.push((p0, p1));
-                        continue;
-                    }
-                    let kept = &mut ww.kept;
-                    let mut keep = |u: f64, v: f64| match kept.last_mut() {
-                        Some(last) if last.1 == u => last.1 = v,
-                        _ => kept.push((u, v)),
-                    };
-                    if p0 < a {
-                        keep(p0, a);
-                    }
-                    share(w, &o, a, b, slack, |u, v, mine| {
-                        if mine {
-                            keep(u, v)
-                        }
-                    });
-                    if b < p1 {
-                        keep(b, p1);
-                    }
+    /// Rule 3 across the edge (of length `l`): cuts `self.w.pieces` (of `w`, on a side of the
+    /// edge) where a window waiting on its other side `u` (running the `same` way or not) beats
+    /// `w` by more than `slack`.
+    fn cut_by_side(&mut self, u: usize, same: bool, w: &Seg, l: f64, slack: f64) {
+        let ww = &mut *self.w;
+        let list = &ww.side[u].env;
+        if list.is_empty() || ww.pieces.is_empty() {
+            return;
+        }
+        let (lo, hi) = (ww.pieces[0].0, ww.pieces[ww.pieces.len() - 1].1);
+        let range = if same { overlapping(list, lo, hi) } else { overlapping(list, l - hi, l - lo) };
+        for o in &list[range] {
+            let o = if same { *o } else { o.mirrored(l) };
+            ww.kept.clear();
+            for &(p0, p1) in &ww.pieces {
+                let (a, b) = (p0.max(o.b0), p1.min(o.b1));
+                if !(a < b) {
+                    ww.kept.push((p0, p1));
+                    continue;
                 }
-                ww.kept.retain(|&(p0, p1)| p1 - p0 > MIN_WIDTH * l);
-                std::mem::swap(&mut ww.pieces, &mut ww.kept);
+                let kept = &mut ww.kept;
+                let mut keep = |u: f64, v: f64| match kept.last_mut() {
+                    Some(last) if last.1 == u => last.1 = v,
+                    _ => kept.push((u, v)),
+                };
+                if p0 < a {
+                    keep(p0, a);
+                }
+                share(w, &o, a, b, slack, |u, v, mine| {
+                    if mine {
+                        keep(u, v)
+                    }
+                });
+                if b < p1 {
+                    keep(b, p1);
+                }
             }
+            ww.kept.retain(|&(p0, p1)| p1 - p0 > MIN_WIDTH * l);
+            std::mem::swap(&mut ww.pieces, &mut ww.kept);
         }
     }
 
     /// Rule 3 on the window's own side: `w`'s pieces take over the parts of the list waiting on
     /// side `h` where they beat what is there by more than `slack`. Returns whether `w` took any.
-    fn merge(&mut self, h: usize, w: &Seg, slack: f64) -> bool {
-        let narrow = MIN_WIDTH * self.m.half[h].len;
+    fn merge(&mut self, h: usize, w: &Seg, l: f64, slack: f64) -> bool {
+        let narrow = MIN_WIDTH * l;
         let ww = &mut *self.w;
         let mut took = false;
         for &(b0, b1) in &ww.pieces {
             let w = Seg { b0, b1, ..*w };
             let list = &mut ww.side[h].env;
+            if list.capacity() == 0 {
+                if let Some(spare) = ww.spare.pop() {
+                    *list = spare;
+                }
+            }
             let range = overlapping(list, b0, b1);
+            if range.is_empty() {
+                // Over nothing yet (the common case: a batch's windows reach an edge side by side).
+                if b1 - b0 > narrow {
+                    list.insert(range.start, w);
+                    took = true;
+                }
+                continue;
+            }
             let out = &mut ww.out;
             out.clear();
             // [cursor, b1] of w is still to place.
@@ -942,7 +998,11 @@ impl<'a> Run<'a> {
                 append(out, &w, cursor, b1, narrow);
             }
             took |= out.iter().any(|s| s.id == w.id);
-            list.splice(range, out.drain(..));
+            if out.len() == range.len() {
+                list[range].copy_from_slice(out);
+            } else {
+                list.splice(range, out.drain(..));
+            }
         }
         took
     }
