@@ -203,7 +203,7 @@ impl Layout {
         }
         let scale = [0, 1, 2].map(|k| if hi[k] > lo[k] { 2097151.0 / (hi[k] - lo[k]) } else { 0.0 });
         let mut order: Vec<(u64, u32)> = given_faces
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, f)| {
                 let c = centroid(f);
@@ -211,7 +211,7 @@ impl Layout {
                 (spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2, i as u32)
             })
             .collect();
-        order.sort_unstable();
+        order.par_sort_unstable();
         let mut inner = vec![NONE; n];
         let mut outer = Vec::with_capacity(n);
         let mut faces = Vec::with_capacity(given_faces.len());
@@ -232,30 +232,44 @@ impl Layout {
         }
         let points: Vec<[f64; 3]> = outer.iter().map(|&v| given_points[v as usize]).collect();
 
+        // Each face's half-edges, corner angles and whether it is a sliver, in parallel; then
+        // the angles summed per vertex in face order (the same sums on any number of threads).
         let p = |v: u32| points[v as usize];
-        let mut half = vec![Half::default(); 3 * faces.len()];
+        let geometry: Vec<([Half; 3], [f64; 3], bool)> = faces
+            .par_iter()
+            .map(|face| {
+                let (mut half, mut angle) = ([Half::default(); 3], [0.0; 3]);
+                if !distinct(face) {
+                    return (half, angle, true);
+                }
+                let mut longest: f64 = 0.0;
+                for i in 0..3 {
+                    let (a, b, c) = (p(face[i]), p(face[(i + 1) % 3]), p(face[(i + 2) % 3]));
+                    let (ab, ac) = (sub(b, a), sub(c, a));
+                    let len = norm(ab);
+                    longest = longest.max(len);
+                    if len > 0.0 {
+                        half[i] = Half { len, cx: dot(ac, ab) / len, cy: norm(cross(ab, ac)) / len, mate: NONE };
+                    }
+                    angle[i] = norm(cross(ab, ac)).atan2(dot(ab, ac));
+                }
+                let height = half.iter().map(|h| h.cy).fold(f64::INFINITY, f64::min);
+                (half, angle, !(height > SLIVER * longest))
+            })
+            .collect();
+        let mut half = Vec::with_capacity(3 * faces.len());
         let mut angle = vec![0.0; n];
         let mut pseudo = vec![false; n];
-        for (f, face) in faces.iter().enumerate() {
+        for (face, (h, a, sliver)) in faces.iter().zip(&geometry) {
+            half.extend_from_slice(h);
             if !distinct(face) {
                 face.iter().for_each(|&v| pseudo[v as usize] = true);
                 continue;
             }
-            let mut longest: f64 = 0.0;
             for i in 0..3 {
-                let (a, b, c) = (p(face[i]), p(face[(i + 1) % 3]), p(face[(i + 2) % 3]));
-                let (ab, ac) = (sub(b, a), sub(c, a));
-                let len = norm(ab);
-                longest = longest.max(len);
-                half[3 * f + i] = if len > 0.0 {
-                    Half { len, cx: dot(ac, ab) / len, cy: norm(cross(ab, ac)) / len, mate: NONE }
-                } else {
-                    Half::default()
-                };
-                angle[face[i] as usize] += norm(cross(ab, ac)).atan2(dot(ab, ac));
+                angle[face[i] as usize] += a[i];
             }
-            let height = (0..3).map(|i| half[3 * f + i].cy).fold(f64::INFINITY, f64::min);
-            if !(height > SLIVER * longest) {
+            if *sliver {
                 face.iter().for_each(|&v| pseudo[v as usize] = true);
             }
         }
@@ -271,7 +285,7 @@ impl Layout {
                 })
             })
             .collect();
-        keyed.sort_unstable();
+        keyed.par_sort_unstable();
         let mut edge_of = vec![NONE; 3 * faces.len()];
         let mut edge_start = Vec::new();
         let mut edge_half = Vec::with_capacity(keyed.len());
@@ -304,11 +318,13 @@ impl Layout {
         let extent = points.iter().flat_map(|q| q.iter()).fold(0.0f64, |m, c| m.max(c.abs()));
         let mut layout =
             Layout { points, faces, inner, half, edge_of, edge_start, edge_half, pseudo, around, tiny: 1e-15 * extent };
-        for (v, &total) in angle.iter().enumerate() {
-            if total > 2.0 * PI - 1e-5 || !layout.one_fan(v) {
-                layout.pseudo[v] = true;
-            }
-        }
+        // one_fan(v) reads only v's own flag, so the vertices can be decided in parallel.
+        let pseudo: Vec<bool> = angle
+            .par_iter()
+            .enumerate()
+            .map(|(v, &total)| layout.pseudo[v] || total > 2.0 * PI - 1e-5 || !layout.one_fan(v))
+            .collect();
+        layout.pseudo = pseudo;
         layout
     }
 
