@@ -569,7 +569,8 @@ fn crossings(w: &Seg, o: &Seg, lo: f64, hi: f64) -> ([f64; 2], usize) {
         }
         for _ in 0..3 {
             let (rw, ro) = (hyp(t - w.x, w.y), hyp(t - o.x, o.y));
-            let step = (w.sigma + rw - o.sigma - ro) / ((t - w.x) / rw - (t - o.x) / ro);
+            // (f_w − f_o) / (f_w − f_o)′ with the slopes (t − x)/r over a common denominator.
+            let step = (w.sigma + rw - o.sigma - ro) * rw * ro / ((t - w.x) * ro - (t - o.x) * rw);
             if !step.is_finite() {
                 break;
             }
