@@ -1041,7 +1041,20 @@ fn overlapping(list: &[Seg], b0: f64, b1: f64) -> std::ops::Range<usize> {
 pub fn geodesic_exact(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<Vec<Vec<f64>>> {
     check_input(vertices, faces, sources)?;
     let layout = Layout::new(vertices, faces);
-    sources.par_iter().map_init(Work::default, |work, &s| distances_from(&layout, work, vertices.len(), s)).collect()
+    // One set of buffers per thread at work, handed from source to source: rayon calls a
+    // `map_init` initialiser once per job it splits off, which here is about once per source.
+    let idle = std::sync::Mutex::new(Vec::<Work>::new());
+    sources
+        .par_iter()
+        .map(|&s| {
+            let mut work = idle.lock().ok().and_then(|mut idle| idle.pop()).unwrap_or_default();
+            let row = distances_from(&layout, &mut work, vertices.len(), s);
+            if let Ok(mut idle) = idle.lock() {
+                idle.push(work);
+            }
+            row
+        })
+        .collect()
 }
 
 /// One row of `geodesic_exact`, in the given numbering.
