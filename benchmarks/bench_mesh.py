@@ -7,7 +7,8 @@ MeshFastMarchingDistanceSolver (≥ 3×; its solver built once, outside the timi
 distances from 20 sources against potpourri3d's MeshHeatMethodDistanceSolver (≥ 1.5×; the factorization
 inside the timing for both: potpourri3d's constructor and 20 compute_distance calls), and exact geodesic
 distances from one source against pygeodesic's PyGeodesicAlgorithmExact (target ≥ 10×; its mesh set up
-outside the timing, ours inside the call).
+outside the timing, ours inside the call). Every library's time is the best of --repeat runs, except
+trimesh's (one run of ~17 s) and pygeodesic's eight sources (best of half as many, at least 2).
 
     python benchmarks/bench_mesh.py [--repeat 5] [--bunny PATH]
 """
@@ -81,7 +82,7 @@ def main() -> None:
     )
     exact = pygeodesic.PyGeodesicAlgorithmExact(vu, fu)
     ours = best_time(lambda: machscan.geodesic_distances(vu, fu, [src], method="exact"), args.repeat)
-    ref = best_time(lambda: exact.geodesicDistances(np.array([src]), None), 1)
+    ref = best_time(lambda: exact.geodesicDistances(np.array([src]), None), args.repeat)
     print(
         f"exact geodesics, one source on the bunny: machscan {ours * 1e3:.0f} ms, pygeodesic {ref * 1e3:.0f} ms "
         f"-> {ref / ours:.1f}x"
@@ -92,7 +93,7 @@ def main() -> None:
     ours = best_time(lambda: machscan.geodesic_distances(vu, fu, eight, method="exact"), args.repeat)
     with machscan.thread_limit(1):
         ours_1 = best_time(lambda: machscan.geodesic_distances(vu, fu, eight, method="exact"), args.repeat)
-    ref = best_time(lambda: [exact.geodesicDistances(np.array([s]), None) for s in eight], 1)
+    ref = best_time(lambda: [exact.geodesicDistances(np.array([s]), None) for s in eight], max(2, args.repeat // 2))
     print(
         f"exact geodesics, 8 sources on the bunny: machscan {ours:.2f} s ({os.cpu_count()} threads), {ours_1:.2f} s "
         f"(1 thread); pygeodesic {ref:.2f} s -> {ref / ours:.1f}x, {ref / ours_1:.1f}x on one thread"

@@ -511,7 +511,9 @@ fn cut_ends(sx: f64, sy: f64, sigma: f64, l: f64, da: f64, db: f64, b0: f64, b1:
             let k = dv - sigma;
             let x = (sx * sx + sy * sy - k * k) / (2.0 * (k + sx));
             if x.is_finite() {
-                b0 = x.clamp(b0, b1);
+                // max/min, not clamp: rounding can leave b0 a hair above b1 (clamp would panic;
+                // the caller drops such a window as too narrow).
+                b0 = x.max(b0).min(b1);
                 f0 = f(b0);
             }
         }
@@ -525,7 +527,7 @@ fn cut_ends(sx: f64, sy: f64, sigma: f64, l: f64, da: f64, db: f64, b0: f64, b1:
             let (rx, k) = (l - sx, dv - sigma);
             let x = (rx * rx + sy * sy - k * k) / (2.0 * (k + rx));
             if x.is_finite() {
-                b1 = l - x.clamp(l - b1, l - b0);
+                b1 = l - x.max(l - b1).min(l - b0);
                 f1 = f(b1);
             }
         }
@@ -1028,10 +1030,13 @@ impl<'a> Run<'a> {
     }
 }
 
-/// The pieces of `list` (in order, disjoint) that overlap (b0, b1).
+/// The pieces of `list` (in order, disjoint) that overlap (b0, b1). A batch's windows mostly
+/// reach an edge in order, so the end of the list is tried first; a window overlaps few pieces,
+/// so they are counted one by one (a binary search's chain of dependent loads cost more).
 fn overlapping(list: &[Seg], b0: f64, b1: f64) -> std::ops::Range<usize> {
-    let i = list.partition_point(|s| s.b1 <= b0);
-    let j = i + list[i..].partition_point(|s| s.b0 < b1);
+    let n = list.len();
+    let i = if list.last().is_none_or(|s| s.b1 <= b0) { n } else { list.partition_point(|s| s.b1 <= b0) };
+    let j = i + list[i..].iter().take_while(|s| s.b0 < b1).count();
     i..j
 }
 
