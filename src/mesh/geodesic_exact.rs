@@ -613,23 +613,25 @@ fn share(w: &Seg, o: &Seg, lo: f64, hi: f64, bar: f64, mut take: impl FnMut(f64,
     // Between crossings w − o keeps its sign, so the first and last sub-intervals are decided
     // by the ends' values where those are clearly away from the bar; near it (the end may be a
     // crossing itself), and for the middle one, by the value at the middle.
-    let clear = 2.0 * bar.abs();
-    let decide = |from: f64, to: f64, end: f64| {
-        if (end - bar).abs() > clear {
+    let at_middle = |from: f64, to: f64| {
+        let mid = 0.5 * (from + to);
+        w.at(mid) - o.at(mid) <= bar
+    };
+    let by_end = |end: f64, from: f64, to: f64| {
+        if (end - bar).abs() > 2.0 * bar.abs() {
             end <= bar
         } else {
-            let mid = 0.5 * (from + to);
-            w.at(mid) - o.at(mid) <= bar
+            at_middle(from, to)
         }
     };
     let mut from = lo;
     for (k, &to) in roots[..n].iter().chain(std::iter::once(&hi)).enumerate() {
         let keeps = if k == 0 {
-            decide(from, to, w0 - o0)
+            by_end(w0 - o0, from, to)
         } else if k == n {
-            decide(from, to, w1 - o1)
+            by_end(w1 - o1, from, to)
         } else {
-            decide(from, to, f64::NAN)
+            at_middle(from, to)
         };
         take(from, to, keeps);
         from = to;
