@@ -677,6 +677,20 @@ struct Work {
     spare: Vec<Vec<Seg>>,
     pieces: Vec<(f64, f64)>,
     kept: Vec<(f64, f64)>,
+    batch: Vec<Crossing>,
+}
+
+/// A window of a batch about to cross its face: its part [b0, b1] left by rule 1, its source
+/// (sx, sy, σ), where the ray to the apex crosses its edge and the distance it brings the apex.
+#[derive(Clone, Copy)]
+struct Crossing {
+    b0: f64,
+    b1: f64,
+    sx: f64,
+    sy: f64,
+    sigma: f64,
+    xc: f64,
+    dc: f64,
 }
 
 /// The propagation from one source.
@@ -824,41 +838,55 @@ impl<'a> Run<'a> {
         let l = m.half[h].len;
         let slack = self.slack(key + l);
         let (da, db) = (self.w.d[a], self.w.d[b]);
+        // First the whole batch reaches the apex: its best path is then known before any window
+        // splits by rule 2 and before any child is cut by the apex's distance (rule 1).
+        let Half { cx, cy, .. } = m.half[h];
+        let mut batch = std::mem::take(&mut self.w.batch);
+        batch.clear();
+        let mut best = self.w.side[h].best;
         for s in &mine {
             let Some([b0, b1, ..]) = cut_ends(s.x, s.y, s.sigma, l, da, db, s.b0, s.b1, slack) else {
                 continue;
             };
-            if b1 - b0 > MIN_WIDTH * l {
-                self.cross(h, b0, b1, s.x, s.y, s.sigma);
+            if !(b1 - b0 > MIN_WIDTH * l) {
+                continue;
             }
+            // Straight when the apex's ray crosses the window, else through the nearer end.
+            let (sx, sy, sigma) = (s.x, s.y, s.sigma);
+            let xc = sx + (cx - sx) * (-sy) / (cy - sy);
+            let q = if xc.is_nan() { b0 } else { xc.clamp(b0, b1) };
+            let dc = if q == xc { sigma + hyp(cx - sx, cy - sy) } else { sigma + hyp(q - sx, sy) + hyp(cx - q, cy) };
+            if dc < best.0 {
+                best = (dc, q);
+            }
+            batch.push(Crossing { b0, b1, sx, sy, sigma, xc, dc });
         }
         mine.clear();
         self.w.spare.push(mine);
+        if best.0 < self.w.side[h].best.0 {
+            self.w.side[h].best = best;
+            self.relax(face[(h + 2) % 3] as usize, best.0);
+        }
+        for c in &batch {
+            self.cross(h, c, best);
+        }
+        self.w.batch = batch;
     }
 
-    /// Sends the part [b0, b1] of a window on `h` (in h's frame) across h's face: reaches the
-    /// apex, splits by rule 2 and makes the children on the face's other two edges.
-    fn cross(&mut self, h: usize, b0: f64, b1: f64, sx: f64, sy: f64, sigma: f64) {
+    /// Sends the part [b0, b1] of a window on `h` (in h's frame) across h's face: splits by
+    /// rule 2 against the best path `best` to the apex and makes the children on the face's
+    /// other two edges.
+    fn cross(&mut self, h: usize, c: &Crossing, best: (f64, f64)) {
         let m = self.m;
         let (f, i) = (h / 3, h % 3);
-        let face = m.faces[f];
-        let c = face[(i + 2) % 3] as usize;
         let Half { len: l, cx, cy, .. } = m.half[h];
-
-        // The apex: straight when its ray crosses the window, else through the nearer end.
-        let xc = sx + (cx - sx) * (-sy) / (cy - sy);
-        let q = if xc.is_nan() { b0 } else { xc.clamp(b0, b1) };
-        let dc = if q == xc { sigma + hyp(cx - sx, cy - sy) } else { sigma + hyp(q - sx, sy) + hyp(cx - q, cy) };
-        self.relax(c, dc);
+        let Crossing { b0, b1, sx, sy, sigma, xc, dc } = *c;
 
         // Rule 2.
         let (mut left_end, mut right_start) = (b1.min(xc), b0.max(xc));
-        let best = self.w.side[h].best;
         if dc > best.0 + self.slack(best.0) {
             left_end = left_end.min(best.1);
             right_start = right_start.max(best.1);
-        } else if dc < best.0 {
-            self.w.side[h].best = (dc, q);
         }
 
         if left_end > b0 {
