@@ -583,7 +583,7 @@ fn crossings(w: &Seg, o: &Seg, lo: f64, hi: f64) -> ([f64; 2], usize) {
             // Newton converges quadratically from the quadratic's root: after a step this small
             // the root is good to rounding. (Near a double root, where it converges slowly, the
             // two windows are equal to second order there, so the place of the cut is moot.)
-            if step.abs() <= 1e-9 * reach {
+            if step.abs() <= 1e-6 * reach {
                 break;
             }
         }
@@ -650,11 +650,10 @@ fn append(out: &mut Vec<Seg>, seg: &Seg, a: f64, b: f64, narrow: f64) {
     }
 }
 
-/// A half-edge as the propagation knows it: rule 2's best path through it (length to the apex,
-/// where it crosses the edge), and the pieces of the windows waiting there, in order along the
-/// edge and disjoint (rule 3). Together, since they are used together.
+/// A half-edge as the propagation knows it when windows join it: the pieces of the windows
+/// waiting there, in order along the edge and disjoint (rule 3). 32 bytes, two to a cache line;
+/// rule 2's best path, used only when the side's turn comes, is kept apart (`Work::best`).
 struct Side {
-    best: (f64, f64),
     env: Vec<Seg>,
     /// The key (as queued) of the side's one live queue entry, `u64::MAX` for none: a side is
     /// queued once, at its earliest window, not once per window.
@@ -665,7 +664,9 @@ struct Side {
 #[derive(Default)]
 struct Work {
     d: Vec<f64>,
-    /// Per half-edge, what the propagation knows of it.
+    /// Per half-edge, rule 2's best path from it to its face's apex: length, where it crosses.
+    best: Vec<(f64, f64)>,
+    /// Per half-edge, the windows waiting there.
     side: Vec<Side>,
     queue: Option<Radix>,
     ids: u64,
@@ -706,8 +707,9 @@ impl<'a> Run<'a> {
         w.d.clear();
         w.d.resize(nv, f64::INFINITY);
         w.side.truncate(nh);
+        w.best.clear();
+        w.best.resize(nh, (f64::INFINITY, 0.0));
         for side in &mut w.side {
-            side.best = (f64::INFINITY, 0.0);
             if side.env.capacity() > 0 {
                 let mut env = std::mem::take(&mut side.env);
                 env.clear();
@@ -715,7 +717,7 @@ impl<'a> Run<'a> {
             }
             side.queued = u64::MAX;
         }
-        w.side.resize_with(nh, || Side { best: (f64::INFINITY, 0.0), env: Vec::new(), queued: u64::MAX });
+        w.side.resize_with(nh, || Side { env: Vec::new(), queued: u64::MAX });
         w.ids = 0;
         let mut queue = w.queue.take().unwrap_or_else(Radix::new);
         queue.clear();
@@ -843,7 +845,7 @@ impl<'a> Run<'a> {
         let Half { cx, cy, .. } = m.half[h];
         let mut batch = std::mem::take(&mut self.w.batch);
         batch.clear();
-        let mut best = self.w.side[h].best;
+        let mut best = self.w.best[h];
         for s in &mine {
             let Some([b0, b1, ..]) = cut_ends(s.x, s.y, s.sigma, l, da, db, s.b0, s.b1, slack) else {
                 continue;
@@ -863,8 +865,8 @@ impl<'a> Run<'a> {
         }
         mine.clear();
         self.w.spare.push(mine);
-        if best.0 < self.w.side[h].best.0 {
-            self.w.side[h].best = best;
+        if best.0 < self.w.best[h].0 {
+            self.w.best[h] = best;
             self.relax(face[(h + 2) % 3] as usize, best.0);
         }
         for c in &batch {
