@@ -971,17 +971,31 @@ impl<'a> Run<'a> {
         if !same {
             w = w.mirrored(l);
         }
-        self.w.pieces.clear();
-        self.w.pieces.push((w.b0, w.b1));
-        if m.half[h].mate == MANY {
-            for (u, same) in m.others(t) {
-                self.cut_by_side(u, same, &w, l, slack);
-            }
+        let took = if m.half[h].mate != MANY && self.w.side[h].env.is_empty() {
+            // On a manifold edge the one other side of t is h, the side w comes from; mostly
+            // nothing waits there.
+            self.merge(t, &w, w.b0, w.b1, l, slack)
         } else {
-            // On a manifold edge the one other side of t is h, the side w comes from.
-            self.cut_by_side(h, same, &w, l, slack);
-        }
-        if self.merge(t, &w, l, slack) && self.queue.due(least) < self.w.side[t].queued {
+            let mut pieces = std::mem::take(&mut self.w.pieces);
+            pieces.clear();
+            pieces.push((w.b0, w.b1));
+            self.w.pieces = pieces;
+            if m.half[h].mate == MANY {
+                for (u, same) in m.others(t) {
+                    self.cut_by_side(u, same, &w, l, slack);
+                }
+            } else {
+                self.cut_by_side(h, same, &w, l, slack);
+            }
+            let pieces = std::mem::take(&mut self.w.pieces);
+            let mut took = false;
+            for &(b0, b1) in &pieces {
+                took |= self.merge(t, &w, b0, b1, l, slack);
+            }
+            self.w.pieces = pieces;
+            took
+        };
+        if took && self.queue.due(least) < self.w.side[t].queued {
             self.w.side[t].queued = self.queue.push(least, t as u64);
         }
     }
@@ -1028,56 +1042,55 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// Rule 3 on the window's own side: `w`'s pieces take over the parts of the list waiting on
-    /// side `h` where they beat what is there by more than `slack`. Returns whether `w` took any.
-    fn merge(&mut self, h: usize, w: &Seg, l: f64, slack: f64) -> bool {
+    /// Rule 3 on the window's own side: the piece [b0, b1] of `w` takes over the parts of the
+    /// list waiting on side `h` where it beats what is there by more than `slack`. Returns
+    /// whether it took any.
+    #[allow(clippy::too_many_arguments)]
+    fn merge(&mut self, h: usize, w: &Seg, b0: f64, b1: f64, l: f64, slack: f64) -> bool {
         let narrow = MIN_WIDTH * l;
         let ww = &mut *self.w;
-        let mut took = false;
-        for &(b0, b1) in &ww.pieces {
-            let w = Seg { b0, b1, ..*w };
-            let list = &mut ww.side[h].env;
-            if list.capacity() == 0 {
-                if let Some(spare) = ww.spare.pop() {
-                    *list = spare;
-                }
+        let w = Seg { b0, b1, ..*w };
+        let list = &mut ww.side[h].env;
+        if list.capacity() == 0 {
+            if let Some(spare) = ww.spare.pop() {
+                *list = spare;
             }
-            let range = overlapping(list, b0, b1);
-            if range.is_empty() {
-                // Over nothing yet (the common case: a batch's windows reach an edge side by side).
-                if b1 - b0 > narrow {
-                    list.insert(range.start, w);
-                    took = true;
-                }
-                continue;
+        }
+        let range = overlapping(list, b0, b1);
+        if range.is_empty() {
+            // Over nothing yet (the common case: a batch's windows reach an edge side by side).
+            if b1 - b0 > narrow {
+                list.insert(range.start, w);
+                return true;
             }
-            let out = &mut ww.out;
-            out.clear();
-            // [cursor, b1] of w is still to place.
-            let mut cursor = b0;
-            for o in &list[range.clone()] {
-                let (lo, hi) = (o.b0.max(b0), o.b1.min(b1));
-                if o.b0 < lo {
-                    append(out, o, o.b0, lo, narrow);
-                }
-                if cursor < lo {
-                    append(out, &w, cursor, lo, narrow);
-                }
-                share(&w, o, lo, hi, -slack, |u, v, mine| append(out, if mine { &w } else { o }, u, v, narrow));
-                cursor = cursor.max(hi);
-                if hi < o.b1 {
-                    append(out, o, hi, o.b1, narrow);
-                }
+            return false;
+        }
+        let out = &mut ww.out;
+        out.clear();
+        // [cursor, b1] of w is still to place.
+        let mut cursor = b0;
+        for o in &list[range.clone()] {
+            let (lo, hi) = (o.b0.max(b0), o.b1.min(b1));
+            if o.b0 < lo {
+                append(out, o, o.b0, lo, narrow);
             }
-            if cursor < b1 {
-                append(out, &w, cursor, b1, narrow);
+            if cursor < lo {
+                append(out, &w, cursor, lo, narrow);
             }
-            took |= out.iter().any(|s| s.id == w.id);
-            if out.len() == range.len() {
-                list[range].copy_from_slice(out);
-            } else {
-                list.splice(range, out.drain(..));
+            share(&w, o, lo, hi, -slack, |u, v, mine| append(out, if mine { &w } else { o }, u, v, narrow));
+            cursor = cursor.max(hi);
+            if hi < o.b1 {
+                append(out, o, hi, o.b1, narrow);
             }
+        }
+        if cursor < b1 {
+            append(out, &w, cursor, b1, narrow);
+        }
+        let took = out.iter().any(|s| s.id == w.id);
+        if out.len() == range.len() {
+            list[range].copy_from_slice(out);
+        } else {
+            list.splice(range, out.drain(..));
         }
         took
     }
