@@ -372,9 +372,12 @@ impl Layout {
             let Some(exit) = other_side(f, h) else {
                 return false;
             };
-            let Some((next, _)) = self.others(exit).next() else {
+            // An interior vertex's edges have two faces each (else it is a pseudo-source already).
+            let mate = self.half[exit].mate;
+            if mate >= MANY {
                 return false;
-            };
+            }
+            let next = (mate & !SAME) as usize;
             f = next / 3;
             h = next;
             if f == first as usize {
