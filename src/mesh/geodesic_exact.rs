@@ -41,7 +41,9 @@
 //! everything nearer, so its distance is final and it emits once: to its neighbours along the
 //! edges, and one window over each edge opposite it. A side's turn sends all its waiting
 //! windows across its face together (they share the face's data in cache; their order among
-//! themselves does not matter), each making at most two children on the face's other edges.
+//! themselves does not matter), each making at most two children on the face's other edges:
+//! first the whole batch reaches the apex, so that every window of it splits by the batch's
+//! best path there (rule 2) and every child is cut by the apex's distance (rule 1).
 //!
 //! Windows lose the parts that another known path beats at every point. Each rule compares
 //! with a real path (a vertex distance is always the length of some path), strictly and with a
