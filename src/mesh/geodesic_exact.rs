@@ -943,16 +943,9 @@ impl<'a> Run<'a> {
         if !(t1 - t0 > MIN_WIDTH * l) {
             return;
         }
-        // The smallest distance the window carries: at the end nearer s, or straight across.
-        let least = if sx < t0 {
-            f0
-        } else if sx > t1 {
-            f1
-        } else {
-            sigma - sy
-        };
-        let slack = self.slack(least + l);
         let seg = Seg { b0: t0, b1: t1, x: sx, y: sy, sigma, id: 0 };
+        let least = seg.least(t0, t1, f0, f1);
+        let slack = self.slack(least + l);
         match m.half[h].mate {
             NONE => {}
             MANY => {
@@ -981,10 +974,8 @@ impl<'a> Run<'a> {
             // nothing waits there.
             self.merge(t, &w, w.b0, w.b1, l, slack)
         } else {
-            let mut pieces = std::mem::take(&mut self.w.pieces);
-            pieces.clear();
-            pieces.push((w.b0, w.b1));
-            self.w.pieces = pieces;
+            self.w.pieces.clear();
+            self.w.pieces.push((w.b0, w.b1));
             if m.half[h].mate == MANY {
                 for (u, same) in m.others(t) {
                     self.cut_by_side(u, same, &w, l, slack);
