@@ -328,3 +328,49 @@ def test_geodesic_distances_mark_unreached_vertices_and_refuse_bad_input():
         assert np.isinf(d[0, 3]) and np.isinf(d[1, :3]).all() and d[1, 3] == 0, method
     with pytest.raises(ValueError, match="method"):
         machscan.geodesic_distances(v, [[0, 1, 2]], [0], method="dijkstra")
+
+
+@pytest.mark.parametrize("method", ["exact", "fmm", "heat"])
+def test_a_geodesic_solver_gives_the_rows_of_geodesic_distances_call_after_call(shared_data, method):
+    # The hedgehog: closed, irregular, saddles everywhere; the exact method's buffers are reused from
+    # call to call and from thread to thread, which must not change a bit of any row.
+    from concurrent.futures import ThreadPoolExecutor
+
+    v, f = read_txt_mesh(shared_data / "geodesic-flat-mesh" / "hedgehog_mesh.txt")
+    sources = [0, 25, 97, len(v) - 1]
+    once = machscan.geodesic_distances(v, f, sources, method=method)
+    solver = machscan.GeodesicSolver(v, f, method=method)
+    assert (solver.method, solver.vertex_count) == (method, len(v))
+    assert repr(solver) == f"GeodesicSolver(method={method!r}, vertex_count={len(v)})"
+    np.testing.assert_array_equal(solver.distances(sources), once)
+    np.testing.assert_array_equal(solver.distances(sources), once)
+    with ThreadPoolExecutor(4) as pool:
+        rows = list(pool.map(lambda _: solver.distances(sources), range(8)))
+    for r in rows:
+        np.testing.assert_array_equal(r, once)
+    if method != "heat":  # the heat method solves its sources in blocks, bitwise equal only in the same block
+        np.testing.assert_array_equal(solver.distances(sources[2]), once[2:3])
+        np.testing.assert_array_equal(solver.distances(sources[::-1]), once[::-1])
+    assert solver.distances([]).shape == (0, len(v))
+
+
+def test_a_geodesic_solver_refuses_bad_input_by_name():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [5, 5, 5.0]])
+    solver = machscan.GeodesicSolver(v, [[0, 1, 2]])
+    assert solver.method == "exact"
+    d = solver.distances([0, 3])
+    assert np.isinf(d[0, 3]) and np.isinf(d[1, :3]).all() and d[1, 3] == 0
+    with pytest.raises(ValueError, match="sources: vertex 7 is beyond the 4 given"):
+        solver.distances([7])
+    with pytest.raises(ValueError, match="sources: -1 is not a vertex index"):
+        solver.distances(-1)
+    with pytest.raises(ValueError, match="sources: expected vertex indices"):
+        solver.distances([0.5])
+    with pytest.raises(ValueError, match="method"):
+        machscan.GeodesicSolver(v, [[0, 1, 2]], method="Exact")
+    with pytest.raises(ValueError, match="faces"):
+        machscan.GeodesicSolver(v, [[0, 1, 4]])
+    with pytest.raises(ValueError, match="vertices"):
+        machscan.GeodesicSolver(v[:, :2], [[0, 1, 2]])
+    with pytest.raises(ValueError, match="vertices"):
+        machscan.GeodesicSolver(np.where(v == 5, np.nan, v), [[0, 1, 2]])

@@ -83,7 +83,15 @@ from machscan.kinematics import (
     scan_to_wcs,
 )
 from machscan.matching import IsometricMatch, isometric_match
-from machscan.mesh import ClosestPoints, InsertedPoints, closest_points, delaunay_xy, geodesic_distances, insert_points
+from machscan.mesh import (
+    ClosestPoints,
+    GeodesicSolver,
+    InsertedPoints,
+    closest_points,
+    delaunay_xy,
+    geodesic_distances,
+    insert_points,
+)
 from machscan.registration import (
     EnvelopeFit,
     IcpResult,
@@ -125,6 +133,7 @@ __all__ = [
     "EnvelopeFit",
     "FileFormatError",
     "FitCriteria",
+    "GeodesicSolver",
     "GrindingPaths",
     "GrooveFits",
     "GrooveModel",

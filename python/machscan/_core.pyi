@@ -36,6 +36,7 @@ __all__ = [
     "groove_defaults",
     "icp",
     "geodesic_distances",
+    "GeodesicSolver",
     "icp_defaults",
     "insert_points",
     "interpolate_poses",
@@ -513,6 +514,21 @@ def insert_points(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, t
 
 def geodesic_distances(vertices: ArrayLike, faces: ArrayLike, sources: Sequence[int], *, method: str) -> _F64:
     """Geodesic distances (SPEC S3); ``machscan.geodesic_distances`` documents it."""
+
+@final
+class GeodesicSolver:
+    """A mesh prepared once for geodesic distances (SPEC S3); ``machscan.GeodesicSolver``
+    documents it."""
+
+    def __new__(cls, vertices: ArrayLike, faces: ArrayLike, *, method: str) -> GeodesicSolver: ...
+    @property
+    def method(self) -> str:
+        """The method, ``"exact"``, ``"fmm"`` or ``"heat"``."""
+    @property
+    def vertex_count(self) -> int:
+        """The number of vertices (the length of each row of ``distances``)."""
+    def distances(self, sources: Sequence[int]) -> _F64:
+        """Distances from each source vertex to every vertex → ``(S, V)``."""
 
 def isometric_match(
     theoretical_points: ArrayLike,

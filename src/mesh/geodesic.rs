@@ -8,6 +8,7 @@
 //! min(T_A + |AC|, T_B + |BC|). Obtuse triangles need no unfolding this way: where the line
 //! misses AB the edge update is taken, which is what the neighbouring triangle's update then
 //! improves on.
+use super::geodesic_heat::{HeatOptions, HeatSolver};
 use crate::error::{check_finite_points, Error, Result};
 use nalgebra::Vector3;
 use rayon::prelude::*;
@@ -219,34 +220,61 @@ fn march(faces: &[[u32; 3]], geometry: &[FaceGeometry], around: &Around, n: usiz
     t
 }
 
+/// A mesh prepared once for fast marching: the faces around each vertex and each face's
+/// lengths.
+struct Marching {
+    n: usize,
+    faces: Vec<[u32; 3]>,
+    around: Around,
+    geometry: Vec<FaceGeometry>,
+}
+
+impl Marching {
+    fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Self {
+        Marching {
+            n: vertices.len(),
+            faces: faces.to_vec(),
+            around: Around::new(vertices.len(), faces),
+            geometry: faces.par_iter().map(|f| FaceGeometry::new(vertices, f)).collect(),
+        }
+    }
+
+    fn distances(&self, sources: &[usize]) -> Vec<Vec<f64>> {
+        sources
+            .par_iter()
+            .map(|&s| {
+                if self.around.of(s).is_empty() {
+                    unreached(self.n, s)
+                } else {
+                    march(&self.faces, &self.geometry, &self.around, self.n, s as u32)
+                }
+            })
+            .collect()
+    }
+}
+
 /// Fast-marching geodesic distances from each source vertex to every vertex, one row per
 /// source, sources in parallel. A vertex that no face uses, or that no face path reaches, is
 /// `inf`.
 pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<Vec<Vec<f64>>> {
     check_input(vertices, faces, sources)?;
-    let around = Around::new(vertices.len(), faces);
-    let geometry: Vec<FaceGeometry> = faces.par_iter().map(|f| FaceGeometry::new(vertices, f)).collect();
-    Ok(sources
-        .par_iter()
-        .map(|&s| {
-            if around.of(s).is_empty() {
-                unreached(vertices.len(), s)
-            } else {
-                march(faces, &geometry, &around, vertices.len(), s as u32)
-            }
-        })
-        .collect())
+    Ok(Marching::new(vertices, faces).distances(sources))
 }
 
 /// The checks shared by every geodesic method: finite vertices, faces naming them, sources
 /// among them.
 pub(super) fn check_input(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<()> {
+    check_sources(vertices.len(), sources)?;
     check_finite_points("vertices", vertices)?;
-    super::check_faces(vertices.len(), faces)?;
-    if let Some(&s) = sources.iter().find(|&&s| s >= vertices.len()) {
-        return Err(Error::invalid("sources", format!("vertex {s} is beyond the {} given", vertices.len())));
+    super::check_faces(vertices.len(), faces)
+}
+
+/// Sources among the `n` vertices.
+fn check_sources(n: usize, sources: &[usize]) -> Result<()> {
+    match sources.iter().find(|&&s| s >= n) {
+        Some(&s) => Err(Error::invalid("sources", format!("vertex {s} is beyond the {n} given"))),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// How geodesic distances are computed (`method=` in Python).
@@ -270,20 +298,82 @@ impl GeodesicMethod {
             _ => Err(Error::invalid("method", format!("expected 'exact', 'fmm' or 'heat', got {name:?}"))),
         }
     }
+
+    /// The name `parse` reads.
+    pub fn name(self) -> &'static str {
+        match self {
+            GeodesicMethod::Exact => "exact",
+            GeodesicMethod::Fmm => "fmm",
+            GeodesicMethod::Heat => "heat",
+        }
+    }
 }
 
-/// Geodesic distances from each source vertex to every vertex by `method`, one row per source.
+/// A mesh prepared once for geodesic distances by one method, for any number of calls: the
+/// exact method's layout and buffers, fast marching's adjacency and lengths, the heat method's
+/// factored operators. `Sync`: calls may come from several threads.
+pub struct GeodesicSolver {
+    n: usize,
+    method: GeodesicMethod,
+    prepared: Prepared,
+}
+
+enum Prepared {
+    Exact(super::geodesic_exact::ExactGeodesics),
+    Fmm(Marching),
+    Heat(Box<HeatSolver>),
+}
+
+impl GeodesicSolver {
+    /// Prepares the mesh. Errors name `vertices` (not finite) or `faces` (beyond the vertices).
+    pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]], method: GeodesicMethod) -> Result<Self> {
+        check_input(vertices, faces, &[])?;
+        let prepared = match method {
+            GeodesicMethod::Exact => Prepared::Exact(super::geodesic_exact::ExactGeodesics::new(vertices, faces)),
+            GeodesicMethod::Fmm => Prepared::Fmm(Marching::new(vertices, faces)),
+            GeodesicMethod::Heat => {
+                Prepared::Heat(Box::new(HeatSolver::with_options(vertices, faces, HeatOptions::default())?))
+            }
+        };
+        Ok(GeodesicSolver { n: vertices.len(), method, prepared })
+    }
+
+    pub fn method(&self) -> GeodesicMethod {
+        self.method
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.n
+    }
+
+    /// Distances from each source vertex to every vertex, one row per source, sources in
+    /// parallel; `inf` at vertices no face uses or no face path reaches. Errors name `sources`
+    /// beyond the vertices.
+    pub fn distances(&self, sources: &[usize]) -> Result<Vec<Vec<f64>>> {
+        check_sources(self.n, sources)?;
+        match &self.prepared {
+            Prepared::Exact(exact) => exact.distances(sources),
+            Prepared::Fmm(marching) => Ok(marching.distances(sources)),
+            Prepared::Heat(heat) => heat.distances_from(sources),
+        }
+    }
+}
+
+/// Geodesic distances from each source vertex to every vertex by `method`, one row per source:
+/// a `GeodesicSolver` used once (the sources checked before the mesh is prepared).
 pub fn geodesic_distances(
     vertices: &[[f64; 3]],
     faces: &[[u32; 3]],
     sources: &[usize],
     method: GeodesicMethod,
 ) -> Result<Vec<Vec<f64>>> {
-    match method {
-        GeodesicMethod::Exact => super::geodesic_exact::geodesic_exact(vertices, faces, sources),
-        GeodesicMethod::Fmm => geodesic_fmm(vertices, faces, sources),
-        GeodesicMethod::Heat => super::geodesic_heat::geodesic_heat(vertices, faces, sources),
+    check_sources(vertices.len(), sources)?;
+    if sources.is_empty() {
+        // Nothing to compute: no mesh to prepare (the heat method would factor its operators).
+        check_input(vertices, faces, sources)?;
+        return Ok(Vec::new());
     }
+    GeodesicSolver::new(vertices, faces, method)?.distances(sources)
 }
 
 /// A source that no face uses reaches only itself.

@@ -1102,26 +1102,45 @@ fn overlapping(list: &[Seg], b0: f64, b1: f64) -> std::ops::Range<usize> {
     i..j
 }
 
+/// A mesh laid out once for exact geodesics (`GeodesicSolver` with `GeodesicMethod::Exact`):
+/// each call of `distances` reuses the layout and the propagation buffers of earlier calls (one
+/// set per thread that has worked on it, a few tens of bytes per half-edge).
+pub(super) struct ExactGeodesics {
+    layout: Layout,
+    n: usize,
+    /// Buffers not in use, handed from source to source and from call to call: rayon calls a
+    /// `map_init` initialiser once per job it splits off, which here is about once per source.
+    idle: std::sync::Mutex<Vec<Work>>,
+}
+
+impl ExactGeodesics {
+    /// Lays out a mesh whose vertices and faces have passed `check_input`.
+    pub(super) fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Self {
+        ExactGeodesics { layout: Layout::new(vertices, faces), n: vertices.len(), idle: Default::default() }
+    }
+
+    /// One row per source (each below the vertex count), sources in parallel.
+    pub(super) fn distances(&self, sources: &[usize]) -> Result<Vec<Vec<f64>>> {
+        sources
+            .par_iter()
+            .map(|&s| {
+                let mut work = self.idle.lock().ok().and_then(|mut idle| idle.pop()).unwrap_or_default();
+                let row = distances_from(&self.layout, &mut work, self.n, s);
+                if let Ok(mut idle) = self.idle.lock() {
+                    idle.push(work);
+                }
+                row
+            })
+            .collect()
+    }
+}
+
 /// Exact geodesic distances along the mesh surface from each source vertex to every vertex,
 /// one row per source, sources in parallel. A vertex that no face uses, or that no face path
 /// reaches, is `inf`. Degenerate and non-manifold meshes are accepted (see the module notes).
 pub fn geodesic_exact(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<Vec<Vec<f64>>> {
     check_input(vertices, faces, sources)?;
-    let layout = Layout::new(vertices, faces);
-    // One set of buffers per thread at work, handed from source to source: rayon calls a
-    // `map_init` initialiser once per job it splits off, which here is about once per source.
-    let idle = std::sync::Mutex::new(Vec::<Work>::new());
-    sources
-        .par_iter()
-        .map(|&s| {
-            let mut work = idle.lock().ok().and_then(|mut idle| idle.pop()).unwrap_or_default();
-            let row = distances_from(&layout, &mut work, vertices.len(), s);
-            if let Ok(mut idle) = idle.lock() {
-                idle.push(work);
-            }
-            row
-        })
-        .collect()
+    ExactGeodesics::new(vertices, faces).distances(sources)
 }
 
 /// One row of `geodesic_exact`, in the given numbering.

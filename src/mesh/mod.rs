@@ -12,7 +12,7 @@ pub mod thin;
 
 pub use closest::{closest_points, Closest, TriangleBvh};
 pub use delaunay::{delaunay_xy, edge_length, peel_long_edges};
-pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod};
+pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod, GeodesicSolver};
 pub use geodesic_exact::geodesic_exact;
 pub use geodesic_heat::{geodesic_heat, HeatSolver};
 pub use insert::{insert_points, Inserted, Landing};

@@ -2,7 +2,7 @@
 use super::convert::{count, enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
 use crate::mesh::{
     closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, geodesic_distances as run_geodesic_distances,
-    insert_points as run_insert_points, GeodesicMethod, Landing,
+    insert_points as run_insert_points, GeodesicMethod, GeodesicSolver, Landing,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -147,7 +147,47 @@ fn geodesic_distances<'py>(
     to_numpy(py, d.into_iter().flatten().collect(), &[k, n])
 }
 
+/// A mesh prepared once for geodesic distances (SPEC S3); ``machscan.GeodesicSolver``
+/// documents it.
+#[pyclass(name = "GeodesicSolver", module = "machscan._core", frozen)]
+pub struct PyGeodesicSolver {
+    inner: GeodesicSolver,
+}
+
+#[pymethods]
+impl PyGeodesicSolver {
+    #[new]
+    #[pyo3(signature = (vertices, faces, *, method))]
+    fn new(py: Python<'_>, vertices: &Bound<'_, PyAny>, faces: &Bound<'_, PyAny>, method: &str) -> PyResult<Self> {
+        let (v, tri) = mesh(vertices, faces)?;
+        let method = GeodesicMethod::parse(method)?;
+        let vr = v.rows::<3>()?;
+        Ok(PyGeodesicSolver { inner: enter(py, || GeodesicSolver::new(vr, &tri, method))? })
+    }
+
+    /// The method, ``"exact"``, ``"fmm"`` or ``"heat"``.
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.method().name()
+    }
+
+    /// The number of vertices (the length of each row of ``distances``).
+    #[getter]
+    fn vertex_count(&self) -> usize {
+        self.inner.vertex_count()
+    }
+
+    /// Distances from each source vertex to every vertex → ``(S, V)``.
+    fn distances<'py>(&self, py: Python<'py>, sources: Vec<i64>) -> PyResult<Bound<'py, PyAny>> {
+        let src: Vec<usize> = sources.iter().map(|&s| count("sources", s)).collect::<PyResult<_>>()?;
+        let d = enter(py, || self.inner.distances(&src))?;
+        let k = d.len();
+        to_numpy(py, d.into_iter().flatten().collect(), &[k, self.inner.vertex_count()])
+    }
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyGeodesicSolver>()?;
     m.add_function(wrap_pyfunction!(geodesic_distances, m)?)?;
     m.add_function(wrap_pyfunction!(insert_points, m)?)?;
     m.add_function(wrap_pyfunction!(closest_points, m)?)?;
