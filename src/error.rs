@@ -74,9 +74,27 @@ pub fn check_finite(name: &str, values: &[f64], width: usize) -> Result<()> {
     Ok(())
 }
 
-/// `check_finite` for points.
+/// The largest coordinate a point may have: a square of it (distances, cross products) stays
+/// finite, 1e150² = 1e300 < f64::MAX. Beyond it the kernels' arithmetic would overflow into
+/// inf and NaN; in millimetres it is far beyond any part.
+pub const MAX_COORDINATE: f64 = 1e150;
+
+/// `check_finite` for points, which also fails where a coordinate is beyond ±`MAX_COORDINATE`.
 pub fn check_finite_points(name: &str, points: &[[f64; 3]]) -> Result<()> {
-    check_finite(name, points.as_flattened(), 3)
+    let values = points.as_flattened();
+    check_finite(name, values, 3)?;
+    match values.iter().position(|v| v.abs() > MAX_COORDINATE) {
+        Some(pos) => Err(Error::invalid(
+            name,
+            format!(
+                "coordinates beyond ±1e150 cannot be measured (their squares overflow), found {:e} at row {}, column {}",
+                values[pos],
+                pos / 3,
+                pos % 3
+            ),
+        )),
+        None => Ok(()),
+    }
 }
 
 /// Fails unless `value` is a finite number > 0 (a length, a tolerance, ...). `unit` is put in

@@ -328,6 +328,11 @@ def test_geodesic_distances_mark_unreached_vertices_and_refuse_bad_input():
         assert np.isinf(d[0, 3]) and np.isinf(d[1, :3]).all() and d[1, 3] == 0, method
     with pytest.raises(ValueError, match="method"):
         machscan.geodesic_distances(v, [[0, 1, 2]], [0], method="dijkstra")
+    # Coordinates whose squares overflow: refused by name, not all inf.
+    with pytest.raises(ValueError, match=r"vertices: coordinates beyond ±1e150 .* found 1e200 at row 1, column 0"):
+        machscan.geodesic_distances(v * 1e200, [[0, 1, 2]], [0])
+    with pytest.raises(ValueError, match=r"queries: coordinates beyond ±1e150"):
+        machscan.closest_points(v, [[0, 1, 2]], [[1e160, 0.0, 0.0]])
 
 
 @pytest.mark.parametrize("method", ["exact", "fmm", "heat"])

@@ -122,6 +122,14 @@ def test_bad_arguments_are_refused_by_name(skin):
     with_axes[2, 4] = np.nan
     with pytest.raises(ValueError, match=r"tool_points: .* row 2, column 4"):
         machscan.compensate_toolpath(with_axes, tm, am, scan)
+    # Coordinates whose squares overflow, and a point so far out that the extrapolated (cubic) mapping
+    # overflows: refused by name (the latter was an index panic).
+    for x, message in [(1e200, r"tool_points: coordinates beyond ±1e150 .* row 4, column 0"), (1e150, "tool_points: point 4")]:
+        far = np.r_[tools[:4], [[x, 0.0, 0.0]]]
+        with pytest.raises(ValueError, match=message):
+            machscan.compensate_toolpath(far, tm, am, scan)
+    with pytest.raises(ValueError, match=r"actual_surface: coordinates beyond ±1e150"):
+        machscan.compensate_toolpath(tools, tm, am, np.r_[scan, [[1e200, 0.0, 0.0]]])
 
 
 def test_a_gap_in_the_scan_does_not_tilt_the_axes_across_it():

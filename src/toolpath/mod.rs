@@ -208,6 +208,7 @@ pub fn compensate_toolpath(
         Some(a) => {
             let rows: Vec<f64> = tool_points.iter().zip(a).flat_map(|(p, x)| p.iter().chain(x).copied()).collect();
             check_finite("tool_points", &rows, 6)?;
+            check_finite_points("tool_points", tool_points)?;
         }
         None => check_finite_points("tool_points", tool_points)?,
     }
@@ -311,6 +312,13 @@ pub fn compensate_toolpath(
                 (foot, nt, mapped) = theoretical_at(xy.0, xy.1);
             }
             let h = (t - foot).dot(&nt);
+            // Far outside the hull the extrapolated mapping (cubic) overflows: no answer, said so.
+            if !(mapped.iter().chain(nt.iter()).all(|c| c.is_finite()) && h.is_finite()) {
+                return Err(Error::invalid(
+                    "tool_points",
+                    format!("point {i} lies too far from the matching points to be mapped (the mapping overflows)"),
+                ));
+            }
             let inside = hull.locate(xy.0, xy.1).is_some();
             let (a, na) = actual.project(mapped, options.normals);
             let axis = match tool_axes {
@@ -319,9 +327,9 @@ pub fn compensate_toolpath(
                 }
                 None => na,
             };
-            ((a + h * na).into(), axis.normalize().into(), inside, h)
+            Ok(((a + h * na).into(), axis.normalize().into(), inside, h))
         })
-        .collect();
+        .collect::<Result<_>>()?;
     Ok(Compensated {
         points: results.iter().map(|r| r.0).collect(),
         axes: results.iter().map(|r| r.1).collect(),
