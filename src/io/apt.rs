@@ -25,6 +25,9 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
     let (mut feed, mut segment, mut rapid) = (f64::NAN, 0u32, false);
     let mut statement = String::new();
     let mut start_line = 0;
+    // A byte-order mark (Windows editors write one) is not part of the first statement; lines
+    // may end in LF, CR LF or CR alone (old Mac controllers).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text).replace("\r\n", "\n").replace('\r', "\n");
     for (k, raw) in text.lines().enumerate() {
         let line = raw.split("$$").next().unwrap_or("").trim_end();
         if statement.is_empty() {
@@ -41,19 +44,32 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
         if s.is_empty() {
             continue;
         }
-        let (word, args) = match s.split_once('/') {
-            Some((w, a)) => (w.trim().to_ascii_uppercase(), a),
-            None => (s.to_ascii_uppercase(), ""),
-        };
+        // The major word ends at the slash, or at the first blank where a writer left the slash out
+        // (`GOTO 1, 2, 3`).
+        let cut = s.find(|c: char| c == '/' || c.is_whitespace()).unwrap_or(s.len());
+        let (word, args) = (s[..cut].to_ascii_uppercase(), s[cut..].trim_start().trim_start_matches('/'));
         let numbers = |what: &str| -> Result<Vec<f64>> {
-            args.split(|c: char| c == ',' || c.is_whitespace())
-                .filter(|t| !t.is_empty())
-                .map(|t| match t.parse::<f64>() {
-                    // Rust reads "nan", "inf" and 1e400 as numbers; no machine can go there.
-                    Ok(v) if v.is_finite() => Ok(v),
-                    _ => Err(Error::format(path, format!("line {start_line}: {what}: {t:?} is not a finite number"))),
-                })
-                .collect()
+            let mut values = Vec::new();
+            for field in args.split(',') {
+                let field = field.trim();
+                if field.is_empty() {
+                    // `GOTO/1,,2,3`: a value left out, not a separator to skip.
+                    return Err(Error::format(path, format!("line {start_line}: {what}: an empty value in {args:?}")));
+                }
+                for t in field.split_whitespace() {
+                    match t.parse::<f64>() {
+                        // Rust reads "nan", "inf" and 1e400 as numbers; no machine can go there.
+                        Ok(v) if v.is_finite() => values.push(v),
+                        _ => {
+                            return Err(Error::format(
+                                path,
+                                format!("line {start_line}: {what}: {t:?} is not a finite number"),
+                            ))
+                        }
+                    }
+                }
+            }
+            Ok(values)
         };
         match word.as_str() {
             "GOTO" => {
@@ -194,5 +210,19 @@ mod tests {
         assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2\n").is_err());
         assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2,x\n").is_err());
         assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2, $\n").is_err());
+        assert!(parse_apt(Path::new("t.apt"), "GOTO/1,,2,3\n").is_err());
+        assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2,3,\n").is_err());
+    }
+
+    #[test]
+    fn reads_a_byte_order_mark_any_line_ending_and_a_left_out_slash() {
+        let points = |text: &str| parse_apt(Path::new("t.apt"), text).unwrap().points;
+        let two = vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        assert_eq!(points("\u{feff}GOTO/1,2,3\nGOTO/4,5,6\n"), two);
+        assert_eq!(points("PARTNO/X\rGOTO/1,2,3\rGOTO/4,5,6\r"), two);
+        assert_eq!(points("PARTNO/X\r\nGOTO/1,2,3 $\r\n ,0,0,1\r\n"), vec![1.0, 2.0, 3.0]);
+        assert_eq!(points("GOTO 1, 2, 3\ngoto/4 5 6\n"), two);
+        let feeds = parse_apt(Path::new("t.apt"), "\u{feff}FEDRAT/50\nGOTO/1,2,3\n").unwrap().feeds;
+        assert_eq!(feeds, vec![50.0]);
     }
 }
