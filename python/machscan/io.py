@@ -372,7 +372,9 @@ def write_toolpath(
     """Write an APT/CL toolpath: ``GOTO/x,y,z[,i,j,k]`` per point (shortest round-trip numbers),
     ``FEDRAT`` whenever the feed changes, ``RAPID`` where the segment label changes. Feeds are
     positive; NaN only before the first feed (as :func:`read_toolpath` gives points before any
-    ``FEDRAT``).
+    ``FEDRAT``). A row of ``axes`` that is all NaN writes its point without a tool axis (as
+    :func:`read_toolpath` gives a ``GOTO/x,y,z``), so what it reads is written back as it was; any
+    other axis must be finite and not (0, 0, 0).
 
     Examples
     --------

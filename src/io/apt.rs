@@ -84,6 +84,12 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
                     segment += 1;
                 }
                 rapid = false;
+                if v.len() == 6 && v[3..].iter().all(|&c| c == 0.0) {
+                    return Err(Error::format(
+                        path,
+                        format!("line {start_line}: GOTO tool axis (0, 0, 0) is not a direction"),
+                    ));
+                }
                 tp.points.extend_from_slice(&v[..3]);
                 tp.axes.extend_from_slice(if v.len() == 6 { &v[3..6] } else { &[f64::NAN; 3] });
                 tp.feeds.push(feed);
@@ -143,7 +149,22 @@ pub fn write_apt(
                 format!("({}, 3)", a.len() / 3),
             ));
         }
-        crate::error::check_finite("axes", a, 3)?;
+        // A row of NaN is a point without a tool axis (as the reader gives a GOTO of x, y, z):
+        // it is written so. Anything else must be a direction.
+        for (i, r) in a.chunks_exact(3).enumerate() {
+            if r.iter().all(|v| v.is_nan()) {
+                continue;
+            }
+            if !r.iter().all(|v| v.is_finite()) {
+                return Err(Error::invalid(
+                    "axes",
+                    format!("row {i} is {r:?}: a tool axis is finite, or all NaN for a point without one"),
+                ));
+            }
+            if r.iter().map(|v| v * v).sum::<f64>() == 0.0 {
+                return Err(Error::invalid("axes", format!("row {i} is (0, 0, 0), not a direction")));
+            }
+        }
     }
     for (name, v) in [("feeds", feeds), ("segments", segments)] {
         if let Some(v) = v {
@@ -184,9 +205,9 @@ pub fn write_apt(
             }
         }
         let p = &points[3 * i..3 * i + 3];
-        match axes {
-            Some(a) => writeln!(w, "GOTO/{},{},{},{},{},{}", p[0], p[1], p[2], a[3 * i], a[3 * i + 1], a[3 * i + 2]),
-            None => writeln!(w, "GOTO/{},{},{}", p[0], p[1], p[2]),
+        match axes.map(|a| &a[3 * i..3 * i + 3]) {
+            Some(a) if !a[0].is_nan() => writeln!(w, "GOTO/{},{},{},{},{},{}", p[0], p[1], p[2], a[0], a[1], a[2]),
+            _ => writeln!(w, "GOTO/{},{},{}", p[0], p[1], p[2]),
         }
         .map_err(io)?;
     }
@@ -224,5 +245,26 @@ mod tests {
         assert_eq!(points("GOTO 1, 2, 3\ngoto/4 5 6\n"), two);
         let feeds = parse_apt(Path::new("t.apt"), "\u{feff}FEDRAT/50\nGOTO/1,2,3\n").unwrap().feeds;
         assert_eq!(feeds, vec![50.0]);
+        assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2,3,0,0,0\n").is_err());
+    }
+
+    /// What the reader gives, the writer takes back: points with and without tool axes mixed.
+    #[test]
+    fn a_path_read_is_written_back_as_it_was() {
+        let dir = std::env::temp_dir().join(format!("machscan-apt-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("mixed.cl");
+        let text = "FEDRAT/800\nGOTO/1,2,3,0,0,1\nGOTO/4,5,6\nRAPID\nGOTO/7,8,9,0,1,0\n";
+        let tp = parse_apt(Path::new("t.apt"), text).unwrap();
+        let segments: Vec<f64> = tp.segments.iter().map(|&s| s as f64).collect();
+        write_apt(&path, &tp.points, Some(&tp.axes), Some(&tp.feeds), Some(&segments)).unwrap();
+        let back = read_apt(&path).unwrap();
+        assert_eq!(back.points, tp.points);
+        assert_eq!((back.feeds, back.segments), (tp.feeds, tp.segments));
+        assert!(back.axes.iter().zip(&tp.axes).all(|(a, b)| a == b || (a.is_nan() && b.is_nan())));
+        let (half_nan, zero) = ([0.0, f64::NAN, 1.0], [0.0; 3]);
+        assert!(write_apt(&path, &tp.points[..3], Some(&half_nan), None, None).is_err());
+        assert!(write_apt(&path, &tp.points[..3], Some(&zero), None, None).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -1476,10 +1476,14 @@ mod tests {
         f.push([20, 21, 22]); // collinear
         f.push([copy, 30, 31]);
         f.push([3, 3, 3]);
-        v.push([f64::MAX / 4.0, 0.0, 0.0]);
+        // As far as a coordinate may be (its square still finite); beyond, the input is refused.
+        v.push([crate::error::MAX_COORDINATE, 0.0, 0.0]);
         let far = (v.len() - 1) as u32;
         f.push([0, 1, far]);
         let sources: Vec<usize> = (0..v.len()).step_by(5).collect();
+        let mut beyond = v.clone();
+        beyond[far as usize][0] = f64::MAX / 4.0;
+        assert!(geodesic_exact(&beyond, &f, &sources).unwrap_err().to_string().contains("vertices"));
         let d = geodesic_exact(&v, &f, &sources).unwrap();
         for (row, &s) in d.iter().zip(&sources) {
             assert!(row.iter().all(|x| !x.is_nan()), "source {s}");

@@ -42,6 +42,45 @@ fn polynomial(p: [f64; 2]) -> ([f64; 10], [f64; 10], [f64; 10]) {
     )
 }
 
+/// Sites closer than this fraction of their typical spacing (the median distance to the nearest
+/// other site) are refused: an interpolant through both must bend between them by their values'
+/// difference over their distance, which measurement noise alone makes millimetres (two points
+/// 0.01 mm apart on a 15 mm grid with 10 µm between their values moved tool points by 4 mm).
+const MIN_SEPARATION: f64 = 1e-3;
+
+/// Fails naming `name` where two sites are closer than `MIN_SEPARATION` of the typical spacing.
+fn check_separation(name: &str, sites: &[[f64; 2]]) -> Result<()> {
+    let distance = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    // Each site's nearest other site; a few hundred sites at most, so all pairs.
+    let nearest: Vec<(f64, usize)> = sites
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| {
+            sites
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(j, &q)| (distance(p, q), j))
+                .fold((f64::INFINITY, usize::MAX), |m, c| if c.0 < m.0 { c } else { m })
+        })
+        .collect();
+    let mut spacing: Vec<f64> = nearest.iter().map(|c| c.0).collect();
+    spacing.sort_by(f64::total_cmp);
+    let typical = spacing[spacing.len() / 2];
+    match nearest.iter().enumerate().find(|(_, c)| c.0 < MIN_SEPARATION * typical) {
+        Some((i, &(d, j))) => Err(Error::invalid(
+            name,
+            format!(
+                "points {} and {} are {d:.3e} mm apart in x, y, under a thousandth of their typical spacing \
+                 ({typical:.3} mm): too close to interpolate between (leave one out, or interpolation='linear')",
+                i.min(j),
+                i.max(j)
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 impl Spline {
     /// Interpolates `values[i]` (k per site) at `sites[i]`. `name` names the sites in errors.
     pub fn fit(name: &str, sites: &[[f64; 2]], values: &[Vec<f64>]) -> Result<Self> {
@@ -62,6 +101,7 @@ impl Spline {
         let scale = ((hi[0] - lo[0]).max(hi[1] - lo[1]) / 2.0).max(f64::MIN_POSITIVE);
         let centres: Vec<[f64; 2]> =
             sites.iter().map(|p| [(p[0] - shift[0]) / scale, (p[1] - shift[1]) / scale]).collect();
+        check_separation(name, sites)?;
         // The polynomial must be fixed by the sites (not all on one line, conic or cubic
         // curve), or the system is singular.
         let terms = if n >= CUBIC_FROM { 10 } else { 6 };
@@ -160,5 +200,16 @@ mod tests {
         let v: Vec<Vec<f64>> = line.iter().map(|_| vec![0.0]).collect();
         assert!(Spline::fit("sites", &line, &v).unwrap_err().to_string().contains("sites"));
         assert!(Spline::fit("sites", &line[..5], &v[..5]).unwrap_err().to_string().contains("at least 6"));
+    }
+
+    #[test]
+    fn sites_closer_than_a_thousandth_of_their_spacing_are_refused_by_name() {
+        let mut sites: Vec<[f64; 2]> = (0..9).map(|k| [15.0 * (k % 3) as f64, 15.0 * (k / 3) as f64]).collect();
+        sites.push([15.0 + 0.01, 15.0]);
+        let v: Vec<Vec<f64>> = sites.iter().map(|_| vec![0.0]).collect();
+        let e = Spline::fit("sites", &sites, &v).unwrap_err().to_string();
+        assert!(e.contains("sites") && e.contains("points 4 and 9"), "{e}");
+        sites[9] = [15.0 + 0.1, 15.0]; // 1/150 of the spacing: allowed
+        assert!(Spline::fit("sites", &sites, &v).is_ok());
     }
 }
