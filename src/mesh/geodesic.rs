@@ -319,7 +319,7 @@ pub struct GeodesicSolver {
 }
 
 enum Prepared {
-    Exact(super::geodesic_exact::ExactGeodesics),
+    Exact(Box<super::geodesic_exact::ExactGeodesics>),
     Fmm(Marching),
     Heat(Box<HeatSolver>),
 }
@@ -329,7 +329,9 @@ impl GeodesicSolver {
     pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]], method: GeodesicMethod) -> Result<Self> {
         check_input(vertices, faces, &[])?;
         let prepared = match method {
-            GeodesicMethod::Exact => Prepared::Exact(super::geodesic_exact::ExactGeodesics::new(vertices, faces)),
+            GeodesicMethod::Exact => {
+                Prepared::Exact(Box::new(super::geodesic_exact::ExactGeodesics::new(vertices, faces)))
+            }
             GeodesicMethod::Fmm => Prepared::Fmm(Marching::new(vertices, faces)),
             GeodesicMethod::Heat => {
                 Prepared::Heat(Box::new(HeatSolver::with_options(vertices, faces, HeatOptions::default())?))
