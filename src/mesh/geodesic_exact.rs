@@ -813,7 +813,7 @@ impl<'a> Run<'a> {
         w.ids = me as u64;
         let mut queue = w.queue.take().unwrap_or_else(Radix::new);
         queue.clear();
-        // Half the budget each: one part alone cannot hang either.
+        // A budget for each part: neither can hang.
         let budget = WORK_PER_FACE.saturating_mul(m.faces.len()).max(1_000_000);
         Run { m, w, queue, me, budget }
     }
@@ -1274,7 +1274,8 @@ impl ExactGeodesics {
 
     /// One row per source (each below the vertex count), sources in parallel.
     pub(super) fn distances(&self, sources: &[usize]) -> Result<Vec<Vec<f64>>> {
-        // One source on more than one thread: its two parts on two threads.
+        // One source: in two parts, on two threads where there are; several: one part each, in
+        // parallel.
         let split = match (sources.len(), rayon::current_num_threads()) {
             (1, 1) => Split::InTurn,
             (1, _) => Split::Paired,
@@ -1445,42 +1446,64 @@ impl SpinBarrier {
 /// The rounds with part `b` on a thread of its own: this thread exchanges the news and sets the
 /// bound while `b`'s waits at the barrier, then both take their round.
 fn in_two_threads(a: &mut Run, b: &mut Run, rounds: &mut Rounds) -> bool {
+    use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
     use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
     let b = std::sync::Mutex::new(b);
     let barrier = SpinBarrier { arrived: 0.into(), generation: 0.into() };
     let bound = AtomicU64::new(0);
     let (stop, b_ok) = (AtomicBool::new(false), AtomicBool::new(true));
-    std::thread::scope(|scope| {
+    // A panic on either thread (a bug) must not leave the other spinning at the barrier: it is
+    // caught, both leave the rounds, and it goes on from this thread.
+    let b_panic = std::sync::Mutex::new(None);
+    let (ok, a_panic) = std::thread::scope(|scope| {
         scope.spawn(|| loop {
             barrier.wait();
             if stop.load(Relaxed) {
                 break;
             }
-            let Ok(mut b) = b.lock() else { break };
-            if !b.round(f64::from_bits(bound.load(Relaxed))) {
-                b_ok.store(false, Relaxed);
+            let round = catch_unwind(AssertUnwindSafe(|| match b.lock() {
+                Ok(mut b) => b.round(f64::from_bits(bound.load(Relaxed))),
+                Err(_) => false,
+            }));
+            match round {
+                Ok(true) => {}
+                Ok(false) => b_ok.store(false, Relaxed),
+                Err(payload) => {
+                    b_ok.store(false, Relaxed);
+                    if let Ok(mut slot) = b_panic.lock() {
+                        *slot = Some(payload);
+                    }
+                }
             }
-            drop(b);
             barrier.wait();
         });
-        let ok = loop {
+        let rounds = catch_unwind(AssertUnwindSafe(|| loop {
             let next = match b.lock() {
                 Ok(mut b) => rounds.next(a, &mut b),
-                Err(_) => None,
+                Err(_) => break false,
             };
             let Some(next) = next else { break true };
             bound.store(next.to_bits(), Relaxed);
             barrier.wait();
-            let a_ok = a.round(next);
+            let a_ok = catch_unwind(AssertUnwindSafe(|| a.round(next)));
             barrier.wait();
-            if !(a_ok && b_ok.load(Relaxed)) {
-                break false;
+            match a_ok {
+                Ok(a_ok) if a_ok && b_ok.load(Relaxed) => {}
+                Ok(_) => break false,
+                Err(payload) => resume_unwind(payload),
             }
-        };
+        }));
         stop.store(true, Relaxed);
         barrier.wait();
-        ok
-    })
+        match rounds {
+            Ok(ok) => (ok, None),
+            Err(payload) => (false, Some(payload)),
+        }
+    });
+    if let Some(payload) = a_panic.or_else(|| b_panic.into_inner().ok().flatten()) {
+        resume_unwind(payload);
+    }
+    ok
 }
 
 /// One row of `geodesic_exact`, in the given numbering.
