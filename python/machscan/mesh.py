@@ -219,8 +219,8 @@ class GeodesicSolver:
     pygeodesic's ``PyGeodesicAlgorithmExact`` and potpourri3d's distance solvers are. ``method="exact"``
     keeps the mesh's layout for the window propagation (edges, unfolded faces, which vertices are
     saddles) and the propagation's buffers; ``"fmm"`` the faces around each vertex and the face lengths;
-    ``"heat"`` the factored heat and Poisson operators (the costly part: ~0.15 s on the 35,947-vertex
-    bunny, then ~5 ms per source). Each call of :meth:`distances` gives the same rows as
+    ``"heat"`` the factored heat and Poisson operators (the costly part: ~0.1 s on the 35,947-vertex
+    bunny, then 2–9 ms per source). Each call of :meth:`distances` gives the same rows as
     :func:`geodesic_distances` on the same mesh and sources (for ``"heat"``, the same sources in the same
     order). Calls release the GIL and may come from several threads.
 
