@@ -209,6 +209,8 @@ struct Layout {
     /// alternately), and whether a vertex has faces in both.
     owner: Vec<u8>,
     shared: Vec<bool>,
+    /// The mean length of the half-edges (1 when all are degenerate): the first band of rounds.
+    mean_edge: f64,
 }
 
 impl Layout {
@@ -348,6 +350,7 @@ impl Layout {
             face.iter().for_each(|&v| parts[v as usize] |= 1 << o);
         }
         let shared = parts.iter().map(|&p| p == 3).collect();
+        let mean_edge = half.iter().map(|h| h.len).sum::<f64>() / half.len().max(1) as f64;
         let mut layout = Layout {
             points,
             faces,
@@ -361,6 +364,7 @@ impl Layout {
             tiny: 1e-15 * extent,
             owner,
             shared,
+            mean_edge: if mean_edge > 0.0 { mean_edge } else { 1.0 },
         };
         // one_fan(v) reads only v's own flag, so the vertices can be decided in parallel.
         let pseudo: Vec<bool> = angle
@@ -836,6 +840,11 @@ impl<'a> Run<'a> {
                 self.w.outbox.push(Message::Relax { v: v as u32, dist });
             }
         }
+    }
+
+    /// Gives the queue back to the buffers, for the next source.
+    fn finish(self) {
+        self.w.queue = Some(self.queue);
     }
 
     /// The source, inner vertex `source`, at distance 0.
@@ -1338,7 +1347,7 @@ fn propagate_in_parts(layout: &Layout, works: &mut [Work; 2], source: usize, spl
         let mut whole = Run::new(layout, w0, WHOLE);
         whole.start(source);
         let ok = whole.round(f64::INFINITY);
-        whole.w.queue = Some(whole.queue);
+        whole.finish();
         return ok;
     }
     let (mut a, mut b) = (Run::new(layout, w0, 0), Run::new(layout, w1, 1));
@@ -1359,8 +1368,8 @@ fn propagate_in_parts(layout: &Layout, works: &mut [Work; 2], source: usize, spl
     for (x, y) in a.w.d.iter_mut().zip(&b.w.d) {
         *x = x.min(*y);
     }
-    a.w.queue = Some(a.queue);
-    b.w.queue = Some(b.queue);
+    a.finish();
+    b.finish();
     ok
 }
 
@@ -1377,12 +1386,7 @@ struct Rounds {
 
 impl Rounds {
     fn new(layout: &Layout) -> Self {
-        let mean_edge = layout.half.iter().map(|h| h.len).sum::<f64>() / layout.half.len().max(1) as f64;
-        Rounds {
-            band: if mean_edge > 0.0 { mean_edge } else { 1.0 },
-            news: Default::default(),
-            budgets: [usize::MAX; 2],
-        }
+        Rounds { band: layout.mean_edge, news: Default::default(), budgets: [usize::MAX; 2] }
     }
 
     /// Delivers each part's news to the other and gives the bound of the next round, None when
