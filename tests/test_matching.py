@@ -124,6 +124,40 @@ def test_points_near_the_edge_of_a_tilted_bent_skin_are_matched():
     assert untrimmed.max_error[-1] > 0.05
 
 
+def test_a_strongly_bent_part_starts_inside_its_outline():
+    # Bent to R = 100 mm, the 120 mm plate is 7 mm shorter in xy than flat: the rigid motion of the locating points
+    # carries the far matching points past the scan's outline. They start just inside it (this raised before).
+    skin = BentSkin(length=120.0, width=80.0, radius=100.0, pose=misplacement(3, translation=1.0, rotation=0.01))
+    theoretical, scan = skin.grid(1.5), skin.scan(1.5, 0.002, seed=1)
+    r, grid = skin.locating(), skin.matching_grid(4, 4, margin=2.0)
+    r_actual = skin.actual(r)[0]
+    # The rigid xy motion of r1, r2 (the default start), to show the case is the one meant.
+    a, b = r_actual[1, :2] - r_actual[0, :2], r[1, :2] - r[0, :2]
+    turn = np.arctan2(a[1], a[0]) - np.arctan2(b[1], b[0])
+    rot = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    start = (grid[:, :2] - r[0, :2]) @ rot.T + r_actual[0, :2]
+    along = (start - r_actual[0, :2]) @ (a / np.linalg.norm(a))
+    assert along.max() > ((scan[:, :2] - r_actual[0, :2]) @ (a / np.linalg.norm(a))).max() + 2.0
+    m = machscan.isometric_match(theoretical, scan, r, r_actual, grid, jacobian="gradient")
+    assert m.converged
+    assert rms(m.points - skin.actual(grid)[0]) < 0.010
+
+
+def test_the_noise_floor_stops_the_match_not_the_iteration_limit():
+    # 10 µm noise and a tolerance no match reaches (1 nm): T falls to the noise floor in a few steps, then by
+    # nothing. The match stops there ("stalled", converged) instead of trying up to max_iterations (which took
+    # 21 and 32 iterations for the same points before).
+    skin = BentSkin(length=120.0, width=80.0, radius=400.0, pose=misplacement(2, translation=1.0, rotation=0.01))
+    theoretical, scan = skin.grid(1.5), skin.scan(1.5, 0.010, seed=1)
+    r, grid = skin.locating(), skin.matching_grid(4, 4)
+    for jacobian in ("gradient", "quadratic"):
+        m = machscan.isometric_match(theoretical, scan, r, skin.actual(r)[0], grid, jacobian=jacobian, tolerance=1e-6)
+        assert (m.stop, m.converged) == ("stalled", True), (jacobian, m)
+        assert m.iterations <= 10, (jacobian, m)
+        assert m.objective[-1] < m.objective[0] / 100
+        assert rms(m.points - skin.actual(grid)[0]) < 0.015, jacobian
+
+
 def test_the_iteration_limit_is_reported_not_raised(part):
     _skin, theoretical, scan, r, r_actual, grid = part
     m = machscan.isometric_match(theoretical, scan, r, r_actual, grid, max_iterations=1, method="fmm")

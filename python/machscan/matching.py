@@ -30,8 +30,8 @@ __all__ = ["IsometricMatch", "Jacobian", "MatchStop", "isometric_match"]
 Jacobian = Literal["quadratic", "gradient"]
 
 #: Why the iterations stopped: ``"tolerance"`` (E ≤ tolerance), ``"step"`` (the last step moved no point by
-#: more than a hundredth of the tolerance), ``"stalled"`` (no step lowers T any more: the scan's noise floor),
-#: ``"max_iterations"``.
+#: more than a hundredth of the tolerance), ``"stalled"`` (T stopped falling: by less than 0.1 % in each of two
+#: steps, or not at all; the scan's noise floor), ``"max_iterations"``.
 MatchStop = Literal["tolerance", "step", "stalled", "max_iterations"]
 
 
@@ -112,7 +112,8 @@ def isometric_match(
         or conic (a ValueError says so; the gradient Jacobian has no such need).
     actual_initial : array_like, shape (n, 3), optional
         Where the actual matching points start (their x, y); by default the theoretical ones moved by the x, y
-        rigid motion that takes r₁, r₂ to r′₁, r′₂.
+        rigid motion that takes r₁, r₂ to r′₁, r′₂ (a point that this puts outside the actual surface's xy
+        outline, as on a strongly bent part, starts just inside the nearest triangle).
     jacobian : {"quadratic", "gradient"}
         See :data:`Jacobian`. Both end at the same points; the gradient needs fewer iterations.
     method : {"exact", "fmm", "heat"}
@@ -149,8 +150,8 @@ def isometric_match(
     Raises
     ------
     ValueError
-        An argument of the wrong shape, not finite, a starting point outside the actual surface's xy outline,
-        locating or matching points the surface does not join, a bad option.
+        An argument of the wrong shape, not finite, an ``actual_initial`` point outside the actual surface's xy
+        outline, locating or matching points the surface does not join, a bad option.
 
     Examples
     --------

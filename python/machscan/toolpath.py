@@ -116,6 +116,10 @@ def compensate_toolpath(
         See :data:`SurfaceNormals`.
     radius : float, optional
         Radius of the scan patch of the smooth surface, mm; by default 5 median edge lengths of the scan mesh.
+        The axes' tilt from the scan's noise σ at spacing h goes as σ·h / radius²: at the default about
+        0.011° per µm of noise per mm of spacing, measured on the bent skin (0.040° at 5 µm and 1.3 mm, 0.08°
+        at 10 µm, 0.115° at 10 µm and 1.0 mm); a larger radius lowers it, at the cost of the surface's
+        features smaller than the patch.
     max_edge : float, optional
         Long-edge trim when meshing a point scan, mm.
 
