@@ -71,16 +71,18 @@
 //! window end, also a real path) and from a pseudo-source to its neighbours along the edges.
 //!
 //! Several sources in one call run in parallel, one per thread. The one source of a call runs in
-//! two parts: the faces are dealt in blocks of the Morton order (below) to two parts, each with
+//! two parts (on meshes of 2048 faces and more): the faces are dealt in blocks of the Morton order (below) to two parts, each with
 //! its own queue, windows and copy of the vertex distances. They take their queued work in
 //! rounds, each round up to a common bound a band beyond the least distance queued in either,
 //! and between rounds each hands the other what it found for it: windows leaving into the
 //! other's faces and new distances of vertices on both. On two threads the parts run at once
-//! (one source on the bunny 1.4× faster), on one in turn; nothing depends on the threads, so
-//! neither do the distances. Out of order within a band, a part may settle a pseudo-source
-//! before a shorter path to it arrives from the other: it then emits again, at the shorter
-//! distance, and what it emitted before loses to that (a pseudo-source too early costs time,
-//! never accuracy). A source's row alone and in a batch are the same up to rounding.
+//! (one source on the bunny 1.4× faster), on one in turn, and in turn too once two threads
+//! stop paying (when another program keeps the second core busy); nothing depends on the
+//! threads, so neither do the distances. Out of order within a band, a part may settle a
+//! pseudo-source before a shorter path to it arrives from the other: it then emits again, at
+//! the shorter distance, and what it emitted before loses to that (a pseudo-source too early
+//! costs time, never accuracy). A source's row alone and in a batch are the same up to
+//! rounding.
 //!
 //! The work: on the Stanford bunny (69 451 faces, about half its vertices saddles) the distance
 //! field along the edges has some 14 pieces per edge (Kirsanov's MMP ends with 1.455 million
@@ -130,6 +132,10 @@ const NONE: u32 = u32::MAX;
 /// exchange (on the bunny, messages per side taken: 64 faces 0.39, 256 0.20, 1024 0.11; the
 /// longer part of each round, summed, 0.55–0.57 of all sides taken at all three).
 const FACE_BLOCK: usize = 256;
+/// Faces below which one source runs in one part: with a few blocks each, two parts on two
+/// threads gained nothing (icospheres, one thread against two: 1280 faces 1.0–1.1×, 320 faces
+/// 0.8×; 5120 faces 1.1–1.2×; 20 480 faces 1.2–1.5×).
+const PAIRED_FACES: usize = 8 * FACE_BLOCK;
 /// `Half::mate` of a half-edge on an edge of more than two faces.
 const MANY: u32 = u32::MAX - 1;
 /// `Half::mate` flag: the mate runs the same way (faces oriented inconsistently).
@@ -1306,9 +1312,11 @@ impl ExactGeodesics {
 
     /// One row per source (each below the vertex count), sources in parallel.
     pub(super) fn distances(&self, sources: &[usize]) -> Result<Vec<Vec<f64>>> {
-        // One source: in two parts, on two threads where there are; several: one part each, in
-        // parallel.
+        // One source: in two parts, on two threads where there are; several, or one on a mesh
+        // too small to share: one part each, in parallel. The choice never depends on the
+        // threads alone (two parts in turn give the bits of two parts at once).
         let split = match (sources.len(), rayon::current_num_threads()) {
+            (1, _) if self.layout.faces.len() < PAIRED_FACES => Split::Whole,
             (1, 1) => Split::InTurn,
             (1, _) => Split::Paired,
             _ => Split::Whole,
