@@ -526,6 +526,7 @@ impl Radix {
     }
 
     /// Queues `item` at `key`; returns the key as queued (`due`).
+    #[inline(always)]
     fn push(&mut self, key: f64, item: u64) -> u64 {
         let key = self.due(key);
         let b = self.bin(key);
@@ -535,7 +536,7 @@ impl Radix {
     }
 
     /// Brings the least keys to bin 0; false when the queue is empty.
-    #[inline]
+    #[inline(always)]
     fn settle(&mut self) -> bool {
         if self.full & 1 != 0 {
             return true;
@@ -571,7 +572,7 @@ impl Radix {
     }
 
     /// Takes an entry of the least key if that is at most `bound`.
-    #[inline]
+    #[inline(always)]
     fn pop_to(&mut self, bound: f64) -> Option<(f64, u64)> {
         if !self.settle() || self.bins[0].last().is_none_or(|e| f64::from_bits(e.0) > bound) {
             return None;
@@ -936,7 +937,7 @@ impl<'a> Run<'a> {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn queue_side(&mut self, t: usize, took: bool, least: f64) {
         if took && self.queue.due(least) < self.w.side[t].queued {
             self.w.side[t].queued = self.queue.push(least, t as u64);
