@@ -955,15 +955,24 @@ impl<'a> Run<'a> {
                 continue; // the other part emits there, at its own news of v
             }
             let face = m.faces[f];
-            for &u in &face {
-                let length = norm(sub(m.points[u as usize], m.points[v]));
-                self.relax(u as usize, dv + length);
-            }
             let Some(k) = face.iter().position(|&u| u as usize == v) else {
                 continue;
             };
             if !distinct(&face) {
+                for &u in &face {
+                    let length = norm(sub(m.points[u as usize], m.points[v]));
+                    self.relax(u as usize, dv + length);
+                }
                 continue;
+            }
+            // Along the face's two edges at v, whose lengths the half-edges hold (the same
+            // bits as measuring them again: where every vertex is a saddle, emitting is most
+            // of the work).
+            for i in 0..3 {
+                if i != k {
+                    let along = if i == (k + 1) % 3 { 3 * f + k } else { 3 * f + i };
+                    self.relax(face[i] as usize, dv + m.half[along].len);
+                }
             }
             let opposite = 3 * f + (k + 1) % 3;
             let Half { len, cx, cy, .. } = m.half[opposite];
