@@ -26,10 +26,10 @@ const DAMPING_FACTOR: f64 = 5.0;
 const DAMPING_LIMIT: f64 = 1e8;
 /// The other signs of the noise floor: `FLAT_STEPS` accepted steps in a row, each lowering T by
 /// less than `FLAT` of itself, or a rejected step of which the linear model expected less than
-/// 2 `FLAT` of T² (the fraction of T a step could still remove, squared). Measured on the bent skin with 10 µm noise: E stays at 1.14–1.16
-/// µm, above the default tolerance, while T falls by 0.3, 0.14, 0.04, 0.01 % a step and then
-/// by nothing; without this stop the match went on to its iteration limit (50, ~55 s) for the
-/// same points. Away from the floor the paper's Jacobian lowers T by a third a step.
+/// 2 `FLAT` of T² (about `FLAT` of T). Measured on the bent skin with 10 µm noise: E stays at
+/// 1.14–1.16 µm, above the default tolerance, while T falls by 0.3, 0.14, 0.04, 0.01 % a step
+/// and then by nothing; without this stop the match went on to its iteration limit (50, ~55 s)
+/// for the same points. Away from the floor the paper's Jacobian lowers T by a third a step.
 const FLAT: f64 = 1e-3;
 const FLAT_STEPS: usize = 2;
 

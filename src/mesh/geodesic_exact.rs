@@ -71,12 +71,12 @@
 //! window end, also a real path) and from a pseudo-source to its neighbours along the edges.
 //!
 //! Several sources in one call run in parallel, one per thread. The one source of a call runs in
-//! two parts (on meshes of 2048 faces and more): the faces are dealt in blocks of the Morton order (below) to two parts, each with
-//! its own queue, windows and copy of the vertex distances. They take their queued work in
+//! two parts (on meshes of 2048 faces and more): the faces are dealt in blocks of the Morton
+//! order (below) to two parts, each with its own queue, windows and copy of the vertex distances. They take their queued work in
 //! rounds, each round up to a common bound a band beyond the least distance queued in either,
 //! and between rounds each hands the other what it found for it: windows leaving into the
 //! other's faces and new distances of vertices on both. On two threads the parts run at once
-//! (one source on the bunny 1.4× faster), on one in turn, and in turn too once two threads
+//! (one source on the bunny 1.5× faster), on one in turn, and in turn too once two threads
 //! stop paying (when another program keeps the second core busy); nothing depends on the
 //! threads, so neither do the distances. Out of order within a band, a part may settle a
 //! pseudo-source before a shorter path to it arrives from the other: it then emits again, at
@@ -133,8 +133,8 @@ const NONE: u32 = u32::MAX;
 /// longer part of each round, summed, 0.55–0.57 of all sides taken at all three).
 const FACE_BLOCK: usize = 256;
 /// Faces below which one source runs in one part: with a few blocks each, two parts on two
-/// threads gained nothing (icospheres, one thread against two: 1280 faces 1.0–1.1×, 320 faces
-/// 0.8×; 5120 faces 1.1–1.2×; 20 480 faces 1.2–1.5×).
+/// threads gained nothing (icospheres, two threads against one: 320 faces 0.8×, 1280 faces
+/// 1.0–1.1×; 5120 faces 1.1–1.4×, 20 480 faces 1.2–1.6×).
 const PAIRED_FACES: usize = 8 * FACE_BLOCK;
 /// `Half::mate` of a half-edge on an edge of more than two faces.
 const MANY: u32 = u32::MAX - 1;
@@ -1151,7 +1151,7 @@ impl<'a> Run<'a> {
     /// The window `w` leaving through `h` (in h's frame) joins side `t` of the same edge (running
     /// the `same` way as h or not): rule 3 against the windows waiting on the edge, then the
     /// queue, at the window's `least` distance.
-    // Inlined into `spawn`, its two callers' copy of the 48-byte window goes (8 sources on one
+    // Inlined at its two calls in `spawn`, the 48-byte window is not copied (8 sources on one
     // thread 8 % faster; inlining `spawn` or `merge` too was slower, 4–17 %).
     #[inline(always)]
     fn join(&mut self, h: usize, t: usize, same: bool, w: Seg, least: f64, slack: f64) {
