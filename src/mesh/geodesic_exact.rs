@@ -968,10 +968,10 @@ impl<'a> Run<'a> {
             // Along the face's two edges at v, whose lengths the half-edges hold (the same
             // bits as measuring them again: where every vertex is a saddle, emitting is most
             // of the work).
-            for i in 0..3 {
+            for (i, &u) in face.iter().enumerate() {
                 if i != k {
                     let along = if i == (k + 1) % 3 { 3 * f + k } else { 3 * f + i };
-                    self.relax(face[i] as usize, dv + m.half[along].len);
+                    self.relax(u as usize, dv + m.half[along].len);
                 }
             }
             let opposite = 3 * f + (k + 1) % 3;
