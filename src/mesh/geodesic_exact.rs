@@ -72,10 +72,10 @@
 //!
 //! Several sources in one call run in parallel, one per thread. The one source of a call runs in
 //! two parts (on meshes of 2048 faces and more): the faces are dealt in blocks of the Morton
-//! order (below) to two parts, each with its own queue, windows and copy of the vertex distances. They take their queued work in
-//! rounds, each round up to a common bound a band beyond the least distance queued in either,
-//! and between rounds each hands the other what it found for it: windows leaving into the
-//! other's faces and new distances of vertices on both. On two threads the parts run at once
+//! order (below) to two parts, each with its own queue, windows and copy of the vertex
+//! distances. They take their queued work in rounds, each round up to a common bound a band
+//! beyond the least distance queued in either, and between rounds each hands the other what it
+//! found for it: windows leaving into the other's faces and new distances of vertices on both. On two threads the parts run at once
 //! (one source on the bunny 1.5× faster), on one in turn, and in turn too once two threads
 //! stop paying (when another program keeps the second core busy); nothing depends on the
 //! threads, so neither do the distances. Out of order within a band, a part may settle a
@@ -312,11 +312,8 @@ impl Layout {
         // counting sort by the smaller vertex, then each vertex's few sorted: a third of the
         // layout's time went to a comparison sort of all of them.
         let mut first = vec![0u32; n + 1];
-        let lower = |f: usize, i: usize| faces[f][i].min(faces[f][(i + 1) % 3]) as usize;
-        for (f, face) in faces.iter().enumerate() {
-            if distinct(face) {
-                (0..3).for_each(|i| first[lower(f, i) + 1] += 1);
-            }
+        for face in faces.iter().filter(|face| distinct(face)) {
+            (0..3).for_each(|i| first[face[i].min(face[(i + 1) % 3]) as usize + 1] += 1);
         }
         for v in 0..n {
             first[v + 1] += first[v];
@@ -516,8 +513,9 @@ impl Radix {
         self.full = 0;
     }
 
-    fn bin(&self, key: u64) -> usize {
-        (64 - (key ^ self.last).leading_zeros()) as usize
+    /// The bin of `key` when `last` is the last key taken: one past its highest bit that differs.
+    fn bin(key: u64, last: u64) -> usize {
+        (64 - (key ^ last).leading_zeros()) as usize
     }
 
     /// The key as queued: rounding may put a child a hair below its parent; it is due now.
@@ -529,7 +527,7 @@ impl Radix {
     #[inline(always)]
     fn push(&mut self, key: f64, item: u64) -> u64 {
         let key = self.due(key);
-        let b = self.bin(key);
+        let b = Self::bin(key, self.last);
         self.bins[b].push((key, item));
         self.full |= 1 << b;
         key
@@ -552,7 +550,7 @@ impl Radix {
         // in all on the bunny).
         let (lower, mut full) = (&mut self.bins[..b], self.full & !(1 << b));
         for &e in &moving {
-            let to = (64 - (e.0 ^ last).leading_zeros()) as usize;
+            let to = Self::bin(e.0, last);
             lower[to].push(e);
             full |= 1 << to;
         }
@@ -1381,11 +1379,11 @@ const WHOLE: u8 = 2;
 /// rounds of 256–1024, as with 16–64, and 0.88 M with 2048–8192).
 const ROUND_WORK: usize = 256;
 
-/// The propagation from inner vertex `source` in two parts (the faces of each `Layout::owner`)
-/// that take the queued work in rounds, each round the distances up to a bound, and exchange
-/// their news between rounds; on two threads when `paired`, else in turn on this one. The
-/// parts and the bounds depend on neither, so the distances do not either. The result in
-/// `works[0].d`; false when the work budget ran out.
+/// The propagation from inner vertex `source`: in one part (`Split::Whole`), or in two (the
+/// faces of each `Layout::owner`) that take the queued work in rounds, each round the distances
+/// up to a bound, and exchange their news between rounds; on two threads when `Paired` (until
+/// they stop paying), else in turn on this one. The parts and the bounds depend on neither, so
+/// the distances do not either. The result in `works[0].d`; false when the work budget ran out.
 fn propagate_in_parts(layout: &Layout, works: &mut [Work; 2], source: usize, split: Split) -> bool {
     let [w0, w1] = works;
     if split == Split::Whole {
@@ -1425,7 +1423,7 @@ fn in_turn(a: &mut Run, b: &mut Run, rounds: &mut Rounds) -> bool {
 /// Whether the rounds on two threads so far, `paired` ns, stopped paying against the parts'
 /// own times summed, `in_turn` ns (about what taking them in turn costs): after some rounds,
 /// so that one slow round does not decide, when they saved less than a tenth. Unloaded, two
-/// threads take 0.6–0.7 of the sum on the bunny.
+/// threads take 0.58–0.59 of the sum on the bunny.
 fn stops_paying(paired: u64, in_turn: u64) -> bool {
     paired > 5_000_000 && 10 * paired > 9 * in_turn
 }
@@ -1507,10 +1505,10 @@ impl SpinBarrier {
 /// The rounds with part `b` on a thread of its own: this thread exchanges the news and sets the
 /// bound while `b`'s waits at the barrier, then both take their round. Some(ok) when the rounds
 /// are done. The second thread pays only while the machine gives each thread a core: once the
-/// rounds `stops_paying`, the second thread stops and None tells the caller to take the rest in
-/// turn (on the bunny, with the machine's other core busy, the pair took 1.8–5× one thread's
-/// time; with this, one thread's).
-fn in_two_threads(a: &mut Run, b: &mut Run, rounds: &mut Rounds, stops_paying: fn(u64, u64) -> bool) -> Option<bool> {
+/// rounds stop paying, the second thread stops and None tells the caller to take the rest in
+/// turn (on the bunny, with the machine's other core busy, the pair took 1.3–5× one thread's
+/// time; with this, one thread's). `gives_up` is `stops_paying`, or a test's judge.
+fn in_two_threads(a: &mut Run, b: &mut Run, rounds: &mut Rounds, gives_up: fn(u64, u64) -> bool) -> Option<bool> {
     use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
     use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
     use std::time::Instant;
@@ -1568,7 +1566,7 @@ fn in_two_threads(a: &mut Run, b: &mut Run, rounds: &mut Rounds, stops_paying: f
                 Ok(_) => break Some(false),
                 Err(payload) => resume_unwind(payload),
             }
-            if stops_paying(paired, in_turn) {
+            if gives_up(paired, in_turn) {
                 break None;
             }
         }));
