@@ -909,9 +909,23 @@ impl<'a> Run<'a> {
         true
     }
 
+    /// The least distance queued, inf when nothing is.
+    fn least(&mut self) -> f64 {
+        self.queue.peek().unwrap_or(f64::INFINITY)
+    }
+
+    /// Hands this round's news for the other part to `mail` (which the other has read).
+    fn post(&mut self, mail: &mut News) {
+        mail.messages.clear();
+        mail.pieces.clear();
+        std::mem::swap(&mut mail.messages, &mut self.w.outbox);
+        std::mem::swap(&mut mail.pieces, &mut self.w.outbox_pieces);
+    }
+
     /// The other part's news of the last round.
-    fn receive(&mut self, news: &[Message], pieces: &[(f64, f64)]) {
-        for &message in news {
+    fn receive(&mut self, news: &News) {
+        let pieces = &news.pieces;
+        for &message in &news.messages {
             match message {
                 Message::Relax { v, dist } => {
                     let v = v as usize;
@@ -1411,12 +1425,19 @@ fn propagate_in_parts(layout: &Layout, works: &mut [Work; 2], source: usize, spl
 
 /// The rounds left, taken in turn on this thread.
 fn in_turn(a: &mut Run, b: &mut Run, rounds: &mut Rounds) -> bool {
+    let [mail_a, mail_b] = &mut rounds.mail;
+    let (mail_a, mail_b) =
+        (mail_a.get_mut().unwrap_or_else(|e| e.into_inner()), mail_b.get_mut().unwrap_or_else(|e| e.into_inner()));
     loop {
-        let Some(bound) = rounds.next(a, b) else { break true };
+        let Some(bound) = rounds.band.bound([a.least(), b.least()], [a.budget, b.budget]) else { break true };
         let (ra, rb) = (a.round(bound), b.round(bound));
         if !(ra && rb) {
             break false;
         }
+        a.post(mail_a);
+        b.post(mail_b);
+        a.receive(mail_b);
+        b.receive(mail_a);
     }
 }
 
@@ -1429,48 +1450,50 @@ fn stops_paying(paired: u64, in_turn: u64) -> bool {
 }
 
 /// A part's messages of a round and the pieces of its joins.
-type News = (Vec<Message>, Vec<(f64, f64)>);
+#[derive(Default)]
+struct News {
+    messages: Vec<Message>,
+    pieces: Vec<(f64, f64)>,
+}
 
-/// The rounds of a propagation in two parts: between rounds the news exchanged and the next
-/// round's bound, the band of distances adapted to the work done.
+/// The band of distances a round takes, adapted to the work of the round before. Each thread
+/// of a pair steps its own copy with the same numbers, so both get the same bounds.
+#[derive(Clone, Copy)]
+struct Band {
+    width: f64,
+    /// The parts' work budgets left when the last bound was set.
+    budgets: Option<[usize; 2]>,
+}
+
+impl Band {
+    /// The next round's bound, from the parts' least queued distances and budgets left; None
+    /// when nothing is queued.
+    fn bound(&mut self, least: [f64; 2], budgets: [usize; 2]) -> Option<f64> {
+        if let Some(before) = self.budgets {
+            let done = before[0] - budgets[0] + before[1] - budgets[1];
+            if done < ROUND_WORK {
+                self.width *= 2.0;
+            } else if done > 4 * ROUND_WORK {
+                self.width *= 0.5;
+            }
+        }
+        self.budgets = Some(budgets);
+        let lo = least[0].min(least[1]);
+        (lo < f64::INFINITY).then_some(lo + self.width)
+    }
+}
+
+/// The rounds of a propagation in two parts: the band, and each part's news of its last round
+/// (in a mutex, as the other part's thread reads it; never contended, the rounds' barriers
+/// keep writing and reading apart).
 struct Rounds {
-    band: f64,
-    news: [News; 2],
-    budgets: [usize; 2],
+    band: Band,
+    mail: [std::sync::Mutex<News>; 2],
 }
 
 impl Rounds {
     fn new(layout: &Layout) -> Self {
-        Rounds { band: layout.mean_edge, news: Default::default(), budgets: [usize::MAX; 2] }
-    }
-
-    /// Delivers each part's news to the other and gives the bound of the next round, None when
-    /// nothing is left.
-    fn next(&mut self, a: &mut Run, b: &mut Run) -> Option<f64> {
-        if self.budgets[0] != usize::MAX {
-            let done = self.budgets[0] - a.budget + self.budgets[1] - b.budget;
-            if done < ROUND_WORK {
-                self.band *= 2.0;
-            } else if done > 4 * ROUND_WORK {
-                self.band *= 0.5;
-            }
-        }
-        std::mem::swap(&mut self.news[0].0, &mut a.w.outbox);
-        std::mem::swap(&mut self.news[0].1, &mut a.w.outbox_pieces);
-        std::mem::swap(&mut self.news[1].0, &mut b.w.outbox);
-        std::mem::swap(&mut self.news[1].1, &mut b.w.outbox_pieces);
-        b.receive(&self.news[0].0, &self.news[0].1);
-        a.receive(&self.news[1].0, &self.news[1].1);
-        self.news.iter_mut().for_each(|(m, p)| {
-            m.clear();
-            p.clear();
-        });
-        self.budgets = [a.budget, b.budget];
-        let lo = match (a.queue.peek(), b.queue.peek()) {
-            (None, None) => return None,
-            (x, y) => x.unwrap_or(f64::INFINITY).min(y.unwrap_or(f64::INFINITY)),
-        };
-        Some(lo + self.band)
+        Rounds { band: Band { width: layout.mean_edge, budgets: None }, mail: Default::default() }
     }
 }
 
@@ -1482,6 +1505,10 @@ struct SpinBarrier {
 }
 
 impl SpinBarrier {
+    fn new() -> Self {
+        SpinBarrier { arrived: 0.into(), generation: 0.into() }
+    }
+
     fn wait(&self) {
         use std::sync::atomic::Ordering::{AcqRel, Acquire, Release};
         let generation = self.generation.load(Acquire);
@@ -1502,85 +1529,133 @@ impl SpinBarrier {
     }
 }
 
-/// The rounds with part `b` on a thread of its own: this thread exchanges the news and sets the
-/// bound while `b`'s waits at the barrier, then both take their round. Some(ok) when the rounds
+/// What the two threads of a pair tell each other between the barriers of a round: each part's
+/// least queued distance and budget left (after taking its news), whether a round failed or
+/// panicked, and whether the pair stops (the first thread's judgement).
+struct Shared {
+    barrier: SpinBarrier,
+    least: [std::sync::atomic::AtomicU64; 2],
+    budgets: [std::sync::atomic::AtomicUsize; 2],
+    failed: std::sync::atomic::AtomicBool,
+    stop: std::sync::atomic::AtomicBool,
+    /// The second thread's time in its last round, ns.
+    b_time: std::sync::atomic::AtomicU64,
+}
+
+/// How a thread of a pair left the rounds.
+enum Left {
+    Done,
+    Failed,
+    Stopped,
+}
+
+/// One thread's side of the rounds on two threads: part `me` (0 or 1) of `run`, with its own copy
+/// of the band. Each round: past the first barrier, both know both parts' least distances and
+/// budgets (so both set the same bound) and whether to leave; each takes its round and posts its
+/// news; past the second, each takes the other's news on its own thread, where its own data are
+/// in cache, and tells the other its least distance and budget. `judge` (the first thread's)
+/// is given the part's own time in the round and the round's, and says whether to stop.
+fn take_rounds(
+    run: &mut Run,
+    me: usize,
+    mut band: Band,
+    mail: &[std::sync::Mutex<News>; 2],
+    shared: &Shared,
+    mut judge: impl FnMut(u64, u64) -> bool,
+) -> (Left, Band, Option<Box<dyn std::any::Any + Send>>) {
+    use std::panic::{catch_unwind, AssertUnwindSafe};
+    use std::sync::atomic::Ordering::Relaxed;
+    use std::time::Instant;
+    let lock = |k: usize| mail[k].lock().unwrap_or_else(|e| e.into_inner());
+    let mut panic = None;
+    let tell = |run: &mut Run| {
+        shared.least[me].store(run.least().to_bits(), Relaxed);
+        shared.budgets[me].store(run.budget, Relaxed);
+    };
+    tell(run);
+    let left = loop {
+        shared.barrier.wait();
+        if shared.failed.load(Relaxed) {
+            break Left::Failed;
+        }
+        if shared.stop.load(Relaxed) {
+            break Left::Stopped;
+        }
+        let least = [0, 1].map(|k| f64::from_bits(shared.least[k].load(Relaxed)));
+        let budgets = [0, 1].map(|k| shared.budgets[k].load(Relaxed));
+        let Some(bound) = band.bound(least, budgets) else { break Left::Done };
+        let started = Instant::now();
+        let round = catch_unwind(AssertUnwindSafe(|| {
+            let ok = run.round(bound);
+            run.post(&mut lock(me));
+            ok
+        }));
+        let took = started.elapsed().as_nanos() as u64;
+        match round {
+            Ok(true) => {}
+            Ok(false) => shared.failed.store(true, Relaxed),
+            Err(payload) => {
+                shared.failed.store(true, Relaxed);
+                panic = Some(payload);
+            }
+        }
+        if me == 1 {
+            shared.b_time.store(took, Relaxed);
+        }
+        shared.barrier.wait();
+        if judge(took, started.elapsed().as_nanos() as u64) {
+            shared.stop.store(true, Relaxed);
+        }
+        if panic.is_none() {
+            if let Err(payload) = catch_unwind(AssertUnwindSafe(|| run.receive(&lock(1 - me)))) {
+                shared.failed.store(true, Relaxed);
+                panic = Some(payload);
+            }
+        }
+        tell(run);
+    };
+    (left, band, panic)
+}
+
+/// The rounds with part `b` on a thread of its own (see `take_rounds`). Some(ok) when the rounds
 /// are done. The second thread pays only while the machine gives each thread a core: once the
 /// rounds stop paying, the second thread stops and None tells the caller to take the rest in
 /// turn (on the bunny, with the machine's other core busy, the pair took 1.3–5× one thread's
 /// time; with this, one thread's). `gives_up` is `stops_paying`, or a test's judge.
 fn in_two_threads(a: &mut Run, b: &mut Run, rounds: &mut Rounds, gives_up: fn(u64, u64) -> bool) -> Option<bool> {
-    use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
-    use std::time::Instant;
-    let b = std::sync::Mutex::new(b);
-    let barrier = SpinBarrier { arrived: 0.into(), generation: 0.into() };
-    let bound = AtomicU64::new(0);
-    let (stop, b_ok) = (AtomicBool::new(false), AtomicBool::new(true));
-    let b_time = AtomicU64::new(0);
-    // A panic on either thread (a bug) must not leave the other spinning at the barrier: it is
-    // caught, both leave the rounds, and it goes on from this thread.
-    let b_panic = std::sync::Mutex::new(None);
-    let (ok, a_panic) = std::thread::scope(|scope| {
-        scope.spawn(|| loop {
-            barrier.wait();
-            if stop.load(Relaxed) {
-                break;
-            }
-            let started = Instant::now();
-            let round = catch_unwind(AssertUnwindSafe(|| match b.lock() {
-                Ok(mut b) => b.round(f64::from_bits(bound.load(Relaxed))),
-                Err(_) => false,
-            }));
-            b_time.store(started.elapsed().as_nanos() as u64, Relaxed);
-            match round {
-                Ok(true) => {}
-                Ok(false) => b_ok.store(false, Relaxed),
-                Err(payload) => {
-                    b_ok.store(false, Relaxed);
-                    if let Ok(mut slot) = b_panic.lock() {
-                        *slot = Some(payload);
-                    }
-                }
-            }
-            barrier.wait();
-        });
-        // The rounds' time on two threads against the parts' own times (what taking them in
-        // turn would cost, about).
-        let (mut paired, mut in_turn) = (0u64, 0u64);
-        let rounds = catch_unwind(AssertUnwindSafe(|| loop {
-            let next = match b.lock() {
-                Ok(mut b) => rounds.next(a, &mut b),
-                Err(_) => break Some(false),
-            };
-            let Some(next) = next else { break Some(true) };
-            bound.store(next.to_bits(), Relaxed);
-            let started = Instant::now();
-            barrier.wait();
-            let a_ok = catch_unwind(AssertUnwindSafe(|| a.round(next)));
-            let a_time = started.elapsed().as_nanos() as u64;
-            barrier.wait();
-            paired += started.elapsed().as_nanos() as u64;
-            in_turn += a_time + b_time.load(Relaxed);
-            match a_ok {
-                Ok(a_ok) if a_ok && b_ok.load(Relaxed) => {}
-                Ok(_) => break Some(false),
-                Err(payload) => resume_unwind(payload),
-            }
-            if gives_up(paired, in_turn) {
-                break None;
-            }
-        }));
-        stop.store(true, Relaxed);
-        barrier.wait();
-        match rounds {
-            Ok(ok) => (ok, None),
-            Err(payload) => (Some(false), Some(payload)),
-        }
+    use std::panic::resume_unwind;
+    use std::sync::atomic::Ordering::Relaxed;
+    let shared = Shared {
+        barrier: SpinBarrier::new(),
+        least: Default::default(),
+        budgets: Default::default(),
+        failed: false.into(),
+        stop: false.into(),
+        b_time: 0.into(),
+    };
+    let (band, mail) = (rounds.band, &rounds.mail);
+    // The rounds' time on two threads against the parts' own times (what taking them in turn
+    // would cost, about).
+    let (mut paired, mut in_turn) = (0u64, 0u64);
+    let judge = |a_time: u64, round: u64| {
+        paired += round;
+        in_turn += a_time + shared.b_time.load(Relaxed);
+        gives_up(paired, in_turn)
+    };
+    let ((left, band, a_panic), b_panic) = std::thread::scope(|scope| {
+        let second = scope.spawn(|| take_rounds(b, 1, band, mail, &shared, |_, _| false).2);
+        let first = take_rounds(a, 0, band, mail, &shared, judge);
+        (first, second.join().ok().flatten())
     });
-    if let Some(payload) = a_panic.or_else(|| b_panic.into_inner().ok().flatten()) {
+    if let Some(payload) = a_panic.or(b_panic) {
         resume_unwind(payload);
     }
-    ok
+    rounds.band = band;
+    match left {
+        Left::Done => Some(true),
+        Left::Failed => Some(false),
+        Left::Stopped => None,
+    }
 }
 
 /// One row of `geodesic_exact`, in the given numbering.
