@@ -74,11 +74,14 @@
 //! two parts (on meshes of 2048 faces and more): the faces are dealt in blocks of the Morton
 //! order (below) to two parts, each with its own queue, windows and copy of the vertex
 //! distances. They take their queued work in rounds, each round up to a common bound a band
-//! beyond the least distance queued in either, and between rounds each hands the other what it
-//! found for it: windows leaving into the other's faces and new distances of vertices on both. On two threads the parts run at once
-//! (one source on the bunny 1.5× faster), on one in turn, and in turn too once two threads
-//! stop paying (when another program keeps the second core busy); nothing depends on the
-//! threads, so neither do the distances. Out of order within a band, a part may settle a
+//! further on, and each hands the other what it found for it: windows leaving into the other's
+//! faces and new distances of vertices on both. A round has two halves: first what the other
+//! part's news cannot touch (faces with no vertex on the other's faces), then, with the other's
+//! news of the round before taken, the rest; so a part whose round was light goes on with the
+//! next round's first half instead of waiting (`Rounds`). On two threads the parts run at once
+//! (one source on the bunny 1.7× faster than on one), on one in turn, and in turn too once two
+//! threads stop paying (when another program keeps the second core busy); nothing depends on
+//! the threads, so neither do the distances. Out of order within a band, a part may settle a
 //! pseudo-source before a shorter path to it arrives from the other: it then emits again, at
 //! the shorter distance, and what it emitted before loses to that (a pseudo-source too early
 //! costs time, never accuracy). A source's row alone and in a batch are the same up to
@@ -89,7 +92,7 @@
 //! intervals), and every one has to cross its face once (this code: 1.55 million crossings per
 //! source); the cost is per window: memory traffic and square roots. So the faces are
 //! renumbered along a Morton curve of their centroids, a half-edge's data sits together, the
-//! queue is a radix heap (distances only grow), a side's list of pieces is taken from a pool of
+//! queue is a radix heap (distances mostly grow; what comes in behind, a binary heap), a side's list of pieces is taken from a pool of
 //! emptied lists when its first window comes and given back when it has crossed (only the
 //! front holds storage, and it is warm in cache), every square root a window's tests share is
 //! taken once, and the buffers are kept from one source to the next.
@@ -215,6 +218,9 @@ struct Layout {
     /// alternately), and whether a vertex has faces in both.
     owner: Vec<u8>,
     shared: Vec<bool>,
+    /// Whether a face has a vertex on the other part's faces: the other part's news can touch
+    /// its sides (see `Rounds`).
+    border: Vec<bool>,
     /// The mean length of the half-edges (1 when all are degenerate): the first band of rounds.
     mean_edge: f64,
 }
@@ -368,7 +374,8 @@ impl Layout {
         for (face, &o) in faces.iter().zip(&owner) {
             face.iter().for_each(|&v| parts[v as usize] |= 1 << o);
         }
-        let shared = parts.iter().map(|&p| p == 3).collect();
+        let shared: Vec<bool> = parts.iter().map(|&p| p == 3).collect();
+        let border = faces.iter().map(|face| face.iter().any(|&v| shared[v as usize])).collect();
         let mean_edge = half.iter().map(|h| h.len).sum::<f64>() / half.len().max(1) as f64;
         let mut layout = Layout {
             points,
@@ -383,6 +390,7 @@ impl Layout {
             tiny: 1e-15 * extent,
             owner,
             shared,
+            border,
             mean_edge: if mean_edge > 0.0 { mean_edge } else { 1.0 },
         };
         // one_fan(v) reads only v's own flag, so the vertices can be decided in parallel.
@@ -500,17 +508,22 @@ struct Radix {
     bins: Vec<Vec<(u64, u64)>>,
     /// Bit b set when bin b holds entries (64 bins: keys are ≥ 0, their sign bits never differ).
     full: u64,
+    /// Entries queued below `last`, which a radix heap cannot order: the other part's news and
+    /// what a round's early half put aside, which come after the part has gone further, and a
+    /// child that rounding put a hair below its parent; taken first, in order.
+    behind: std::collections::BinaryHeap<std::cmp::Reverse<(u64, u64)>>,
 }
 
 impl Radix {
     fn new() -> Self {
-        Radix { last: 0, bins: (0..64).map(|_| Vec::new()).collect(), full: 0 }
+        Radix { last: 0, bins: (0..64).map(|_| Vec::new()).collect(), full: 0, behind: Default::default() }
     }
 
     fn clear(&mut self) {
         self.bins.iter_mut().for_each(Vec::clear);
         self.last = 0;
         self.full = 0;
+        self.behind.clear();
     }
 
     /// The bin of `key` when `last` is the last key taken: one past its highest bit that differs.
@@ -518,15 +531,23 @@ impl Radix {
         (64 - (key ^ last).leading_zeros()) as usize
     }
 
-    /// The key as queued: rounding may put a child a hair below its parent; it is due now.
+    /// The key as queued (its bits; 0 for a negative one).
     fn due(&self, key: f64) -> u64 {
-        if key > 0.0 { key.to_bits() } else { 0 }.max(self.last)
+        if key > 0.0 {
+            key.to_bits()
+        } else {
+            0
+        }
     }
 
     /// Queues `item` at `key`; returns the key as queued (`due`).
     #[inline(always)]
     fn push(&mut self, key: f64, item: u64) -> u64 {
         let key = self.due(key);
+        if key < self.last {
+            self.behind.push(std::cmp::Reverse((key, item)));
+            return key;
+        }
         let b = Self::bin(key, self.last);
         self.bins[b].push((key, item));
         self.full |= 1 << b;
@@ -563,6 +584,9 @@ impl Radix {
 
     /// The least key queued.
     fn peek(&mut self) -> Option<f64> {
+        if let Some(std::cmp::Reverse((key, _))) = self.behind.peek() {
+            return Some(f64::from_bits(*key));
+        }
         if !self.settle() {
             return None;
         }
@@ -572,6 +596,13 @@ impl Radix {
     /// Takes an entry of the least key if that is at most `bound`.
     #[inline(always)]
     fn pop_to(&mut self, bound: f64) -> Option<(f64, u64)> {
+        if let Some(&std::cmp::Reverse((key, item))) = self.behind.peek() {
+            if f64::from_bits(key) > bound {
+                return None;
+            }
+            self.behind.pop();
+            return Some((f64::from_bits(key), item));
+        }
         if !self.settle() || self.bins[0].last().is_none_or(|e| f64::from_bits(e.0) > bound) {
             return None;
         }
@@ -782,6 +813,8 @@ struct Work {
     /// Per vertex, the distance it last emitted at (a pseudo-source emits again only when a
     /// shorter path reaches it, which the other part's late news can bring).
     emitted: Vec<f64>,
+    /// What the early half of a round left for the late half (see `Rounds`): queue entries.
+    deferred: Vec<(f64, u64)>,
     /// What this part tells the other at the end of a round, and the pieces of its joins.
     outbox: Vec<Message>,
     outbox_pieces: Vec<(f64, f64)>,
@@ -820,6 +853,8 @@ struct Run<'a> {
     queue: Radix,
     me: u8,
     budget: usize,
+    /// The budget when the round began.
+    started: usize,
 }
 
 impl<'a> Run<'a> {
@@ -831,6 +866,7 @@ impl<'a> Run<'a> {
         w.emitted.resize(nv, f64::INFINITY);
         w.outbox.clear();
         w.outbox_pieces.clear();
+        w.deferred.clear();
         w.side.truncate(nh);
         w.best.clear();
         w.best.resize(nh, (f64::INFINITY, 0.0));
@@ -848,7 +884,7 @@ impl<'a> Run<'a> {
         queue.clear();
         // A budget for each part: neither can hang.
         let budget = WORK_PER_FACE.saturating_mul(m.faces.len()).max(1_000_000);
-        Run { m, w, queue, me, budget }
+        Run { m, w, queue, me, budget, started: budget }
     }
 
     fn mine(&self, h: usize) -> bool {
@@ -882,10 +918,43 @@ impl<'a> Run<'a> {
         self.queue.push(0.0, EVENT | source as u64);
     }
 
-    /// Takes what is queued up to `bound`; false when the work budget ran out.
+    /// Takes what is queued up to `bound`; false when the work budget ran out. Takes first what
+    /// the round's early half left.
     fn round(&mut self, bound: f64) -> bool {
+        for (key, item) in std::mem::take(&mut self.w.deferred) {
+            if item & EVENT != 0 {
+                self.queue.push(key, item);
+            } else if self.w.side[item as usize].queued == key.to_bits() {
+                // (else a later entry stands for the side)
+                self.w.side[item as usize].queued = self.queue.push(key, item);
+            }
+        }
+        self.take(bound, false)
+    }
+
+    /// The early half of a round in two parts: what is queued up to `bound` that the other
+    /// part's news cannot touch (see `Rounds`); the rest is left to `round`.
+    fn early(&mut self, bound: f64) {
+        self.take(bound, true);
+    }
+
+    /// Takes what is queued up to `bound`, in the `early` half of a round only what the other
+    /// part's news cannot touch; false when the work budget ran out.
+    fn take(&mut self, bound: f64, early: bool) -> bool {
+        let m = self.m;
         let mut budget = self.budget;
         while let Some((key, item)) = self.queue.pop_to(bound) {
+            if early {
+                let later = if item & EVENT != 0 {
+                    m.shared[(item & !EVENT) as usize]
+                } else {
+                    self.w.side[item as usize].queued == key.to_bits() && m.border[item as usize / 3]
+                };
+                if later {
+                    self.w.deferred.push((key, item));
+                    continue;
+                }
+            }
             if item & EVENT != 0 {
                 let v = (item & !EVENT) as usize;
                 // Once per distance: a later, shorter one has its own event. Shorter by no more
@@ -1386,13 +1455,6 @@ enum Split {
 /// `Run::me` of a propagation in one part: every face is its own.
 const WHOLE: u8 = 2;
 
-/// Sides taken per round (both parts) below which the band of distances a round takes is
-/// widened, and four times which it is narrowed: a round's synchronisation (~10 µs) small
-/// against its work, and the order within a band close to the distances' (out of order,
-/// windows are made that a nearer one would have cut: on the bunny 0.74 M sides taken with
-/// rounds of 256–1024, as with 16–64, and 0.88 M with 2048–8192).
-const ROUND_WORK: usize = 256;
-
 /// The propagation from inner vertex `source`: in one part (`Split::Whole`), or in two (the
 /// faces of each `Layout::owner`) that take the queued work in rounds, each round the distances
 /// up to a bound, and exchange their news between rounds; on two threads when `Paired` (until
@@ -1423,22 +1485,24 @@ fn propagate_in_parts(layout: &Layout, works: &mut [Work; 2], source: usize, spl
     ok
 }
 
-/// The rounds left, taken in turn on this thread.
+/// The rounds left, taken in turn on this thread: each part's early half, then each part's late
+/// half, round after round (the order of `Rounds`, so the bits of two threads).
 fn in_turn(a: &mut Run, b: &mut Run, rounds: &mut Rounds) -> bool {
-    let [mail_a, mail_b] = &mut rounds.mail;
-    let (mail_a, mail_b) =
-        (mail_a.get_mut().unwrap_or_else(|e| e.into_inner()), mail_b.get_mut().unwrap_or_else(|e| e.into_inner()));
-    loop {
-        let Some(bound) = rounds.band.bound([a.least(), b.least()], [a.budget, b.budget]) else { break true };
-        let (ra, rb) = (a.round(bound), b.round(bound));
+    // Each part steps its own copy of the band, as on two threads.
+    let mut bands = [rounds.band; 2];
+    let ok = loop {
+        let k = rounds.next;
+        let Some(bound) = rounds.early(a, k, &mut bands[0]) else { break true };
+        let Some(same) = rounds.early(b, k, &mut bands[1]) else { break true };
+        debug_assert_eq!(bound.to_bits(), same.to_bits());
+        let (ra, rb) = (rounds.late(a, 0, k, bound), rounds.late(b, 1, k, bound));
+        rounds.next += 1;
         if !(ra && rb) {
             break false;
         }
-        a.post(mail_a);
-        b.post(mail_b);
-        a.receive(mail_b);
-        b.receive(mail_a);
-    }
+    };
+    rounds.band = bands[0];
+    ok
 }
 
 /// Whether the rounds on two threads so far, `paired` ns, stopped paying against the parts'
@@ -1449,6 +1513,56 @@ fn stops_paying(paired: u64, in_turn: u64) -> bool {
     paired > 5_000_000 && 10 * paired > 9 * in_turn
 }
 
+/// Sides a round takes (both parts) that the band aims at: a round's synchronisation small
+/// against its work, and the order within a band close to the distances' (out of order,
+/// windows are made that a nearer one would have cut: on the bunny 0.73–0.74 M sides taken
+/// with rounds of 256–1024 sides, as with 16–64, and 0.88 M with 2048–8192).
+const ROUND_SIDES: usize = 512;
+
+/// The reports a part keeps: the other reads round k's news in its own round k + 1 and the rest
+/// in its round k + 2, while this part may already write its report of round k + 2 (three would
+/// do; four make the index a mask).
+const REPORTS: usize = 4;
+
+/// The rounds of a propagation in two parts. Part p's round k takes what p's queue holds up to
+/// the round's bound in two halves: early, what the other part's news cannot touch (sides of
+/// faces with no vertex on the other part's faces, pseudo-sources on p's faces only; the rest
+/// is put aside), then, once the other part has ended its round k − 1, late: its news of that
+/// round taken, the rest. So a part whose round was light goes on with the next round's early
+/// half instead of waiting for the other to end its round (waiting for it at every round cost
+/// the bunny 13 % of its time on two threads), while the news still comes one round later, as
+/// when the parts waited. Both parts set round k's bound from both parts' reports of round k − 2 (the
+/// last either knows of the other when it starts round k), each with its own copy of the band,
+/// so the rounds are the same on two threads and on one. Rounds are numbered from 2; the
+/// reports of rounds 0 and 1 are the start (the source queued in both parts).
+struct Rounds {
+    reports: [[Report; REPORTS]; 2],
+    /// Per part, the last round whose report is written.
+    completed: [std::sync::atomic::AtomicU64; 2],
+    /// The next round to take, and the band as set for the one before.
+    next: u64,
+    band: Band,
+}
+
+/// What a part tells of its round: its news (in a mutex, as the other part's thread reads it;
+/// never contended, the rounds keep writing and reading apart) and how it stands after it.
+struct Report {
+    news: std::sync::Mutex<News>,
+    /// Sides taken in the round; `usize::MAX` for the start.
+    done: std::sync::atomic::AtomicUsize,
+    /// The least distance queued after the round, inf when nothing is.
+    least: std::sync::atomic::AtomicU64,
+    /// Nothing queued after the round and no news sent in it: the part has nothing to do but
+    /// what news may bring.
+    idle: std::sync::atomic::AtomicBool,
+}
+
+impl Report {
+    fn start() -> Self {
+        Report { news: Default::default(), done: usize::MAX.into(), least: 0f64.to_bits().into(), idle: false.into() }
+    }
+}
+
 /// A part's messages of a round and the pieces of its joins.
 #[derive(Default)]
 struct News {
@@ -1456,69 +1570,140 @@ struct News {
     pieces: Vec<(f64, f64)>,
 }
 
-/// The band of distances a round takes, adapted to the work of the round before. Each thread
-/// of a pair steps its own copy with the same numbers, so both get the same bounds.
+/// A part's news, as the round it came from left it (a panic there, a bug, is raised on its own).
+fn lock(news: &std::sync::Mutex<News>) -> std::sync::MutexGuard<'_, News> {
+    news.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The bounds of the rounds: each a band beyond the last (or beyond the least distance queued,
+/// when that is further), the band adapted to the work of the rounds.
 #[derive(Clone, Copy)]
 struct Band {
-    width: f64,
-    /// The parts' work budgets left when the last bound was set.
-    budgets: Option<[usize; 2]>,
+    /// The bands of the last two rounds, the last first.
+    widths: [f64; 2],
+    bound: f64,
 }
 
 impl Band {
-    /// The next round's bound, from the parts' least queued distances and budgets left; None
-    /// when nothing is queued.
-    fn bound(&mut self, least: [f64; 2], budgets: [usize; 2]) -> Option<f64> {
-        if let Some(before) = self.budgets {
-            let done = before[0] - budgets[0] + before[1] - budgets[1];
-            if done < ROUND_WORK {
-                self.width *= 2.0;
-            } else if done > 4 * ROUND_WORK {
-                self.width *= 0.5;
-            }
+    /// A round's bound from both parts' reports of two rounds before (`done` sides between them,
+    /// the `least` distance queued in either); None when both were idle then: nothing is queued
+    /// and no news is on its way, so the rounds are over. The band is that round's, scaled to
+    /// the work it took (within a factor of two), not the last round's: the last one's work is
+    /// not known yet, and stepping its band by what an older round took would overshoot.
+    fn next(&mut self, done: Option<usize>, least: f64, idle: bool) -> Option<f64> {
+        if idle {
+            return None;
         }
-        self.budgets = Some(budgets);
-        let lo = least[0].min(least[1]);
-        (lo < f64::INFINITY).then_some(lo + self.width)
+        let before = self.widths[1];
+        let width = match done {
+            Some(done) => before * (ROUND_SIDES as f64 / done.max(1) as f64).clamp(0.5, 2.0),
+            None => before,
+        };
+        self.widths = [width, self.widths[0]];
+        self.bound = if least < f64::INFINITY { self.bound.max(least) } else { self.bound } + width;
+        Some(self.bound)
     }
-}
-
-/// The rounds of a propagation in two parts: the band, and each part's news of its last round
-/// (in a mutex, as the other part's thread reads it; never contended, the rounds' barriers
-/// keep writing and reading apart).
-struct Rounds {
-    band: Band,
-    mail: [std::sync::Mutex<News>; 2],
 }
 
 impl Rounds {
     fn new(layout: &Layout) -> Self {
-        Rounds { band: Band { width: layout.mean_edge, budgets: None }, mail: Default::default() }
-    }
-}
-
-/// A barrier of two threads that spins (a round lasts tens of microseconds; waking a sleeping
-/// thread would cost as much), yielding the core after a while in case it is shared.
-struct SpinBarrier {
-    arrived: std::sync::atomic::AtomicUsize,
-    generation: std::sync::atomic::AtomicUsize,
-}
-
-impl SpinBarrier {
-    fn new() -> Self {
-        SpinBarrier { arrived: 0.into(), generation: 0.into() }
-    }
-
-    fn wait(&self) {
-        use std::sync::atomic::Ordering::{AcqRel, Acquire, Release};
-        let generation = self.generation.load(Acquire);
-        if self.arrived.fetch_add(1, AcqRel) == 1 {
-            self.arrived.store(0, Release);
-            self.generation.fetch_add(1, Release);
-            return;
+        Rounds {
+            reports: std::array::from_fn(|_| std::array::from_fn(|_| Report::start())),
+            completed: [1.into(), 1.into()],
+            next: 2,
+            band: Band { widths: [layout.mean_edge; 2], bound: 0.0 },
         }
+    }
+
+    fn report(&self, part: usize, round: u64) -> &Report {
+        &self.reports[part][(round % REPORTS as u64) as usize]
+    }
+
+    /// The early half of a part's round k on `run`: the bound set from the reports of round
+    /// k − 2 (on `band`, the part's copy), and what the other part's news cannot touch taken. None
+    /// when the rounds are over, else the bound.
+    fn early(&self, run: &mut Run, k: u64, band: &mut Band) -> Option<f64> {
+        use std::sync::atomic::Ordering::Relaxed;
+        let before = [0, 1].map(|q| self.report(q, k - 2));
+        let done =
+            before.iter().map(|r| r.done.load(Relaxed)).try_fold(0usize, |sum, d| (d != usize::MAX).then(|| sum + d));
+        let least = before.iter().map(|r| f64::from_bits(r.least.load(Relaxed))).fold(f64::INFINITY, f64::min);
+        let bound = band.next(done, least, before.iter().all(|r| r.idle.load(Relaxed)))?;
+        run.started = run.budget;
+        run.early(bound);
+        Some(bound)
+    }
+
+    /// The late half: the other part's news of round k − 1 taken, then the rest up to `bound`,
+    /// and the round reported. False when the work budget ran out. The other part's report of
+    /// round k − 1 must be written.
+    fn late(&self, run: &mut Run, p: usize, k: u64, bound: f64) -> bool {
+        use std::sync::atomic::Ordering::{Relaxed, Release};
+        run.receive(&lock(&self.report(1 - p, k - 1).news));
+        let ok = run.round(bound);
+        let mine = self.report(p, k);
+        let sent = {
+            let mut news = lock(&mine.news);
+            run.post(&mut news);
+            !news.messages.is_empty()
+        };
+        let least = run.least();
+        mine.done.store(run.started - run.budget, Relaxed);
+        mine.least.store(least.to_bits(), Relaxed);
+        mine.idle.store(least == f64::INFINITY && !sent, Relaxed);
+        self.completed[p].store(k, Release);
+        ok
+    }
+}
+
+/// How a part left its rounds on two threads.
+enum Left {
+    Done,
+    Failed,
+    /// Stopped before this round: two threads stopped paying.
+    Stopped(u64),
+}
+
+/// A thread's part of the rounds on two threads: its rounds from `rounds.next` on, before each
+/// round's late half waiting until the other part has reported the round before. Leaves when
+/// the rounds are over, when either part fails, or at `stop_at`. `judge`, given the time since
+/// the start and this thread's own time in its rounds, says when to stop (three rounds on, so
+/// that the other thread, which reads `stop_at` after waiting for this one, stops at the same
+/// round). Returns how it left, its band, and the payload of a panic (a bug) in its rounds.
+fn take_rounds(
+    rounds: &Rounds,
+    run: &mut Run,
+    p: usize,
+    failed: &std::sync::atomic::AtomicBool,
+    stop_at: &std::sync::atomic::AtomicU64,
+    mut judge: impl FnMut(u64, u64) -> bool,
+) -> (Left, Band, Option<Box<dyn std::any::Any + Send>>) {
+    use std::panic::{catch_unwind, AssertUnwindSafe};
+    use std::sync::atomic::Ordering::{Acquire, Relaxed};
+    use std::time::Instant;
+    let (started, mut busy, mut band) = (Instant::now(), 0u64, rounds.band);
+    let mut k = rounds.next;
+    loop {
+        if failed.load(Relaxed) {
+            return (Left::Failed, band, None);
+        }
+        if k >= stop_at.load(Relaxed) {
+            return (Left::Stopped(k), band, None);
+        }
+        let round = Instant::now();
+        let bound = match catch_unwind(AssertUnwindSafe(|| rounds.early(run, k, &mut band))) {
+            Ok(None) => return (Left::Done, band, None),
+            Ok(Some(bound)) => bound,
+            Err(payload) => {
+                failed.store(true, Relaxed);
+                return (Left::Failed, band, Some(payload));
+            }
+        };
+        busy += round.elapsed().as_nanos() as u64;
         let mut spins = 0u32;
-        while self.generation.load(Acquire) == generation {
+        while rounds.completed[1 - p].load(Acquire) + 1 < k && !failed.load(Relaxed) {
+            // A round lasts tens of microseconds: spin rather than sleep, but yield the core
+            // after a while in case it is shared.
             spins += 1;
             if spins < 1 << 14 {
                 std::hint::spin_loop();
@@ -1526,125 +1711,53 @@ impl SpinBarrier {
                 std::thread::yield_now();
             }
         }
+        if failed.load(Relaxed) {
+            return (Left::Failed, band, None);
+        }
+        let round = Instant::now();
+        match catch_unwind(AssertUnwindSafe(|| rounds.late(run, p, k, bound))) {
+            Ok(true) => {}
+            Ok(false) => {
+                failed.store(true, Relaxed);
+                return (Left::Failed, band, None);
+            }
+            Err(payload) => {
+                failed.store(true, Relaxed);
+                return (Left::Failed, band, Some(payload));
+            }
+        }
+        busy += round.elapsed().as_nanos() as u64;
+        // Decided after round k is reported: the other part waits for round k + 1's report
+        // before it starts round k + 3, so both stop there.
+        if stop_at.load(Relaxed) == u64::MAX && judge(started.elapsed().as_nanos() as u64, busy) {
+            stop_at.store(k + 3, Relaxed);
+        }
+        k += 1;
     }
 }
 
-/// What the two threads of a pair tell each other between the barriers of a round: each part's
-/// least queued distance and budget left (after taking its news), whether a round failed or
-/// panicked, and whether the pair stops (the first thread's judgement).
-struct Shared {
-    barrier: SpinBarrier,
-    least: [std::sync::atomic::AtomicU64; 2],
-    budgets: [std::sync::atomic::AtomicUsize; 2],
-    failed: std::sync::atomic::AtomicBool,
-    stop: std::sync::atomic::AtomicBool,
-    /// The second thread's time in its last round, ns.
-    b_time: std::sync::atomic::AtomicU64,
-}
-
-/// How a thread of a pair left the rounds.
-enum Left {
-    Done,
-    Failed,
-    Stopped,
-}
-
-/// One thread's side of the rounds on two threads: part `me` (0 or 1) of `run`, with its own copy
-/// of the band. Each round: past the first barrier, both know both parts' least distances and
-/// budgets (so both set the same bound) and whether to leave; each takes its round and posts its
-/// news; past the second, each takes the other's news on its own thread, where its own data are
-/// in cache, and tells the other its least distance and budget. `judge` (the first thread's)
-/// is given the part's own time in the round and the round's, and says whether to stop.
-fn take_rounds(
-    run: &mut Run,
-    me: usize,
-    mut band: Band,
-    mail: &[std::sync::Mutex<News>; 2],
-    shared: &Shared,
-    mut judge: impl FnMut(u64, u64) -> bool,
-) -> (Left, Band, Option<Box<dyn std::any::Any + Send>>) {
-    use std::panic::{catch_unwind, AssertUnwindSafe};
-    use std::sync::atomic::Ordering::Relaxed;
-    use std::time::Instant;
-    let lock = |k: usize| mail[k].lock().unwrap_or_else(|e| e.into_inner());
-    let mut panic = None;
-    let tell = |run: &mut Run| {
-        shared.least[me].store(run.least().to_bits(), Relaxed);
-        shared.budgets[me].store(run.budget, Relaxed);
-    };
-    tell(run);
-    let left = loop {
-        shared.barrier.wait();
-        if shared.failed.load(Relaxed) {
-            break Left::Failed;
-        }
-        if shared.stop.load(Relaxed) {
-            break Left::Stopped;
-        }
-        let least = [0, 1].map(|k| f64::from_bits(shared.least[k].load(Relaxed)));
-        let budgets = [0, 1].map(|k| shared.budgets[k].load(Relaxed));
-        let Some(bound) = band.bound(least, budgets) else { break Left::Done };
-        let started = Instant::now();
-        let round = catch_unwind(AssertUnwindSafe(|| {
-            let ok = run.round(bound);
-            run.post(&mut lock(me));
-            ok
-        }));
-        let took = started.elapsed().as_nanos() as u64;
-        match round {
-            Ok(true) => {}
-            Ok(false) => shared.failed.store(true, Relaxed),
-            Err(payload) => {
-                shared.failed.store(true, Relaxed);
-                panic = Some(payload);
-            }
-        }
-        if me == 1 {
-            shared.b_time.store(took, Relaxed);
-        }
-        shared.barrier.wait();
-        if judge(took, started.elapsed().as_nanos() as u64) {
-            shared.stop.store(true, Relaxed);
-        }
-        if panic.is_none() {
-            if let Err(payload) = catch_unwind(AssertUnwindSafe(|| run.receive(&lock(1 - me)))) {
-                shared.failed.store(true, Relaxed);
-                panic = Some(payload);
-            }
-        }
-        tell(run);
-    };
-    (left, band, panic)
-}
-
-/// The rounds with part `b` on a thread of its own (see `take_rounds`). Some(ok) when the rounds
+/// The rounds with part `b` on a thread of its own (see `Rounds`). Some(ok) when the rounds
 /// are done. The second thread pays only while the machine gives each thread a core: once the
 /// rounds stop paying, the second thread stops and None tells the caller to take the rest in
 /// turn (on the bunny, with the machine's other core busy, the pair took 1.3–5× one thread's
 /// time; with this, one thread's). `gives_up` is `stops_paying`, or a test's judge.
 fn in_two_threads(a: &mut Run, b: &mut Run, rounds: &mut Rounds, gives_up: fn(u64, u64) -> bool) -> Option<bool> {
     use std::panic::resume_unwind;
-    use std::sync::atomic::Ordering::Relaxed;
-    let shared = Shared {
-        barrier: SpinBarrier::new(),
-        least: Default::default(),
-        budgets: Default::default(),
-        failed: false.into(),
-        stop: false.into(),
-        b_time: 0.into(),
-    };
-    let (band, mail) = (rounds.band, &rounds.mail);
-    // The rounds' time on two threads against the parts' own times (what taking them in turn
-    // would cost, about).
-    let (mut paired, mut in_turn) = (0u64, 0u64);
-    let judge = |a_time: u64, round: u64| {
-        paired += round;
-        in_turn += a_time + shared.b_time.load(Relaxed);
-        gives_up(paired, in_turn)
-    };
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
+    let (failed, stop_at, b_busy) = (AtomicBool::new(false), AtomicU64::new(u64::MAX), AtomicU64::new(0));
+    let shared = &*rounds;
+    // The rounds' time on two threads against the parts' own times summed (what taking them
+    // in turn would cost, about).
+    let judge = |paired: u64, a_busy: u64| gives_up(paired, a_busy + b_busy.load(Relaxed));
     let ((left, band, a_panic), b_panic) = std::thread::scope(|scope| {
-        let second = scope.spawn(|| take_rounds(b, 1, band, mail, &shared, |_, _| false).2);
-        let first = take_rounds(a, 0, band, mail, &shared, judge);
+        let second = scope.spawn(|| {
+            take_rounds(shared, b, 1, &failed, &stop_at, |_, busy| {
+                b_busy.store(busy, Relaxed);
+                false
+            })
+            .2
+        });
+        let first = take_rounds(shared, a, 0, &failed, &stop_at, judge);
         (first, second.join().ok().flatten())
     });
     if let Some(payload) = a_panic.or(b_panic) {
@@ -1654,7 +1767,10 @@ fn in_two_threads(a: &mut Run, b: &mut Run, rounds: &mut Rounds, gives_up: fn(u6
     match left {
         Left::Done => Some(true),
         Left::Failed => Some(false),
-        Left::Stopped => None,
+        Left::Stopped(k) => {
+            rounds.next = k;
+            None
+        }
     }
 }
 
