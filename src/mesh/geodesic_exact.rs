@@ -1017,7 +1017,7 @@ impl<'a> Run<'a> {
             let opposite = 3 * f + (k + 1) % 3;
             let Half { len, cx, cy, .. } = m.half[opposite];
             if cy > SLIVER * len {
-                self.spawn(opposite, 0.0, len, cx, -cy, dv);
+                self.spawn(opposite, 0.0, len, cx, -cy, dv, self.ends(opposite));
             } else if cx > 0.0 && cx < len {
                 // v lies on the edge: it sees the faces beyond directly.
                 for (t, same) in m.others(opposite) {
@@ -1041,10 +1041,10 @@ impl<'a> Run<'a> {
         self.relax(apex, dv + hyp(cx - x, cy));
         let (left, right) = (3 * f + (i + 2) % 3, 3 * f + (i + 1) % 3);
         if let Some((sx, sy)) = self.source_on_left(left, cx, cy, x, 0.0) {
-            self.spawn(left, 0.0, m.half[left].len, sx, sy, dv);
+            self.spawn(left, 0.0, m.half[left].len, sx, sy, dv, self.ends(left));
         }
         if let Some((sx, sy)) = self.source_on_right(right, len, cx, cy, x, 0.0) {
-            self.spawn(right, 0.0, m.half[right].len, sx, sy, dv);
+            self.spawn(right, 0.0, m.half[right].len, sx, sy, dv, self.ends(right));
         }
     }
 
@@ -1104,20 +1104,24 @@ impl<'a> Run<'a> {
         }
         mine.clear();
         self.w.spare.push(mine);
+        let apex = face[(h + 2) % 3] as usize;
         if best.0 < self.w.best[h].0 {
             self.w.best[h] = best;
-            self.relax(face[(h + 2) % 3] as usize, best.0);
+            self.relax(apex, best.0);
         }
+        // The corners' distances as the children's rule 1 sees them: nothing the batch does
+        // from here on changes a vertex distance.
+        let corners = [da, db, self.w.d[apex]];
         for c in &batch {
-            self.cross(h, c, best);
+            self.cross(h, c, best, corners);
         }
         self.w.batch = batch;
     }
 
     /// Sends the part [b0, b1] of a window on `h` (in h's frame) across h's face: splits by
     /// rule 2 against the best path `best` to the apex and makes the children on the face's
-    /// other two edges.
-    fn cross(&mut self, h: usize, c: &Crossing, best: (f64, f64)) {
+    /// other two edges. `corners`: the distances of h's start, end and apex.
+    fn cross(&mut self, h: usize, c: &Crossing, best: (f64, f64), corners: [f64; 3]) {
         let m = self.m;
         let (f, i) = (h / 3, h % 3);
         let Half { len: l, cx, cy, .. } = m.half[h];
@@ -1137,7 +1141,7 @@ impl<'a> Run<'a> {
             let mu = |x: f64| on_edge(sy * x, cx * sy + cy * (x - sx));
             let far = if left_end == xc { Some(1.0) } else { mu(left_end) };
             if let (Some(near), Some(far), Some((tx, ty))) = (mu(b0), far, self.source_on_left(left, cx, cy, sx, sy)) {
-                self.spawn(left, (1.0 - far) * lca, (1.0 - near) * lca, tx, ty, sigma);
+                self.spawn(left, (1.0 - far) * lca, (1.0 - near) * lca, tx, ty, sigma, [corners[2], corners[0]]);
             }
         }
         if right_start < b1 {
@@ -1149,14 +1153,22 @@ impl<'a> Run<'a> {
             if let (Some(near), Some(far), Some((tx, ty))) =
                 (nu(b1), far, self.source_on_right(right, l, cx, cy, sx, sy))
             {
-                self.spawn(right, near * lbc, far * lbc, tx, ty, sigma);
+                self.spawn(right, near * lbc, far * lbc, tx, ty, sigma, [corners[1], corners[2]]);
             }
         }
     }
 
+    /// The distances of half-edge `h`'s start and end.
+    fn ends(&self, h: usize) -> [f64; 2] {
+        let face = self.m.faces[h / 3];
+        [self.w.d[face[h % 3] as usize], self.w.d[face[(h + 1) % 3] as usize]]
+    }
+
     /// A window leaving its face through half-edge `h` on [t0, t1] of h's frame, source (sx, sy)
-    /// with the face on −y: for each face beyond, rule 3 and the queue.
-    fn spawn(&mut self, h: usize, t0: f64, t1: f64, sx: f64, sy: f64, sigma: f64) {
+    /// with the face on −y: for each face beyond, rule 3 and the queue. `ends`: the distances of
+    /// h's start and end (`Run::ends`).
+    #[allow(clippy::too_many_arguments)]
+    fn spawn(&mut self, h: usize, t0: f64, t1: f64, sx: f64, sy: f64, sigma: f64, ends: [f64; 2]) {
         let m = self.m;
         let l = m.half[h].len;
         if !(sy < 0.0 && l > 0.0 && sx.is_finite()) {
@@ -1166,8 +1178,7 @@ impl<'a> Run<'a> {
         // Rule 1 already here, with the edge ends' distances as they are now: a window the ends
         // beat is never merged or queued.
         let slack = self.slack(sigma + l);
-        let (da, db) = (self.w.d[m.start(h) as usize], self.w.d[m.start(3 * (h / 3) + (h + 1) % 3) as usize]);
-        let Some([t0, t1, f0, f1]) = cut_ends(sx, sy, sigma, l, da, db, t0, t1, slack) else {
+        let Some([t0, t1, f0, f1]) = cut_ends(sx, sy, sigma, l, ends[0], ends[1], t0, t1, slack) else {
             return;
         };
         if !(t1 - t0 > MIN_WIDTH * l) {
