@@ -78,7 +78,7 @@
 //! faces and new distances of vertices on both. A round has two halves: first what the part had
 //! queued, then, with the other's news of the round before, what that brings; so a part whose
 //! round was light goes on with the next round's first half instead of waiting (`Rounds`). On
-//! two threads the parts run at once (one source on the bunny 1.7× faster than on one), on one
+//! two threads the parts run at once (one source on the bunny 1.8× faster than on one), on one
 //! in turn, and in turn too once two threads stop paying (when another program keeps the
 //! second core busy); nothing depends on the threads, so neither do the distances. Out of order within a band, a part may settle a
 //! pseudo-source before a shorter path to it arrives from the other: it then emits again, at
@@ -1478,7 +1478,7 @@ fn in_turn(a: &mut Run, b: &mut Run, rounds: &mut Rounds) -> bool {
 /// Whether the rounds on two threads so far, `paired` ns, stopped paying against the parts'
 /// own times summed, `in_turn` ns (about what taking them in turn costs): after some rounds,
 /// so that one slow round does not decide, when they saved less than a tenth. Unloaded, two
-/// threads take 0.58–0.59 of the sum on the bunny.
+/// threads take about 0.55 of the sum on the bunny.
 fn stops_paying(paired: u64, in_turn: u64) -> bool {
     paired > 5_000_000 && 10 * paired > 9 * in_turn
 }
