@@ -80,21 +80,22 @@
 //! round was light goes on with the next round's first half instead of waiting (`Rounds`). On
 //! two threads the parts run at once (one source on the bunny 1.8× faster than on one), on one
 //! in turn, and in turn too once two threads stop paying (when another program keeps the
-//! second core busy); nothing depends on the threads, so neither do the distances. Out of order within a band, a part may settle a
-//! pseudo-source before a shorter path to it arrives from the other: it then emits again, at
-//! the shorter distance, and what it emitted before loses to that (a pseudo-source too early
-//! costs time, never accuracy). A source's row alone and in a batch are the same up to
-//! rounding.
+//! second core busy); nothing depends on the threads, so neither do the distances. Out of
+//! order within a band, a part may settle a pseudo-source before a shorter path to it arrives
+//! from the other: it then emits again, at the shorter distance, and what it emitted before
+//! loses to that (a pseudo-source too early costs time, never accuracy). A source's row alone
+//! and in a batch are the same up to rounding.
 //!
 //! The work: on the Stanford bunny (69 451 faces, about half its vertices saddles) the distance
 //! field along the edges has some 14 pieces per edge (Kirsanov's MMP ends with 1.455 million
 //! intervals), and every one has to cross its face once (this code: 1.55 million crossings per
 //! source); the cost is per window: memory traffic and square roots. So the faces are
 //! renumbered along a Morton curve of their centroids, a half-edge's data sits together, the
-//! queue is a radix heap (distances mostly grow; what comes in behind, a binary heap), a side's list of pieces is taken from a pool of
-//! emptied lists when its first window comes and given back when it has crossed (only the
-//! front holds storage, and it is warm in cache), every square root a window's tests share is
-//! taken once, and the buffers are kept from one source to the next.
+//! queue is a radix heap (distances mostly grow; what comes in behind waits in a binary heap), a
+//! side's list of pieces is taken from a pool of emptied lists when its first window comes and
+//! given back when it has crossed (only the front holds storage, and it is warm in cache), every
+//! square root a window's tests share is taken once, and the buffers are kept from one source to
+//! the next.
 //!
 //! Degenerate input: a non-manifold edge passes each window on to every other face on it. A
 //! vertex on a boundary or non-manifold edge, where the faces around it are not one fan, or on a
@@ -504,8 +505,8 @@ struct Radix {
     full: u64,
     /// Entries queued below `last`, which a radix heap cannot order: the other part's news, which
     /// comes after this part has gone on, and a child that rounding put a hair below its parent;
-    /// taken first, in order (taken at `last` instead, out of order, the other part's news made
-    /// the propagation run away).
+    /// taken first, in order (taken at `last` instead, out of order, they once made the two parts'
+    /// work run away).
     behind: std::collections::BinaryHeap<std::cmp::Reverse<(u64, u64)>>,
 }
 
@@ -1462,12 +1463,15 @@ fn in_turn(a: &mut Run, b: &mut Run, rounds: &mut Rounds) -> bool {
     let mut bands = [rounds.band; 2];
     let ok = loop {
         let k = rounds.next;
-        let Some(bound) = rounds.early(a, k, &mut bands[0]) else { break true };
-        let Some(same) = rounds.early(b, k, &mut bands[1]) else { break true };
+        let Some((bound, ea)) = rounds.early(a, k, &mut bands[0]) else { break true };
+        let Some((same, eb)) = rounds.early(b, k, &mut bands[1]) else { break true };
         debug_assert_eq!(bound.to_bits(), same.to_bits());
-        let (ra, rb) = (rounds.late(a, 0, k, bound), rounds.late(b, 1, k, bound));
+        if !(ea && eb) {
+            break false;
+        }
+        let (la, lb) = (rounds.late(a, 0, k, bound), rounds.late(b, 1, k, bound));
         rounds.next += 1;
-        if !(ra && rb) {
+        if !(la && lb) {
             break false;
         }
     };
@@ -1485,8 +1489,9 @@ fn stops_paying(paired: u64, in_turn: u64) -> bool {
 
 /// Sides a round takes (both parts) that the band aims at: a round's synchronisation small
 /// against its work, and the order within a band close to the distances' (out of order,
-/// windows are made that a nearer one would have cut: on the bunny 0.73–0.74 M sides taken
-/// with rounds of 256–1024 sides, as with 16–64, and 0.88 M with 2048–8192).
+/// windows are made that a nearer one would have cut: on the bunny 0.74 M sides taken with
+/// rounds of 256–1024 sides, as with 16–64, and 0.88 M with 2048–8192; aiming at 256–2048
+/// changes the time by 1 %).
 const ROUND_SIDES: usize = 512;
 
 /// The reports a part keeps: the other reads round k's news in its own round k + 1 and the rest
@@ -1591,8 +1596,8 @@ impl Rounds {
 
     /// The early half of a part's round k on `run`: the bound set from the reports of round
     /// k − 2 (on `band`, the part's copy), and what the part has queued up to it taken. None when
-    /// the rounds are over, else the bound.
-    fn early(&self, run: &mut Run, k: u64, band: &mut Band) -> Option<f64> {
+    /// the rounds are over, else the bound and whether the work budget held.
+    fn early(&self, run: &mut Run, k: u64, band: &mut Band) -> Option<(f64, bool)> {
         use std::sync::atomic::Ordering::Relaxed;
         let before = [0, 1].map(|q| self.report(q, k - 2));
         let done =
@@ -1600,8 +1605,7 @@ impl Rounds {
         let least = before.iter().map(|r| f64::from_bits(r.least.load(Relaxed))).fold(f64::INFINITY, f64::min);
         let bound = band.next(done, least, before.iter().all(|r| r.idle.load(Relaxed)))?;
         run.started = run.budget;
-        run.round(bound);
-        Some(bound)
+        Some((bound, run.round(bound)))
     }
 
     /// The late half: the other part's news of round k − 1 taken, then what it queued up to
@@ -1663,7 +1667,11 @@ fn take_rounds(
         let round = Instant::now();
         let bound = match catch_unwind(AssertUnwindSafe(|| rounds.early(run, k, &mut band))) {
             Ok(None) => return (Left::Done, band, None),
-            Ok(Some(bound)) => bound,
+            Ok(Some((bound, true))) => bound,
+            Ok(Some((_, false))) => {
+                failed.store(true, Relaxed);
+                return (Left::Failed, band, None);
+            }
             Err(payload) => {
                 failed.store(true, Relaxed);
                 return (Left::Failed, band, Some(payload));
@@ -2155,6 +2163,36 @@ mod tests {
             assert!(in_turn(&mut a, &mut b, &mut rounds));
             let row = layout.inner.iter().map(|&i| a.w.d[i as usize].min(b.w.d[i as usize]));
             assert!(row.zip(&alone[0]).all(|(x, y)| x.to_bits() == y.to_bits()), "source {s}");
+        }
+    }
+
+    /// A propagation whose work budget runs out says so, in one part and in two, in turn and on
+    /// two threads (the budget only guards against a pathological mesh looping for ever; here it
+    /// is cut to a few sides of the bumpy grid, which needs thousands).
+    #[test]
+    fn a_propagation_out_of_its_work_budget_fails() {
+        let (mut v, f) = grid(60, 60, 0.5);
+        v.iter_mut().for_each(|p| p[2] = 0.2 * (1.3 * p[0]).sin() * (1.1 * p[1]).cos());
+        let layout = Layout::new(&v, &f);
+        let inner = layout.inner[1830] as usize;
+        let mut w = Work::default();
+        let mut whole = Run::new(&layout, &mut w, WHOLE);
+        whole.budget = 200;
+        whole.start(inner);
+        assert!(!whole.round(f64::INFINITY));
+        for paired in [false, true] {
+            let (mut w0, mut w1) = (Work::default(), Work::default());
+            let (mut a, mut b) = (Run::new(&layout, &mut w0, 0), Run::new(&layout, &mut w1, 1));
+            (a.budget, b.budget) = (200, 200);
+            a.start(inner);
+            b.start(inner);
+            let mut rounds = Rounds::new(&layout);
+            let ok = if paired {
+                in_two_threads(&mut a, &mut b, &mut rounds, |_, _| false)
+            } else {
+                Some(in_turn(&mut a, &mut b, &mut rounds))
+            };
+            assert_eq!(ok, Some(false), "paired: {paired}");
         }
     }
 
