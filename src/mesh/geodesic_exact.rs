@@ -1630,6 +1630,28 @@ impl Rounds {
     }
 }
 
+/// The payload of a panic in a part's rounds (a bug), raised again on the caller's thread.
+type Panic = Box<dyn std::any::Any + Send>;
+
+/// Runs a half of a round on two threads, `half` giving what it found and whether the work
+/// budget held: Err when the budget ran out or it panicked (with the payload), the other part
+/// told by `failed`.
+fn held<T>(
+    failed: &std::sync::atomic::AtomicBool,
+    half: impl FnOnce() -> (T, bool),
+) -> std::result::Result<T, Option<Panic>> {
+    use std::panic::{catch_unwind, AssertUnwindSafe};
+    let outcome = catch_unwind(AssertUnwindSafe(half));
+    if !matches!(outcome, Ok((_, true))) {
+        failed.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+    match outcome {
+        Ok((found, true)) => Ok(found),
+        Ok((_, false)) => Err(None),
+        Err(payload) => Err(Some(payload)),
+    }
+}
+
 /// How a part left its rounds on two threads.
 enum Left {
     Done,
@@ -1651,8 +1673,7 @@ fn take_rounds(
     failed: &std::sync::atomic::AtomicBool,
     stop_at: &std::sync::atomic::AtomicU64,
     mut judge: impl FnMut(u64, u64) -> bool,
-) -> (Left, Band, Option<Box<dyn std::any::Any + Send>>) {
-    use std::panic::{catch_unwind, AssertUnwindSafe};
+) -> (Left, Band, Option<Panic>) {
     use std::sync::atomic::Ordering::{Acquire, Relaxed};
     use std::time::Instant;
     let (started, mut busy, mut band) = (Instant::now(), 0u64, rounds.band);
@@ -1665,17 +1686,12 @@ fn take_rounds(
             return (Left::Stopped(k), band, None);
         }
         let round = Instant::now();
-        let bound = match catch_unwind(AssertUnwindSafe(|| rounds.early(run, k, &mut band))) {
+        let early =
+            held(failed, || rounds.early(run, k, &mut band).map_or((None, true), |(bound, ok)| (Some(bound), ok)));
+        let bound = match early {
+            Ok(Some(bound)) => bound,
             Ok(None) => return (Left::Done, band, None),
-            Ok(Some((bound, true))) => bound,
-            Ok(Some((_, false))) => {
-                failed.store(true, Relaxed);
-                return (Left::Failed, band, None);
-            }
-            Err(payload) => {
-                failed.store(true, Relaxed);
-                return (Left::Failed, band, Some(payload));
-            }
+            Err(panic) => return (Left::Failed, band, panic),
         };
         busy += round.elapsed().as_nanos() as u64;
         let mut spins = 0u32;
@@ -1693,16 +1709,8 @@ fn take_rounds(
             return (Left::Failed, band, None);
         }
         let round = Instant::now();
-        match catch_unwind(AssertUnwindSafe(|| rounds.late(run, p, k, bound))) {
-            Ok(true) => {}
-            Ok(false) => {
-                failed.store(true, Relaxed);
-                return (Left::Failed, band, None);
-            }
-            Err(payload) => {
-                failed.store(true, Relaxed);
-                return (Left::Failed, band, Some(payload));
-            }
+        if let Err(panic) = held(failed, || ((), rounds.late(run, p, k, bound))) {
+            return (Left::Failed, band, panic);
         }
         busy += round.elapsed().as_nanos() as u64;
         // Decided after round k is reported: the other part waits for round k + 1's report
