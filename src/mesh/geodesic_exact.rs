@@ -809,6 +809,13 @@ struct Work {
     /// Per vertex, the distance it last emitted at (a pseudo-source emits again only when a
     /// shorter path reaches it, which the other part's late news can bring).
     emitted: Vec<f64>,
+    /// The sides a batch crossing its face (or a pseudo-source emitting) has given windows to,
+    /// each queued once when the batch is done, at the least distance of all it gave. Queued
+    /// again at each window that came in lower, as a batch's windows mostly do, a source on the
+    /// bunny made 0.76 M queue entries for 0.11 M crossings, 0.61 M of them stale, and the radix
+    /// heap moved entries 4.8 M times; once per batch, 0.23 M, 0.08 M and 0.9 M (8–10 % less
+    /// time, on one thread and on two).
+    touched: Vec<u32>,
     /// What this part tells the other at the end of a round, and the pieces of its joins.
     outbox: Vec<Message>,
     outbox_pieces: Vec<(f64, f64)>,
@@ -860,6 +867,7 @@ impl<'a> Run<'a> {
         w.emitted.resize(nv, f64::INFINITY);
         w.outbox.clear();
         w.outbox_pieces.clear();
+        w.touched.clear();
         w.side.truncate(nh);
         w.best.clear();
         w.best.resize(nh, (f64::INFINITY, 0.0));
@@ -924,6 +932,7 @@ impl<'a> Run<'a> {
                 if before == f64::INFINITY || dv < before - self.slack(before) {
                     self.w.emitted[v] = dv;
                     self.emit(v, dv);
+                    self.queue_touched();
                 }
             } else {
                 if budget == 0 {
@@ -932,6 +941,7 @@ impl<'a> Run<'a> {
                 }
                 budget -= 1;
                 self.propagate(key, item as usize);
+                self.queue_touched();
             }
         }
         self.budget = budget;
@@ -977,6 +987,7 @@ impl<'a> Run<'a> {
                 Message::EmitFromEdge { t, x, dv } => self.emit_from_edge(t as usize, x, dv),
             }
         }
+        self.queue_touched();
     }
 
     #[inline(always)]
@@ -984,6 +995,28 @@ impl<'a> Run<'a> {
         if took && self.queue.due(least) < self.w.side[t].queued {
             self.w.side[t].queued = self.queue.push(least, t as u64);
         }
+    }
+
+    /// `queue_side` while a batch crosses its face: the side is queued when the batch is done
+    /// (`queue_touched`), at the least of what it took.
+    #[inline(always)]
+    fn touch_side(&mut self, t: usize, took: bool, least: f64) {
+        let due = self.queue.due(least);
+        if took && due < self.w.side[t].queued {
+            self.w.side[t].queued = due;
+            if !self.w.touched.contains(&(t as u32)) {
+                self.w.touched.push(t as u32);
+            }
+        }
+    }
+
+    /// Queues the sides the batch gave windows to.
+    fn queue_touched(&mut self) {
+        for &t in &self.w.touched {
+            let t = t as usize;
+            self.queue.push(f64::from_bits(self.w.side[t].queued), t as u64);
+        }
+        self.w.touched.clear();
     }
 
     /// A pseudo-source `v` at its final distance: its neighbours along the edges, and one window
@@ -1220,7 +1253,7 @@ impl<'a> Run<'a> {
             // On a manifold edge the one other side of t is h, the side w comes from; mostly
             // nothing waits there.
             let took = self.merge(t, &w, w.b0, w.b1, l, slack);
-            return self.queue_side(t, took, least);
+            return self.touch_side(t, took, least);
         }
         self.w.pieces.clear();
         self.w.pieces.push((w.b0, w.b1));
@@ -1250,7 +1283,7 @@ impl<'a> Run<'a> {
             took |= self.merge(t, &w, b0, b1, l, slack);
         }
         self.w.pieces = pieces;
-        self.queue_side(t, took, least);
+        self.touch_side(t, took, least);
     }
 
     /// Rule 3 across the edge (of length `l`): cuts `self.w.pieces` (of `w`, on a side of the
