@@ -164,7 +164,7 @@ def geodesic_distances(
     ``method="exact"`` (default): the length of the shortest path along the polyhedral surface, by window
     propagation (Mitchell–Mount–Papadimitriou, with the Chen–Han / Xin–Wang pruning): straight inside every
     face, bending only at saddle and boundary vertices. Equals pygeodesic (Kirsanov's MMP) to 1e-9. One
-    source alone is propagated in two halves of the mesh on two threads (1.8× faster on the bunny; on
+    source alone is propagated in two halves of the mesh on two threads (1.6–1.8× faster on the bunny; on
     meshes of 2,048 faces and more, and back on one thread when another program keeps the second core
     busy); its row equals the same source's row in a call with several up to rounding (~1e-15 of the
     distances).

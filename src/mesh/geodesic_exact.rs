@@ -78,8 +78,8 @@
 //! faces and new distances of vertices on both. A round has two halves: first what the part had
 //! queued, then, with the other's news of the round before, what that brings; so a part whose
 //! round was light goes on with the next round's first half instead of waiting (`Rounds`). On
-//! two threads the parts run at once (one source on the bunny 1.8× faster than on one), on one
-//! in turn, and in turn too once two threads stop paying (when another program keeps the
+//! two threads the parts run at once (one source on the bunny 1.6–1.8× faster than on one), on
+//! one in turn, and in turn too once two threads stop paying (when another program keeps the
 //! second core busy); nothing depends on the threads, so neither do the distances. Out of
 //! order within a band, a part may settle a pseudo-source before a shorter path to it arrives
 //! from the other: it then emits again, at the shorter distance, and what it emitted before
@@ -91,11 +91,11 @@
 //! intervals), and every one has to cross its face once (this code: 1.55 million crossings per
 //! source); the cost is per window: memory traffic and square roots. So the faces are
 //! renumbered along a Morton curve of their centroids, a half-edge's data sits together, the
-//! queue is a radix heap (distances mostly grow; what comes in behind waits in a binary heap), a
-//! side's list of pieces is taken from a pool of emptied lists when its first window comes and
-//! given back when it has crossed (only the front holds storage, and it is warm in cache), every
-//! square root a window's tests share is taken once, and the buffers are kept from one source to
-//! the next.
+//! queue is a radix heap (distances mostly grow; what comes in behind waits in a binary heap)
+//! in which a batch queues each side it gave windows to once, when it is done; a side's list of
+//! pieces is taken from a pool of emptied lists when its first window comes and given back when
+//! it has crossed (only the front holds storage, and it is warm in cache), every square root a
+//! window's tests share is taken once, and the buffers are kept from one source to the next.
 //!
 //! Degenerate input: a non-manifold edge passes each window on to every other face on it. A
 //! vertex on a boundary or non-manifold edge, where the faces around it are not one fan, or on a
