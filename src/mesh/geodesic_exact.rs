@@ -53,8 +53,9 @@
 //! 1. *Edge ends* [XW09]: vertex A reaches the point x of its edge at d(A) + x. Since f(x) − x
 //!    does not increase, the points where A wins form a prefix of the window, cut off by solving
 //!    f(x) − x = d(A): x = (sx² + sy² − k²) / (2(k + sx)), k = d(A) − σ. B cuts a suffix alike.
-//!    Applied when a window is made and again when it crosses its face, with the latest
-//!    distances; it is what stops windows that come round again far behind the front.
+//!    Applied when a window is made, with the ends' distances then; it is what stops windows
+//!    that come round again far behind the front (applied again when the window crosses its
+//!    face, with the latest distances, it cut almost nothing).
 //! 2. *One angle, one split* [XW09, QHY16]: per face and entering edge, the best path so far from
 //!    that edge to the apex C, of length D* crossing the edge at q*. A window that reaches C
 //!    longer than D* is beaten by that path wherever its rays cross the segment q*C, so its rays
@@ -1124,9 +1125,9 @@ impl<'a> Run<'a> {
         (l > 0.0).then(|| (((sx - len) * (cx - len) + sy * cy) / l, -((cx - len) * sy - cy * (sx - len)).abs() / l))
     }
 
-    /// Processes the windows waiting on side `h`: cut by the edge's ends (rule 1), they cross the
-    /// face. They go together, the first of them due: they share the face's data in cache, and
-    /// their order among themselves does not matter.
+    /// Processes the windows waiting on side `h`: they cross the face. They go together, the first
+    /// of them due: they share the face's data in cache, and their order among themselves does
+    /// not matter.
     fn propagate(&mut self, key: f64, h: usize) {
         let m = self.m;
         let side = &self.w.side[h];
@@ -1139,8 +1140,6 @@ impl<'a> Run<'a> {
         let mut mine = std::mem::take(&mut self.w.side[h].env);
         let face = m.faces[h / 3];
         let (a, b) = (face[h % 3] as usize, face[(h + 1) % 3] as usize);
-        let l = m.half[h].len;
-        let slack = self.slack(key + l);
         let (da, db) = (self.w.d[a], self.w.d[b]);
         // First the whole batch reaches the apex: its best path is then known before any window
         // splits by rule 2 and before any child is cut by the apex's distance (rule 1).
@@ -1148,13 +1147,10 @@ impl<'a> Run<'a> {
         let mut batch = std::mem::take(&mut self.w.batch);
         batch.clear();
         let mut best = self.w.best[h];
+        // Rule 1 is not applied again here with the ends' latest distances: on the bunny that
+        // dropped 307 of a source's 1.5 M windows, and cost 3.5 % of the time.
         for s in &mine {
-            let Some([b0, b1, ..]) = cut_ends(s.x, s.y, s.sigma, l, da, db, s.b0, s.b1, slack) else {
-                continue;
-            };
-            if !(b1 - b0 > MIN_WIDTH * l) {
-                continue;
-            }
+            let (b0, b1) = (s.b0, s.b1);
             // Straight when the apex's ray crosses the window, else through the nearer end.
             let (sx, sy, sigma) = (s.x, s.y, s.sigma);
             let xc = sx + (cx - sx) * (-sy) / (cy - sy);
