@@ -226,7 +226,7 @@ struct Layout {
 /// Each face's half-edges, and per vertex its corner angles summed and whether it is a
 /// pseudo-source so far (on a face that names a vertex twice or is a sliver). The faces in
 /// parallel, then the angles summed per vertex in face order (the same sums on any number of
-/// threads).
+/// threads; a face that names a vertex twice adds angles of 0).
 fn geometry(points: &[[f64; 3]], faces: &[[u32; 3]]) -> (Vec<Half>, Vec<f64>, Vec<bool>) {
     let p = |v: u32| points[v as usize];
     let mut half = vec![Half::default(); 3 * faces.len()];
@@ -234,6 +234,7 @@ fn geometry(points: &[[f64; 3]], faces: &[[u32; 3]]) -> (Vec<Half>, Vec<f64>, Ve
         .par_chunks_mut(3)
         .zip(faces.par_iter())
         .map(|(half, face)| {
+            // The corners' angles, and whether the face makes its vertices pseudo-sources.
             let mut angle = [0.0; 3];
             if !distinct(face) {
                 return (angle, true);
@@ -256,14 +257,10 @@ fn geometry(points: &[[f64; 3]], faces: &[[u32; 3]]) -> (Vec<Half>, Vec<f64>, Ve
         .collect();
     let mut angle = vec![0.0; points.len()];
     let mut pseudo = vec![false; points.len()];
-    for (face, (a, sliver)) in faces.iter().zip(&corners) {
-        if *sliver || !distinct(face) {
-            face.iter().for_each(|&v| pseudo[v as usize] = true);
-        }
-        if distinct(face) {
-            for i in 0..3 {
-                angle[face[i] as usize] += a[i];
-            }
+    for (face, (a, degenerate)) in faces.iter().zip(&corners) {
+        for i in 0..3 {
+            angle[face[i] as usize] += a[i];
+            pseudo[face[i] as usize] |= *degenerate;
         }
     }
     (half, angle, pseudo)
@@ -835,9 +832,9 @@ struct Work {
     /// The sides a batch crossing its face (or a pseudo-source emitting) has given windows to,
     /// each queued once when the batch is done, at the least distance of all it gave. Queued
     /// again at each window that came in lower, as a batch's windows mostly do, a source on the
-    /// bunny made 0.76 M queue entries for 0.11 M crossings, 0.61 M of them stale, and the radix
-    /// heap moved entries 4.8 M times; once per batch, 0.23 M, 0.08 M and 0.9 M (8–10 % less
-    /// time, on one thread and on two).
+    /// bunny made 0.76 M queue entries for 0.11 M turns of a side, 0.61 M of them stale, and the
+    /// radix heap moved entries 4.8 M times; once per batch, 0.23 M, 0.08 M and 0.9 M (8–10 %
+    /// less time, on one thread and on two).
     touched: Vec<u32>,
     /// What this part tells the other at the end of a round, and the pieces of its joins.
     outbox: Vec<Message>,
