@@ -1017,6 +1017,9 @@ impl<'a> Run<'a> {
         self.queue_touched();
     }
 
+    /// Queues side `t` at `least` now, if it took a window and is not queued lower already. The
+    /// other part's news queues this way: its joins reach many sides, mostly once each, where
+    /// `touch_side`'s look-up of the sides touched so far would grow with the round.
     #[inline(always)]
     fn queue_side(&mut self, t: usize, took: bool, least: f64) {
         if took && self.queue.due(least) < self.w.side[t].queued {
