@@ -167,7 +167,8 @@ def geodesic_distances(
     source alone is propagated in two halves of the mesh on two threads (1.6–1.8× faster on the bunny; on
     meshes of 2,048 faces and more, and back on one thread when another program keeps the second core
     busy); its row equals the same source's row in a call with several up to rounding (~1e-15 of the
-    distances).
+    distances). The propagation's buffers (about 300 bytes per face) are kept for the next call, up to
+    256 MB in all.
 
     ``method="fmm"``: fast marching with the virtual-source update (the point in the triangle's
     plane at the two known distances; exact where that point is seen through the triangle, so a
