@@ -2295,7 +2295,8 @@ mod tests {
                 assert!(again.iter().zip(expected).all(|(x, y)| x.to_bits() == y.to_bits()), "mesh {k}");
             }
         }
-        // And through `KEPT`: a dropped mesh's buffers are there for the next call.
+        // And through `KEPT` (shared with the tests running beside this one): whichever buffers
+        // the next mesh gets, its row is that of fresh ones.
         let used = ExactGeodesics::new(&big.0, &big.1);
         used.distances(&[7, 8]).unwrap();
         drop(used);
