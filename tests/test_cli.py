@@ -360,7 +360,17 @@ def test_compensate_simulate_then_from_its_files_equals_the_library(tmp_path, ca
     p = machscan.compensate_toolpath(tp, grid, m.points, scan)
     np.testing.assert_allclose(b.points, p.points, atol=1e-9)
     report = np.loadtxt(files / "report.csv", delimiter=",", skiprows=1)
-    assert report.shape == (len(tp.points), 12) and report[:, -1].all()
+    assert report.shape == (len(tp.points), 13) and report[:, -2:].all()  # inside, on_scan
+    # Tables without a header line read the same (review, session 15: their first point was dropped); a match
+    # that ends above --max-error is warned about and exits 3.
+    for name in ("locating.csv", "matching.csv"):
+        lines = (sim / name).read_text().splitlines(keepends=True)
+        (tmp_path / name).write_text("".join(lines[1:]))
+    bare = [*args[:3], "--locating", str(tmp_path / "locating.csv"), "--matching", str(tmp_path / "matching.csv")]
+    capsys.readouterr()
+    assert main(["compensate", *bare, "--out", str(tmp_path / "bare"), "--jacobian", "gradient", "--max-error", "1e-9"]) == 3
+    assert "above --max-error" in capsys.readouterr().err
+    np.testing.assert_array_equal(machscan.io.read_toolpath(tmp_path / "bare" / "compensated.cl").points, b.points)
 
 
 def test_compensate_names_a_missing_argument_and_a_bad_table(tmp_path, capsys):

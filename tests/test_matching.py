@@ -187,6 +187,16 @@ def test_bad_arguments_are_refused_by_name(part):
         (dict(spacing=float("nan")), "spacing"),
         (dict(theoretical_locating=loc[[0, 0]]), "theoretical_locating: r1 and r2 coincide"),
         (dict(actual_locating=loc[[1, 1]]), "actual_locating: r1 and r2 coincide"),
+        # Review (session 15): points far off the surface were put on its edge and matched as if right; inf
+        # was reported as coinciding locating points.
+        (dict(theoretical_locating=loc + [1000.0, 0.0, 0.0]), r"theoretical_locating: point 0 .* lies 9\d\d\.\d+ mm from"),
+        (
+            dict(actual_locating=loc + [0.0, 0.0, 5.0]),
+            r"actual_locating: point 0 .* lies 5\.000 mm from the surface, more than 4\.000",
+        ),
+        (dict(theoretical_matching=np.vstack([g, [[1000.0, 0.0, 0.0]]])), r"theoretical_matching: point 9 "),
+        (dict(theoretical_locating=np.vstack([[np.inf, 0.0, 0.0], loc[1]])), "theoretical_locating: must be finite"),
+        (dict(max_edge=0.1), r"max_edge: 0.1 mm left no triangle of theoretical_points \(its Delaunay edges' median is 2"),
         # The quadratic Jacobian's fit is not defined on points along one line (the gradient one is).
         (dict(theoretical_matching=np.c_[np.linspace(-15, 15, 8), np.zeros(8), np.zeros(8)]), "one line or conic"),
     ]

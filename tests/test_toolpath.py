@@ -76,6 +76,56 @@ def test_points_outside_the_matching_hull_are_flagged_not_dropped(skin):
     assert "2 outside" in repr(r)
 
 
+def test_points_that_map_beyond_the_scan_are_flagged(skin):
+    # Review (session 15): with a scan of half the part, the tool points over the other half were put on the
+    # scan's edge, up to 143 mm from the truth, and nothing said so.
+    s, scan, tm, am = skin
+    tools = s.raster(step=20.0, spacing=20.0)
+    half = scan[scan[:, 0] < 0.0]
+    # The matching points on the missing half are off the scan: refused by name.
+    with pytest.raises(ValueError, match=r"^actual_matching: point \d+ .* from the surface"):
+        machscan.compensate_toolpath(tools, tm, am, half)
+    near = tm[:, 0] < 0.0
+    r = machscan.compensate_toolpath(tools, tm[near], am[near], half)
+    truth = s.actual(tools)[0]
+    err = np.linalg.norm(r.points - truth, axis=1)
+    # Beyond the scan's edge (about x = 0 on the part, give or take the 1 mm, 0.5° misplacement and the ragged
+    # outline): flagged; this side of it: not.
+    assert not r.on_scan[tools[:, 0] > 5.0].any()
+    assert r.on_scan[tools[:, 0] < -5.0].all()
+    assert err[r.on_scan & r.inside].max() < 0.050
+    assert f"{int((~r.on_scan).sum())} beyond the scan" in repr(r)
+
+
+def test_a_point_without_a_tool_axis_takes_the_normal_and_keeps_the_others_axes(skin, tmp_path):
+    # Review (session 15): one GOTO/x,y,z among five-axis GOTOs made every programmed axis be dropped.
+    s, scan, tm, am = skin
+    tools = s.raster(step=50.0, spacing=50.0)
+    lead = np.array([0.0, 0.6, 0.8])
+    axes = np.tile(lead, (len(tools), 1))
+    axes[0] = np.nan
+    path = tmp_path / "mixed.cl"
+    machscan.io.write_toolpath(path, tools, axes=axes)
+    mixed = machscan.compensate_toolpath(machscan.io.read_toolpath(path), tm, am, scan)
+    given = machscan.compensate_toolpath(np.hstack([tools, np.tile(lead, (len(tools), 1))]), tm, am, scan)
+    normal = machscan.compensate_toolpath(tools, tm, am, scan)
+    np.testing.assert_allclose(mixed.axes[1:], given.axes[1:], atol=1e-12)
+    np.testing.assert_allclose(mixed.axes[0], normal.axes[0], atol=1e-12)
+    assert angles(mixed.axes[1:], normal.axes[1:]).min() > 30.0
+    # CL files print axes to a few decimals: 0.70711, 0.70711 (length 1 + 4.6e-6) is an axis, normalised.
+    short = np.hstack([tools, np.tile([0.0, 0.70711, 0.70711], (len(tools), 1))])
+    exact = np.hstack([tools, np.tile([0.0, np.sqrt(0.5), np.sqrt(0.5)], (len(tools), 1))])
+    np.testing.assert_allclose(
+        machscan.compensate_toolpath(short, tm, am, scan).axes, machscan.compensate_toolpath(exact, tm, am, scan).axes, atol=1e-9
+    )
+    half_given = np.hstack([tools, axes])
+    half_given[0, 3] = 0.0  # one NaN left in the row: neither an axis nor none
+    with pytest.raises(ValueError, match=r"^tool_points: must be finite, found NaN at row 0, column 4"):
+        machscan.compensate_toolpath(half_given, tm, am, scan)
+    with pytest.raises(ValueError, match=r"^tool_points: the tool axis of point 1 .* length is 1.01"):
+        machscan.compensate_toolpath(np.hstack([tools, 1.01 * axes]), tm, am, scan)
+
+
 def test_a_mesh_a_toolpath_object_and_apt_files_go_through_the_same_way(skin, tmp_path):
     s, scan, tm, am = skin
     tools = s.raster(step=50.0, spacing=25.0)

@@ -143,6 +143,7 @@ class _CompensatedArrays(TypedDict):
     points: _F64
     axes: _F64
     inside: NDArray[np.bool_]
+    on_scan: NDArray[np.bool_]
     offsets: _F64
 
 class _BeadChainArrays(TypedDict):

@@ -13,7 +13,8 @@ machscan allowance MODEL BLANK [--out a.ply]    stock per model point (PLY/PCD/X
 machscan compensate THEORETICAL SCAN TOOLPATH --locating loc.csv --matching match.csv [--out DIR]
                                                 mirror milling: toolpath onto the bent skin (CL)
                                                 and a report; exit status 3 when the match did
-                                                not converge or tool points lie outside the hull
+                                                not converge or ended above --max-error, or tool
+                                                points lie outside the hull or beyond the scan
 machscan compensate --simulate [--out DIR]      the same on the built-in bent skin, with its truth
 machscan batch grooves SCAN... --cad CAD... [--workers N | --scheduler ADDR] [--out DIR]
                                                 the groove inspection over many scans on a Dask
@@ -499,8 +500,23 @@ def _grind(args: argparse.Namespace) -> int:
 
 
 def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
-    """A CSV table of numbers with one header line, of one of ``widths`` columns."""
-    rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    """A CSV table of numbers of one of ``widths`` columns; a first line that is not all numbers is a header."""
+    try:
+        with open(path, encoding="utf-8-sig") as f:
+            first = f.readline()
+    except OSError as e:
+        raise ValueError(f"{name}: cannot read {path} ({e.strerror})") from None
+    try:
+        [float(v) for v in first.split(",")]
+        header = 0
+    except ValueError:
+        header = 1
+    try:
+        rows = np.loadtxt(path, delimiter=",", skiprows=header, ndmin=2, encoding="utf-8-sig")
+    except ValueError as e:
+        raise ValueError(f"{name}: {path} is not a comma-separated table of numbers ({e})") from None
+    if rows.size == 0:
+        raise ValueError(f"{name}: {path} holds no rows of numbers")
     if rows.shape[1] not in widths:
         raise ValueError(f"{name}: {path} has {rows.shape[1]} columns, expected {' or '.join(map(str, widths))}")
     return rows
@@ -561,8 +577,8 @@ def _run_compensation(args, theoretical, scan, locating, matching, toolpath, tru
     moved = np.linalg.norm(path.points - toolpath.points, axis=1)
     _write_table(
         out / "report.csv",
-        "index,x,y,z,compensated_x,compensated_y,compensated_z,i,j,k,moved,inside",
-        np.column_stack([np.arange(len(moved)), toolpath.points, path.points, path.axes, moved, path.inside]),
+        "index,x,y,z,compensated_x,compensated_y,compensated_z,i,j,k,moved,inside,on_scan",
+        np.column_stack([np.arange(len(moved)), toolpath.points, path.points, path.axes, moved, path.inside, path.on_scan]),
     )
     print(
         f"matching  : {len(match.points)} points, T {match.objective[-1] * 1e3:.2f} µm, E {match.max_error[-1] * 1e3:.2f} "
@@ -571,7 +587,8 @@ def _run_compensation(args, theoretical, scan, locating, matching, toolpath, tru
     )
     print(
         f"toolpath  : {len(moved)} points moved by {moved.min():.3f} … {moved.max():.3f} mm, "
-        f"{int((~path.inside).sum())} outside the matching hull, {t2 - t1:.2f} s"
+        f"{int((~path.inside).sum())} outside the matching hull, {int((~path.on_scan).sum())} beyond the scan, "
+        f"{t2 - t1:.2f} s"
     )
     if truth is not None:
         want, normals = truth
@@ -584,14 +601,21 @@ def _run_compensation(args, theoretical, scan, locating, matching, toolpath, tru
             f"({100 * (1 - err.max() / before.max()):.2f} % less)"
         )
     print(f"written   : {out / 'compensated.cl'}, {out / 'matched.csv'}, {out / 'report.csv'}")
-    if not match.converged or not path.inside.all():
-        _warn(
-            "the match did not converge"
-            if not match.converged
-            else "tool points outside the matching hull were extrapolated (report.csv, inside = 0)"
+    problems = []
+    if not match.converged:
+        problems.append("the match did not converge")
+    elif match.max_error[-1] > args.max_error:
+        problems.append(
+            f"the match ended with E {match.max_error[-1] * 1e3:.1f} µm, above --max-error {args.max_error * 1e3:g} µm: "
+            "the matched points are not where the part is"
         )
-        return 3
-    return 0
+    if not path.inside.all():
+        problems.append("tool points outside the matching hull were extrapolated (report.csv, inside = 0)")
+    if not path.on_scan.all():
+        problems.append("tool points map beyond the scan and were put on its edge (report.csv, on_scan = 0)")
+    for problem in problems:
+        _warn(problem)
+    return 3 if problems else 0
 
 
 def _mesh_spacing(text: str) -> float | str | None:
@@ -807,10 +831,16 @@ def build_parser() -> argparse.ArgumentParser:
     co.add_argument("scan", nargs="?", type=Path, help="scan of the clamped skin (PLY/PCD/XYZ/CSV)")
     co.add_argument("toolpath", nargs="?", type=Path, help="toolpath programmed on the theoretical surface (APT/CL)")
     co.add_argument(
-        "--locating", type=Path, help="CSV, 2 rows: theoretical x, y, z and measured actual x, y, z of the locating points"
+        "--locating",
+        type=Path,
+        help="CSV, 2 rows: theoretical x, y, z and measured actual x, y, z of the locating points (a first line that is "
+        "not numbers is a header)",
     )
     co.add_argument(
-        "--matching", type=Path, help="CSV: theoretical matching points x, y, z (and optionally starting actual x, y, z)"
+        "--matching",
+        type=Path,
+        help="CSV: theoretical matching points x, y, z (and optionally starting actual x, y, z; a first line that is not "
+        "numbers is a header)",
     )
     co.add_argument(
         "--out",
@@ -837,6 +867,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="actual surface point and normal (default: %(default)s)",
     )
     co.add_argument("--max-edge", type=float, default=None, help="trim mesh edges longer than this, mm")
+    co.add_argument(
+        "--max-error",
+        type=float,
+        default=0.05,
+        help="largest geodesic distance mismatch E the match may end with, mm; above it the run warns and exits 3 "
+        "(default: %(default)s, the 50 µm a compensated path must meet)",
+    )
     co.add_argument("--simulate", action="store_true", help="run on the built-in bent skin and compare with its truth")
     co.add_argument(
         "--mesh-spacing",

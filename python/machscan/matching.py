@@ -55,7 +55,9 @@ class IsometricMatch:
     stop : str
         See :data:`MatchStop`.
     converged : bool
-        False only when the iteration limit stopped it.
+        False only when the iteration limit stopped it. True also when T stopped falling (``"stalled"``), which is
+        where a noisy scan ends, but also where a method too coarse for the job ends: check ``max_error[-1]``
+        against what the match must reach (``machscan compensate`` refuses above ``--max-error``).
     """
 
     points: NDArray[np.float64]

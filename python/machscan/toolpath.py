@@ -71,8 +71,11 @@ class CompensatedToolpath:
         side) when none were given.
     inside : ndarray of bool, shape (M,)
         False where the point's foot lies outside the xy hull of the theoretical matching points: it was
-        extrapolated, and is only as good as the mapping beyond the last matching points; beyond the scan it
-        lands on the scan's edge (the surface is not extended).
+        extrapolated, and is only as good as the mapping beyond the last matching points.
+    on_scan : ndarray of bool, shape (M,)
+        False where the point maps to where the scan does not reach (farther than half a median edge from the
+        scan mesh: beyond its outline, over a hole): it was put on the scan's nearest edge, which is not where the
+        part is. Rescan there, or leave the point out. Use ``inside & on_scan`` for the points to trust.
     offsets : ndarray, shape (M,)
         Each tool point's offset from the theoretical surface along its normal, mm (negative below it).
     """
@@ -80,11 +83,12 @@ class CompensatedToolpath:
     points: NDArray[np.float64]
     axes: NDArray[np.float64]
     inside: NDArray[np.bool_]
+    on_scan: NDArray[np.bool_]
     offsets: NDArray[np.float64]
 
     def __repr__(self) -> str:
-        out = int((~self.inside).sum())
-        return f"CompensatedToolpath({len(self.points)} points, {out} outside the matching hull)"
+        out, off = int((~self.inside).sum()), int((~self.on_scan).sum())
+        return f"CompensatedToolpath({len(self.points)} points, {out} outside the matching hull, {off} beyond the scan)"
 
 
 def compensate_toolpath(
@@ -103,8 +107,9 @@ def compensate_toolpath(
     Parameters
     ----------
     tool_points : array_like, shape (M, 3) or (M, 6), or :class:`machscan.io.Toolpath`
-        Tool points on or off the theoretical surface, mm, with unit tool axes in columns 3–5 if given (a
-        Toolpath's axes are used when it has them all).
+        Tool points on or off the theoretical surface, mm, with unit tool axes in columns 3–5 if given (normalised;
+        a length more than 1e-3 from 1 is refused). A point whose axis columns are all NaN has no axis of its own,
+        as a Toolpath's ``GOTO/x,y,z`` among five-axis GOTOs: it takes the actual surface normal.
     theoretical_matching, actual_matching : array_like, shape (n, 3)
         The matching pairs: theoretical points (n ≥ 6, not all on one line or conic in xy) and their actual
         places, e.g. :func:`machscan.isometric_match`'s ``.points``.
@@ -126,7 +131,7 @@ def compensate_toolpath(
     Returns
     -------
     CompensatedToolpath
-        ``.points``, ``.axes``, ``.inside``, ``.offsets``.
+        ``.points``, ``.axes``, ``.inside``, ``.on_scan``, ``.offsets``.
 
     Examples
     --------
@@ -136,7 +141,7 @@ def compensate_toolpath(
     """
     if isinstance(tool_points, Toolpath):
         axes = tool_points.axes
-        tool_points = np.hstack([tool_points.points, axes]) if np.isfinite(axes).all() else tool_points.points
+        tool_points = np.hstack([tool_points.points, axes]) if np.isfinite(axes).any() else tool_points.points
     vertices, faces = _surface(actual_surface, "actual_surface")
     out = _core.compensate_toolpath(
         tool_points,

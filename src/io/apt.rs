@@ -4,7 +4,10 @@
 //! Reader: statements may run over several lines (a trailing `$` continues them), `$$` starts
 //! a comment; `GOTO/x, y, z[, i, j, k]` gives a point (and a tool axis), `FEDRAT/f` the feed of
 //! what follows, `RAPID` marks the next move rapid, which starts a new segment; other statements
-//! (`PARTNO`, `MULTAX`, `PPRINT`, `CUTTER`, …) are skipped.
+//! (`PARTNO`, `MULTAX`, `PPRINT`, `CUTTER`, …) are skipped. machscan works in millimetres and
+//! feeds per minute: `UNITS/INCHES` and feeds per revolution or in inches (`FEDRAT/…, IPM`, `IPR`,
+//! `MMPR`) are refused rather than read as mm and mm/min, and so is a file without a GOTO (not a
+//! toolpath, or not this format).
 use crate::error::{Error, Result};
 use std::path::Path;
 
@@ -95,10 +98,29 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
                 tp.feeds.push(feed);
                 tp.segments.push(segment);
             }
+            "UNITS" => {
+                let unit = args.trim().to_ascii_uppercase();
+                if !matches!(unit.as_str(), "MM" | "MILLIMETERS" | "MILLIMETRES") {
+                    return Err(Error::format(
+                        path,
+                        format!("line {start_line}: UNITS/{}: machscan reads toolpaths in millimetres (UNITS/MM); convert the file", args.trim()),
+                    ));
+                }
+            }
             "FEDRAT" => {
-                // FEDRAT/f or FEDRAT/MMPM, f: the last number is the feed.
-                let v: Vec<f64> =
-                    args.split(|c: char| c == ',' || c.is_whitespace()).filter_map(|t| t.parse::<f64>().ok()).collect();
+                // FEDRAT/f, FEDRAT/MMPM, f or FEDRAT/f, MMPM: the last number is the feed, per minute.
+                let words = args.split(|c: char| c == ',' || c.is_whitespace()).filter(|t| !t.is_empty());
+                if let Some(mode) = words
+                    .clone()
+                    .map(str::to_ascii_uppercase)
+                    .find(|t| matches!(t.as_str(), "IPM" | "IPR" | "MMPR" | "INVERS"))
+                {
+                    return Err(Error::format(
+                        path,
+                        format!("line {start_line}: FEDRAT in {mode}: machscan reads feeds in mm per minute (MMPM)"),
+                    ));
+                }
+                let v: Vec<f64> = words.filter_map(|t| t.parse::<f64>().ok()).collect();
                 feed = *v
                     .last()
                     .ok_or_else(|| Error::format(path, format!("line {start_line}: FEDRAT without a feed")))?;
@@ -118,6 +140,9 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
             path,
             format!("line {start_line}: the last statement is continued ($) past the end of the file"),
         ));
+    }
+    if tp.points.is_empty() {
+        return Err(Error::format(path, "no GOTO statement: not an APT/CL toolpath"));
     }
     Ok(tp)
 }
@@ -246,6 +271,21 @@ mod tests {
         let feeds = parse_apt(Path::new("t.apt"), "\u{feff}FEDRAT/50\nGOTO/1,2,3\n").unwrap().feeds;
         assert_eq!(feeds, vec![50.0]);
         assert!(parse_apt(Path::new("t.apt"), "GOTO/1,2,3,0,0,0\n").is_err());
+    }
+
+    /// Inches and feeds per revolution are refused, not read as mm and mm/min; a file without a
+    /// GOTO is not a toolpath.
+    #[test]
+    fn refuses_other_units_and_files_without_a_goto() {
+        let read = |text: &str| parse_apt(Path::new("t.apt"), text);
+        assert!(read("UNITS/MM\nFEDRAT/MMPM,500\nFEDRAT/300,MMPM\nGOTO/1,2,3\n").is_ok());
+        for text in ["UNITS/INCHES\nGOTO/1,2,3\n", "FEDRAT/IPM,50\nGOTO/1,2,3\n", "FEDRAT/0.2,MMPR\nGOTO/1,2,3\n"] {
+            let e = read(text).unwrap_err().to_string();
+            assert!(e.contains("t.apt") && e.contains("line 1"), "{e}");
+        }
+        for text in ["", "PARTNO/X\nFINI\n", "ply\nformat ascii 1.0\nend_header\n1 2 3\n"] {
+            assert!(read(text).unwrap_err().to_string().contains("no GOTO"), "{text:?}");
+        }
     }
 
     /// What the reader gives, the writer takes back: points with and without tool axes mixed.

@@ -14,7 +14,9 @@
 //! the two rings of mesh vertices around p'ⱼ. The Jacobian only steers the steps: both end at
 //! the same matched points; the gradient takes fewer steps.
 use crate::error::{check_finite_points, Error, Result};
-use crate::mesh::{closest_points, geodesic_distances, insert_points, GeodesicMethod, XyLocator};
+use crate::mesh::{
+    closest_points, geodesic_distances, insert_points, off_surface, off_surface_limit, GeodesicMethod, XyLocator,
+};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix6, Vector2, Vector6};
 
 /// A points that lands this close (mm) to a mesh vertex or edge is put on it, not beside it.
@@ -404,9 +406,16 @@ fn start_by_locating(t_loc: &[[f64; 3]; 2], a_loc: &[[f64; 3]; 2], t_match: &[[f
         .collect()
 }
 
+/// Puts the given points on the surface (their closest points), refusing one farther from it
+/// than `off_surface_limit`.
 fn onto(surface: Surface<'_>, name: &str, points: &[[f64; 3]]) -> Result<Vec<[f64; 3]>> {
     check_finite_points(name, points)?;
-    Ok(closest_points(surface.vertices, surface.faces, points)?.into_iter().map(|c| c.point).collect())
+    let closest = closest_points(surface.vertices, surface.faces, points)?;
+    let limit = off_surface_limit(surface.vertices, surface.faces);
+    if let Some((i, c)) = closest.iter().enumerate().find(|(_, c)| !(c.distance <= limit)) {
+        return Err(off_surface(name, i, points[i], c.distance, limit));
+    }
+    Ok(closest.into_iter().map(|c| c.point).collect())
 }
 
 /// Matches the theoretical matching points onto the actual surface (module docs).
@@ -442,6 +451,7 @@ pub fn isometric_match(
         }
     }
     for (name, p) in [("theoretical_locating", theoretical_locating), ("actual_locating", actual_locating)] {
+        check_finite_points(name, p)?;
         // The start and the frame of eq 11 need the direction r1 → r2 in xy.
         let scale = p.iter().flatten().fold(1.0f64, |m, c| m.max(c.abs()));
         if (p[1][0] - p[0][0]).hypot(p[1][1] - p[0][1]) <= 1e-9 * scale {

@@ -55,6 +55,17 @@ pub fn surface_faces(
         None => delaunay_xy(points, max_edge).map_err(renamed)?,
     };
     if faces.is_empty() {
+        if let Some(limit) = max_edge {
+            // Delaunay gave triangles (the points passed its checks); the trim took them all.
+            let all = delaunay_xy(points, None).map_err(renamed)?;
+            return Err(Error::invalid(
+                "max_edge",
+                format!(
+                    "{limit} mm left no triangle of {name} (its Delaunay edges' median is {:.4} mm)",
+                    median_edge(points, &all)
+                ),
+            ));
+        }
         return Err(Error::invalid(name, "the surface has no triangles"));
     }
     Ok(faces)
@@ -95,6 +106,31 @@ impl Spacing {
 /// bridged: trimming every long edge made geodesics go round a clamp's 12 mm shadow and the
 /// match stalled at E 1.8 mm (found in review, 2026-11-23).
 pub const EDGE_TRIM: f64 = 4.0;
+
+/// The least distance (mm) from a surface at which a point that should lie on it is refused
+/// (`off_surface_limit`).
+pub const OFF_SURFACE_MM: f64 = 1.0;
+
+/// How far from a surface mesh a point that should lie on it (a locating or matching point) may
+/// be: two median edges of the mesh, at least `OFF_SURFACE_MM`. A point just beyond the outline
+/// of a scan is on the part (the outermost points of a scan lie up to a spacing or two inside its
+/// edge, more where the laser loses the edge); one farther off is a wrong point (its units, a
+/// typo), whose closest point, on the surface's edge, would be used as if it were right.
+pub fn off_surface_limit(points: &[[f64; 3]], faces: &[[u32; 3]]) -> f64 {
+    (2.0 * median_edge(points, faces)).max(OFF_SURFACE_MM)
+}
+
+/// The error for point `i` of argument `name`, `distance` from the surface (`off_surface_limit`).
+pub fn off_surface(name: &str, i: usize, p: [f64; 3], distance: f64, limit: f64) -> crate::error::Error {
+    crate::error::Error::invalid(
+        name,
+        format!(
+            "point {i} ({:.3}, {:.3}, {:.3}) lies {distance:.3} mm from the surface, more than {limit:.3} mm (two median edges of \
+             the surface mesh, at least {OFF_SURFACE_MM} mm): it is not on the part (check its coordinates and units)",
+            p[0], p[1], p[2]
+        ),
+    )
+}
 
 /// The median length of the triangles' edges (each inner edge counted twice; on big meshes
 /// over a sample of about 20 000 triangles, evenly spread); 0 without triangles.

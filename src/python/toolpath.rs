@@ -65,6 +65,7 @@ fn compensate_toolpath<'py>(
     d.set_item("points", points_to_numpy(py, r.points)?)?;
     d.set_item("axes", points_to_numpy(py, r.axes)?)?;
     d.set_item("inside", to_numpy(py, r.inside, &[m])?)?;
+    d.set_item("on_scan", to_numpy(py, r.on_scan, &[m])?)?;
     d.set_item("offsets", to_numpy(py, r.offsets, &[m])?)?;
     Ok(d)
 }

@@ -29,8 +29,8 @@ pub mod grinding;
 pub mod scallop;
 pub mod spline;
 
-use crate::error::{check_finite, check_finite_points, check_positive, Error, Result};
-use crate::mesh::{delaunay_xy, median_edge, TriangleBvh, XyLocator};
+use crate::error::{check_finite_points, check_positive, Error, Result};
+use crate::mesh::{delaunay_xy, median_edge, off_surface, off_surface_limit, TriangleBvh, XyLocator};
 use crate::spatial::PointIndex;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
@@ -79,6 +79,14 @@ pub struct CompensateOptions {
 
 /// Fewest scan points a local quadric is fitted to: 6 coefficients, with room for noise.
 const QUADRIC_POINTS: usize = 12;
+/// How far from 1 a given tool axis's length may be: CL files print axes to 4–6 decimals
+/// (0.70711, 0.70711 has length 1 + 4.6e-6); each is normalised, so only a length this far off
+/// says the columns are not an axis.
+const AXIS_TOLERANCE: f64 = 1e-3;
+/// How far a mapped point may lie from the scan mesh, in median edge lengths of the mesh, and
+/// still count as on the scan (`Compensated::on_scan`): the mapping's own error is microns, a
+/// scan's points lie within a fraction of their spacing of its mesh.
+const OFF_SCAN_EDGES: f64 = 0.5;
 /// How many times the foot of an offset tool point is refined (the normal at the foot moves it).
 const FOOT_ITERATIONS: usize = 4;
 
@@ -87,8 +95,21 @@ pub struct Compensated {
     pub points: Vec<[f64; 3]>,
     pub axes: Vec<[f64; 3]>,
     pub inside: Vec<bool>,
+    /// Whether the mapped point lies on the scan: within `OFF_SCAN_EDGES` median edges of the
+    /// scan mesh. Where it does not, the scan does not cover it and the point was put on the
+    /// scan's edge nearest to it, which is not where the part is.
+    pub on_scan: Vec<bool>,
     /// Each tool point's offset h (mm) along the theoretical normal.
     pub offsets: Vec<f64>,
+}
+
+/// One tool point compensated (a row of `Compensated`).
+struct Placed {
+    point: [f64; 3],
+    axis: [f64; 3],
+    inside: bool,
+    on_scan: bool,
+    offset: f64,
 }
 
 /// The theoretical side of the mapping: the surface between the matching points, and where
@@ -127,16 +148,18 @@ struct ActualSurface<'a> {
 }
 
 impl ActualSurface<'_> {
-    /// The surface point near `q` and its normal.
-    fn project(&self, q: Vector3<f64>, normals: Normals) -> (Vector3<f64>, Vector3<f64>) {
+    /// The surface point near `q`, its normal, and the distance from `q` to the scan mesh.
+    fn project(&self, q: Vector3<f64>, normals: Normals) -> (Vector3<f64>, Vector3<f64>, f64) {
         let c = self.bvh.closest(&q.into());
         let f = self.faces[c.triangle].map(|v| Vector3::from(self.vertices[v as usize]));
         let triangle_normal = upward((f[1] - f[0]).cross(&(f[2] - f[0])).normalize());
         let on_mesh = Vector3::from(c.point);
-        if normals == Normals::Triangle {
-            return (on_mesh, triangle_normal);
-        }
-        self.quadric(on_mesh, triangle_normal).unwrap_or((on_mesh, triangle_normal))
+        let (point, normal) = if normals == Normals::Triangle {
+            (on_mesh, triangle_normal)
+        } else {
+            self.quadric(on_mesh, triangle_normal).unwrap_or((on_mesh, triangle_normal))
+        };
+        (point, normal, c.distance)
     }
 
     /// A quadric height field over the plane of the scan points within `radius` of `q` (over a
@@ -203,25 +226,31 @@ pub fn compensate_toolpath(
     actual_faces: &[[u32; 3]],
     options: CompensateOptions,
 ) -> Result<Compensated> {
-    match tool_axes {
-        // As the user gave them, (x, y, z, i, j, k) rows: a bad axis is named by its column.
-        Some(a) => {
-            let rows: Vec<f64> = tool_points.iter().zip(a).flat_map(|(p, x)| p.iter().chain(x).copied()).collect();
-            check_finite("tool_points", &rows, 6)?;
-            check_finite_points("tool_points", tool_points)?;
+    check_finite_points("tool_points", tool_points)?;
+    if let Some(a) = tool_axes {
+        for (i, x) in a.iter().enumerate() {
+            // A row of three NaN: the point has no axis of its own (a `GOTO/x,y,z` among
+            // five-axis ones); the actual normal is its axis.
+            if x.iter().all(|c| c.is_nan()) {
+                continue;
+            }
+            if let Some(k) = x.iter().position(|c| !c.is_finite()) {
+                return Err(Error::invalid(
+                    "tool_points",
+                    format!("must be finite, found {} at row {i}, column {} (a point without a tool axis has NaN in all three of columns 3–5)", x[k], 3 + k),
+                ));
+            }
+            let norm = Vector3::from(*x).norm();
+            if (norm - 1.0).abs() > AXIS_TOLERANCE {
+                return Err(Error::invalid(
+                    "tool_points",
+                    format!("the tool axis of point {i} (columns 3–5) is not a unit vector: its length is {norm}, more than {AXIS_TOLERANCE} from 1"),
+                ));
+            }
         }
-        None => check_finite_points("tool_points", tool_points)?,
     }
     check_finite_points("theoretical_matching", theoretical_matching)?;
     check_finite_points("actual_matching", actual_matching)?;
-    if let Some(a) = tool_axes {
-        if let Some(i) = a.iter().position(|x| (Vector3::from(*x).norm() - 1.0).abs() > 1e-6) {
-            return Err(Error::invalid(
-                "tool_points",
-                format!("the tool axis of point {i} (columns 3–5) is not a unit vector"),
-            ));
-        }
-    }
     let n = theoretical_matching.len();
     if actual_matching.len() != n {
         return Err(Error::invalid(
@@ -258,10 +287,17 @@ pub fn compensate_toolpath(
         Error::Invalid { name, reason } => Error::invalid(&format!("actual_surface ({name})"), reason),
         other => other,
     })?;
-    let radius = match options.radius {
-        Some(r) => r,
-        None => 5.0 * median_edge(actual_vertices, actual_faces),
-    };
+    let edge = median_edge(actual_vertices, actual_faces);
+    let radius = options.radius.unwrap_or(5.0 * edge);
+    // The actual matching points lie on the scan (`isometric_match` puts them there); one off it
+    // is a wrong point, and the mapping would carry the toolpath to it.
+    let limit = off_surface_limit(actual_vertices, actual_faces);
+    for (i, p) in actual_matching.iter().enumerate() {
+        let d = bvh.closest(p).distance;
+        if !(d <= limit) {
+            return Err(off_surface("actual_matching", i, *p, d, limit));
+        }
+    }
     let actual = ActualSurface {
         vertices: actual_vertices,
         faces: actual_faces,
@@ -294,7 +330,7 @@ pub fn compensate_toolpath(
             }
         }
     };
-    let results: Vec<([f64; 3], [f64; 3], bool, f64)> = tool_points
+    let results: Vec<Placed> = tool_points
         .par_iter()
         .enumerate()
         .map(|(i, t)| {
@@ -320,21 +356,23 @@ pub fn compensate_toolpath(
                 ));
             }
             let inside = hull.locate(xy.0, xy.1).is_some();
-            let (a, na) = actual.project(mapped, options.normals);
-            let axis = match tool_axes {
-                Some(axes) => {
-                    Rotation3::rotation_between(&nt, &na).unwrap_or_else(Rotation3::identity) * Vector3::from(axes[i])
+            let (a, na, off) = actual.project(mapped, options.normals);
+            let on_scan = off <= OFF_SCAN_EDGES * edge;
+            let axis = match tool_axes.map(|axes| axes[i]) {
+                Some(given) if !given[0].is_nan() => {
+                    Rotation3::rotation_between(&nt, &na).unwrap_or_else(Rotation3::identity) * Vector3::from(given)
                 }
-                None => na,
+                _ => na,
             };
-            Ok(((a + h * na).into(), axis.normalize().into(), inside, h))
+            Ok(Placed { point: (a + h * na).into(), axis: axis.normalize().into(), inside, on_scan, offset: h })
         })
         .collect::<Result<_>>()?;
     Ok(Compensated {
-        points: results.iter().map(|r| r.0).collect(),
-        axes: results.iter().map(|r| r.1).collect(),
-        inside: results.iter().map(|r| r.2).collect(),
-        offsets: results.iter().map(|r| r.3).collect(),
+        points: results.iter().map(|r| r.point).collect(),
+        axes: results.iter().map(|r| r.axis).collect(),
+        inside: results.iter().map(|r| r.inside).collect(),
+        on_scan: results.iter().map(|r| r.on_scan).collect(),
+        offsets: results.iter().map(|r| r.offset).collect(),
     })
 }
 
