@@ -392,9 +392,23 @@ def test_compensate_names_a_missing_argument_and_a_bad_table(tmp_path, capsys):
     ]
     assert main(["compensate", *args]) == 2
     assert "--locating" in capsys.readouterr().err
-    with pytest.raises(SystemExit) as exit_:
-        main(["compensate", "--simulate", "--mesh-spacing", "fine"])
-    assert exit_.value.code == 2 and "--mesh-spacing" in capsys.readouterr().err
+    # Review (session 15): errors name the option or the file, not NumPy's or the library's argument.
+    for table, says in ((tmp_path / "none.csv", "--locating: cannot read"), (tmp_path / "empty.csv", "holds no rows")):
+        if table.name == "empty.csv":
+            table.write_text("x,y,z,ax,ay,az\n")
+        assert main(["compensate", *args[:3], "--locating", str(table), "--matching", str(bad)]) == 2
+        assert says in capsys.readouterr().err
+    noisy = grid.copy()
+    noisy[5, 2] = np.nan
+    np.savetxt(tmp_path / "nan.xyz", noisy)
+    assert main(["compensate", args[0], str(tmp_path / "nan.xyz"), *args[2:]]) == 2
+    assert "SCAN: " in capsys.readouterr().err
+    assert main(["compensate", "--simulate", "--scan-spacing", "0", "--out", str(tmp_path / "s")]) == 2
+    assert "--scan-spacing" in capsys.readouterr().err
+    for spacing in ("fine", "0"):
+        with pytest.raises(SystemExit) as exit_:
+            main(["compensate", "--simulate", "--mesh-spacing", spacing])
+        assert exit_.value.code == 2 and "--mesh-spacing" in capsys.readouterr().err
 
 
 def test_grind_writes_the_path_table_and_report_from_an_allowance_file(tmp_path, capsys):

@@ -27,6 +27,7 @@ import argparse
 import os
 import sys
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import get_args
@@ -506,13 +507,12 @@ def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
             first = f.readline()
     except OSError as e:
         raise ValueError(f"{name}: cannot read {path} ({e.strerror})") from None
+    # A header names the columns: a first line with letters other than a number's (e, inf, nan) in it.
+    header = int(any(c.isalpha() for c in first.lower().replace("e", "").replace("inf", "").replace("nan", "")))
     try:
-        [float(v) for v in first.split(",")]
-        header = 0
-    except ValueError:
-        header = 1
-    try:
-        rows = np.loadtxt(path, delimiter=",", skiprows=header, ndmin=2, encoding="utf-8-sig")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": said below, by name
+            rows = np.loadtxt(path, delimiter=",", skiprows=header, ndmin=2, encoding="utf-8-sig")
     except ValueError as e:
         raise ValueError(f"{name}: {path} is not a comma-separated table of numbers ({e})") from None
     if rows.size == 0:
@@ -530,6 +530,10 @@ def _compensate(args: argparse.Namespace) -> int:
     if args.theoretical is None or args.scan is None or args.toolpath is None or args.locating is None or args.matching is None:
         raise ValueError("compensate: give THEORETICAL SCAN TOOLPATH --locating and --matching (or --simulate)")
     theoretical, scan = read_points(args.theoretical), read_points(args.scan)
+    for name, path, points in (("THEORETICAL", args.theoretical, theoretical), ("SCAN", args.scan, scan)):
+        bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
+        if bad.size:
+            raise ValueError(f"{name}: {path} has {bad.size} points that are not finite, the first at row {bad[0]}")
     locating = _read_rows(args.locating, "--locating", (6,))
     if len(locating) != 2:
         raise ValueError(f"--locating: {args.locating} has {len(locating)} rows, expected the 2 locating points")
@@ -623,15 +627,20 @@ def _mesh_spacing(text: str) -> float | str | None:
     if text in ("auto", "all"):
         return None if text == "all" else text
     try:
-        return float(text)
+        mm = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected auto, all or a spacing in mm, got {text!r}") from None
+        mm = float("nan")
+    if not (np.isfinite(mm) and mm > 0):
+        raise argparse.ArgumentTypeError(f"expected auto, all or a positive spacing in mm, got {text!r}")
+    return mm
 
 
 def _compensate_simulated(args: argparse.Namespace) -> int:
     from machscan.io import Toolpath, write_points, write_toolpath
     from machscan.synth import BentSkin, misplacement
 
+    if not (np.isfinite(args.scan_spacing) and args.scan_spacing > 0):
+        raise ValueError(f"--scan-spacing: must be a positive number of mm, got {args.scan_spacing:g}")
     skin = BentSkin(pose=misplacement(args.seed, translation=1.0, rotation=np.deg2rad(0.5)))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
