@@ -403,8 +403,9 @@ def test_compensate_names_a_missing_argument_and_a_bad_table(tmp_path, capsys):
     np.savetxt(tmp_path / "nan.xyz", noisy)
     assert main(["compensate", args[0], str(tmp_path / "nan.xyz"), *args[2:]]) == 2
     assert "SCAN: " in capsys.readouterr().err
-    assert main(["compensate", "--simulate", "--scan-spacing", "0", "--out", str(tmp_path / "s")]) == 2
-    assert "--scan-spacing" in capsys.readouterr().err
+    for option in ("--scan-spacing", "--max-error"):
+        assert main(["compensate", "--simulate", option, "nan", "--out", str(tmp_path / "s")]) == 2
+        assert option in capsys.readouterr().err
     for spacing in ("fine", "0"):
         with pytest.raises(SystemExit) as exit_:
             main(["compensate", "--simulate", "--mesh-spacing", spacing])

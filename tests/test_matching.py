@@ -209,6 +209,14 @@ def test_bad_arguments_are_refused_by_name(part):
         machscan.isometric_match(t, t, loc, loc, bad)
 
 
+def test_a_point_off_the_scan_is_measured_against_the_scans_spacing_not_the_thinned_mesh(part):
+    # Review (session 15): the limit came from the mesh thinned for the geodesics (~5.5 mm edges on this part),
+    # so a locating point 8 mm off the 1.3 mm scan passed.
+    _skin, theoretical, scan, r, r_actual, grid = part
+    with pytest.raises(ValueError, match=r"^actual_locating: point 1 .* lies [45]\.\d+ mm from the surface, more than [23]\."):
+        machscan.isometric_match(theoretical, scan, r, r_actual + [[0.0, 0.0, 0.0], [0.0, 0.0, 5.0]], grid)
+
+
 def test_bent_skin_refuses_a_spacing_that_is_not_positive():
     for spacing in (0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="spacing"):

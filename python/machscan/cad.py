@@ -101,9 +101,7 @@ def read_contours_apt(path: str | os.PathLike[str], split_distance: float = 5.0)
     """
     from machscan.io import read_toolpath
 
-    tp = read_toolpath(path)
-    if len(tp.points) == 0:
-        raise ValueError(f"{os.fspath(path)}: no GOTO points")
+    tp = read_toolpath(path)  # refuses a file without a GOTO
     jumps = np.linalg.norm(np.diff(tp.points, axis=0), axis=1) > split_distance
     breaks = np.nonzero(jumps | (np.diff(tp.segments) != 0))[0] + 1
     return [c for c in np.split(tp.points, breaks) if len(c) > 0]

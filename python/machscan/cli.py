@@ -501,22 +501,37 @@ def _grind(args: argparse.Namespace) -> int:
 
 
 def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
-    """A CSV table of numbers of one of ``widths`` columns; a first line that is not all numbers is a header."""
+    """A CSV table of numbers of one of ``widths`` columns; ``#`` starts a comment; a first line with a field
+    that is not a number and letters in it is a header (``x,y,z``)."""
     try:
-        with open(path, encoding="utf-8-sig") as f:
-            first = f.readline()
+        # Numbers are ASCII: a header or comment in another encoding (µ, ° in cp1252) must not stop the read.
+        text = Path(path).read_bytes().decode("utf-8-sig", errors="replace")
     except OSError as e:
         raise ValueError(f"{name}: cannot read {path} ({e.strerror})") from None
-    # A header names the columns: a first line with letters other than a number's (e, inf, nan) in it.
-    header = int(any(c.isalpha() for c in first.lower().replace("e", "").replace("inf", "").replace("nan", "")))
+    lines = text.splitlines()
+    start = next((i for i, line in enumerate(lines) if line.split("#")[0].strip()), len(lines))
+    first = lines[start].split("#")[0] if start < len(lines) else ""
+
+    def number(field: str) -> bool:
+        try:
+            float(field)
+            return True
+        except ValueError:
+            return False
+
+    header = not all(number(f) for f in first.split(",")) and any(c.isalpha() for c in first)
+    body = lines[start + 1 :] if header else lines
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # "input contained no data": said below, by name
-            rows = np.loadtxt(path, delimiter=",", skiprows=header, ndmin=2, encoding="utf-8-sig")
+            rows = np.loadtxt(body, delimiter=",", ndmin=2, comments="#")
     except ValueError as e:
         raise ValueError(f"{name}: {path} is not a comma-separated table of numbers ({e})") from None
     if rows.size == 0:
         raise ValueError(f"{name}: {path} holds no rows of numbers")
+    bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
+    if bad.size:
+        raise ValueError(f"{name}: {path}: row {bad[0]} of its numbers is not finite")
     if rows.shape[1] not in widths:
         raise ValueError(f"{name}: {path} has {rows.shape[1]} columns, expected {' or '.join(map(str, widths))}")
     return rows
@@ -525,6 +540,8 @@ def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
 def _compensate(args: argparse.Namespace) -> int:
     from machscan.io import read_points, read_toolpath
 
+    if not (np.isfinite(args.max_error) and args.max_error > 0):
+        raise ValueError(f"--max-error: must be a positive number of mm, got {args.max_error:g}")
     if args.simulate:
         return _compensate_simulated(args)
     if args.theoretical is None or args.scan is None or args.toolpath is None or args.locating is None or args.matching is None:

@@ -57,7 +57,7 @@ class IsometricMatch:
     converged : bool
         False only when the iteration limit stopped it. True also when T stopped falling (``"stalled"``), which is
         where a noisy scan ends, but also where a method too coarse for the job ends: check ``max_error[-1]``
-        against what the match must reach (``machscan compensate`` refuses above ``--max-error``).
+        against what the match must reach (``machscan compensate`` warns and exits 3 above ``--max-error``).
     """
 
     points: NDArray[np.float64]
@@ -153,7 +153,8 @@ def isometric_match(
     ------
     ValueError
         An argument of the wrong shape, not finite, an ``actual_initial`` point outside the actual surface's xy
-        outline, locating or matching points the surface does not join, a bad option.
+        outline, a locating or matching point farther from its surface than two median edges of the surface as given
+        (at least 1 mm: a wrong point, its units, a typo), points the surface does not join, a bad option.
 
     Examples
     --------

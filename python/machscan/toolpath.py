@@ -73,9 +73,9 @@ class CompensatedToolpath:
         False where the point's foot lies outside the xy hull of the theoretical matching points: it was
         extrapolated, and is only as good as the mapping beyond the last matching points.
     on_scan : ndarray of bool, shape (M,)
-        False where the point maps to where the scan does not reach (farther than half a median edge from the
-        scan mesh: beyond its outline, over a hole): it was put on the scan's nearest edge, which is not where the
-        part is. Rescan there, or leave the point out. Use ``inside & on_scan`` for the points to trust.
+        False where the point maps to where the scan has no surface: its x, y outside the scan mesh (beyond its
+        outline, or over a hole the mesh leaves open). It was put on the scan's nearest edge, which is not where
+        the part is: rescan there, or leave the point out. Use ``inside & on_scan`` for the points to trust.
     offsets : ndarray, shape (M,)
         Each tool point's offset from the theoretical surface along its normal, mm (negative below it).
     """
@@ -112,9 +112,11 @@ def compensate_toolpath(
         as a Toolpath's ``GOTO/x,y,z`` among five-axis GOTOs: it takes the actual surface normal.
     theoretical_matching, actual_matching : array_like, shape (n, 3)
         The matching pairs: theoretical points (n ≥ 6, not all on one line or conic in xy) and their actual
-        places, e.g. :func:`machscan.isometric_match`'s ``.points``.
+        places, e.g. :func:`machscan.isometric_match`'s ``.points``. An actual point farther from the scan than two
+        median edges of its mesh (at least 1 mm) is refused: it is not on the part.
     actual_surface : array_like (N, 3), or (vertices, faces)
-        The scan of the clamped part (meshed by :func:`machscan.delaunay_xy`), or its mesh.
+        The scan of the clamped part (meshed by :func:`machscan.delaunay_xy`, the long triangles across a concave
+        outline peeled off as :func:`machscan.isometric_match` does), or its mesh.
     interpolation : {"cubic", "linear"}
         See :data:`Interpolation`.
     normals : {"smooth", "triangle"}

@@ -5,9 +5,9 @@
 //! a comment; `GOTO/x, y, z[, i, j, k]` gives a point (and a tool axis), `FEDRAT/f` the feed of
 //! what follows, `RAPID` marks the next move rapid, which starts a new segment; other statements
 //! (`PARTNO`, `MULTAX`, `PPRINT`, `CUTTER`, …) are skipped. machscan works in millimetres and
-//! feeds per minute: `UNITS/INCHES` and feeds per revolution or in inches (`FEDRAT/…, IPM`, `IPR`,
-//! `MMPR`) are refused rather than read as mm and mm/min, and so is a file without a GOTO (not a
-//! toolpath, or not this format).
+//! feeds per minute: `UNITS/INCHES` and feeds in any other unit (`FEDRAT/…, IPM`, `IPR`, `MMPR`,
+//! `MMPS`, `INVERS`, …: every word but `MMPM`) are refused rather than read as mm and mm/min, and
+//! so is a file without a GOTO (not a toolpath, or not this format); the writer writes none.
 use crate::error::{Error, Result};
 use std::path::Path;
 
@@ -108,22 +108,32 @@ pub fn parse_apt(path: &Path, text: &str) -> Result<Toolpath> {
                 }
             }
             "FEDRAT" => {
-                // FEDRAT/f, FEDRAT/MMPM, f or FEDRAT/f, MMPM: the last number is the feed, per minute.
-                let words = args.split(|c: char| c == ',' || c.is_whitespace()).filter(|t| !t.is_empty());
-                if let Some(mode) = words
-                    .clone()
-                    .map(str::to_ascii_uppercase)
-                    .find(|t| matches!(t.as_str(), "IPM" | "IPR" | "MMPR" | "INVERS"))
+                // FEDRAT/f, FEDRAT/MMPM, f or FEDRAT/f, MMPM: the number is the feed, per minute. A
+                // RAPTO part (the feed of rapid approaches, in some CLSF dialects) is not this feed.
+                let words: Vec<&str> = args
+                    .split(|c: char| c == ',' || c.is_whitespace())
+                    .filter(|t| !t.is_empty())
+                    .take_while(|t| !t.eq_ignore_ascii_case("RAPTO"))
+                    .collect();
+                // Only mm per minute is read: IPM, IPR, MMPR, MMPS, INVERS… would be taken for it.
+                if let Some(mode) = words.iter().find(|t| t.parse::<f64>().is_err() && !t.eq_ignore_ascii_case("MMPM"))
                 {
                     return Err(Error::format(
                         path,
                         format!("line {start_line}: FEDRAT in {mode}: machscan reads feeds in mm per minute (MMPM)"),
                     ));
                 }
-                let v: Vec<f64> = words.filter_map(|t| t.parse::<f64>().ok()).collect();
-                feed = *v
-                    .last()
-                    .ok_or_else(|| Error::format(path, format!("line {start_line}: FEDRAT without a feed")))?;
+                let v: Vec<f64> = words.iter().filter_map(|t| t.parse::<f64>().ok()).collect();
+                feed = match v[..] {
+                    [f] => f,
+                    [] => return Err(Error::format(path, format!("line {start_line}: FEDRAT without a feed"))),
+                    _ => {
+                        return Err(Error::format(
+                            path,
+                            format!("line {start_line}: FEDRAT/{}: more than one feed", args.trim()),
+                        ))
+                    }
+                };
                 if !(feed.is_finite() && feed > 0.0) {
                     return Err(Error::format(
                         path,
@@ -165,6 +175,10 @@ pub fn write_apt(
 ) -> Result<()> {
     use std::io::Write;
     let n = points.len() / 3;
+    if n == 0 {
+        // A CL file without a GOTO is not a toolpath (the reader refuses one).
+        return Err(Error::invalid("points", "no points to write"));
+    }
     crate::error::check_finite("points", points, 3)?;
     if let Some(a) = axes {
         if a.len() != points.len() {
@@ -279,7 +293,14 @@ mod tests {
     fn refuses_other_units_and_files_without_a_goto() {
         let read = |text: &str| parse_apt(Path::new("t.apt"), text);
         assert!(read("UNITS/MM\nFEDRAT/MMPM,500\nFEDRAT/300,MMPM\nGOTO/1,2,3\n").is_ok());
-        for text in ["UNITS/INCHES\nGOTO/1,2,3\n", "FEDRAT/IPM,50\nGOTO/1,2,3\n", "FEDRAT/0.2,MMPR\nGOTO/1,2,3\n"] {
+        let rapto = read("FEDRAT/MMPM,1200,RAPTO,500\nGOTO/1,2,3\n").unwrap();
+        assert_eq!(rapto.feeds, vec![1200.0]);
+        for text in [
+            "UNITS/INCHES\nGOTO/1,2,3\n",
+            "FEDRAT/IPM,50\nGOTO/1,2,3\n",
+            "FEDRAT/0.2,MMPR\nGOTO/1,2,3\n",
+            "FEDRAT/MMPS,20\n",
+        ] {
             let e = read(text).unwrap_err().to_string();
             assert!(e.contains("t.apt") && e.contains("line 1"), "{e}");
         }

@@ -85,11 +85,14 @@ impl Stop {
     }
 }
 
-/// A triangle mesh, borrowed.
+/// A triangle mesh, borrowed, and the median edge of the surface as the user gave it (before
+/// thinning: the scan's own spacing), which sets how far off it a point may be given
+/// (`off_surface_limit`).
 #[derive(Clone, Copy)]
 pub struct Surface<'a> {
     pub vertices: &'a [[f64; 3]],
     pub faces: &'a [[u32; 3]],
+    pub given_edge: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -411,7 +414,7 @@ fn start_by_locating(t_loc: &[[f64; 3]; 2], a_loc: &[[f64; 3]; 2], t_match: &[[f
 fn onto(surface: Surface<'_>, name: &str, points: &[[f64; 3]]) -> Result<Vec<[f64; 3]>> {
     check_finite_points(name, points)?;
     let closest = closest_points(surface.vertices, surface.faces, points)?;
-    let limit = off_surface_limit(surface.vertices, surface.faces);
+    let limit = off_surface_limit(surface.given_edge);
     if let Some((i, c)) = closest.iter().enumerate().find(|(_, c)| !(c.distance <= limit)) {
         return Err(off_surface(name, i, points[i], c.distance, limit));
     }
@@ -611,6 +614,7 @@ pub fn isometric_match(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::median_edge;
 
     /// A flat grid over [x0, x0 + w] × [y0, y0 + h] at spacing s, turned by `angle` about the
     /// origin, then shifted.
@@ -650,8 +654,8 @@ mod tests {
         for jacobian in [Jacobian::Gradient, Jacobian::Quadratic] {
             let opts = MatchOptions { jacobian, method: GeodesicMethod::Exact, max_iterations: 60, tolerance: 1e-7 };
             let r = isometric_match(
-                Surface { vertices: &tv, faces: &tf },
-                Surface { vertices: &av, faces: &af },
+                Surface { vertices: &tv, faces: &tf, given_edge: median_edge(&tv, &tf) },
+                Surface { vertices: &av, faces: &af, given_edge: median_edge(&av, &af) },
                 &loc,
                 &a_loc,
                 &matching,
@@ -674,7 +678,7 @@ mod tests {
     #[test]
     fn bad_input_is_refused_by_name() {
         let (v, f) = plate(20.0, 20.0, 2.0, 0.0, [0.0, 0.0]);
-        let s = Surface { vertices: &v, faces: &f };
+        let s = Surface { vertices: &v, faces: &f, given_edge: median_edge(&v, &f) };
         // A 3 × 3 grid: without any one of its points the rest fix a quadratic (eq 12–13).
         let m: Vec<[f64; 3]> = (0..9).map(|k| [4.0 + 6.0 * (k % 3) as f64, 4.0 + 6.0 * (k / 3) as f64, 0.0]).collect();
         let line: Vec<[f64; 3]> = (0..8).map(|k| [2.0 + 2.0 * k as f64, 3.0 + k as f64, 0.0]).collect();

@@ -47,6 +47,7 @@ pub fn surface_faces(
         other => other,
     };
     crate::error::check_finite_points(name, points)?;
+    let given = faces.is_some();
     let faces = match faces {
         Some(f) => {
             check_faces(points.len(), &f).map_err(renamed)?;
@@ -55,7 +56,7 @@ pub fn surface_faces(
         None => delaunay_xy(points, max_edge).map_err(renamed)?,
     };
     if faces.is_empty() {
-        if let Some(limit) = max_edge {
+        if let (false, Some(limit)) = (given, max_edge) {
             // Delaunay gave triangles (the points passed its checks); the trim took them all.
             let all = delaunay_xy(points, None).map_err(renamed)?;
             return Err(Error::invalid(
@@ -116,8 +117,9 @@ pub const OFF_SURFACE_MM: f64 = 1.0;
 /// of a scan is on the part (the outermost points of a scan lie up to a spacing or two inside its
 /// edge, more where the laser loses the edge); one farther off is a wrong point (its units, a
 /// typo), whose closest point, on the surface's edge, would be used as if it were right.
-pub fn off_surface_limit(points: &[[f64; 3]], faces: &[[u32; 3]]) -> f64 {
-    (2.0 * median_edge(points, faces)).max(OFF_SURFACE_MM)
+/// `median_edge` is that of the surface as given (its points' spacing), not of a thinned mesh.
+pub fn off_surface_limit(median_edge: f64) -> f64 {
+    (2.0 * median_edge).max(OFF_SURFACE_MM)
 }
 
 /// The error for point `i` of argument `name`, `distance` from the surface (`off_surface_limit`).
@@ -126,7 +128,7 @@ pub fn off_surface(name: &str, i: usize, p: [f64; 3], distance: f64, limit: f64)
         name,
         format!(
             "point {i} ({:.3}, {:.3}, {:.3}) lies {distance:.3} mm from the surface, more than {limit:.3} mm (two median edges of \
-             the surface mesh, at least {OFF_SURFACE_MM} mm): it is not on the part (check its coordinates and units)",
+             the surface as given, at least {OFF_SURFACE_MM} mm): it is not on the part (check its coordinates and units)",
             p[0], p[1], p[2]
         ),
     )
@@ -147,8 +149,9 @@ pub fn median_edge(points: &[[f64; 3]], faces: &[[u32; 3]]) -> f64 {
     *lengths.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
-/// Vertices (the given points when none were dropped) and triangles.
-pub type SurfaceMesh<'a> = (Cow<'a, [[f64; 3]]>, Vec<[u32; 3]>);
+/// Vertices (the given points when none were dropped), triangles, and the median edge of the
+/// surface as given (before any thinning: the points' own spacing).
+pub type SurfaceMesh<'a> = (Cow<'a, [[f64; 3]]>, Vec<[u32; 3]>, f64);
 
 /// A surface argument as a mesh for geodesic work: a mesh as given, or scan points meshed by
 /// `delaunay_xy` (triangles with an edge beyond `max_edge` left out; without it, beyond
@@ -169,7 +172,8 @@ pub fn surface_mesh<'a>(
     let given = faces.is_some();
     let full = surface_faces(name, points, faces, max_edge)?;
     if given {
-        return Ok((Cow::Borrowed(points), full));
+        let edge = median_edge(points, &full);
+        return Ok((Cow::Borrowed(points), full, edge));
     }
     let full = match max_edge {
         Some(_) => full,
@@ -191,8 +195,9 @@ pub fn surface_mesh<'a>(
             (wanted > 1.5 * data).then_some(wanted)
         }
     };
+    let edge = median_edge(points, &full);
     let Some(s) = spacing else {
-        return Ok((Cow::Borrowed(points), full));
+        return Ok((Cow::Borrowed(points), full, edge));
     };
     let kept: Vec<[f64; 3]> = thin_xy(points, &full, s).into_iter().map(|i| points[i]).collect();
     // The thinned points' triangles that lie over the full mesh: a concave outline stays concave
@@ -208,7 +213,7 @@ pub fn surface_mesh<'a>(
     if faces.is_empty() {
         return Err(Error::invalid(name, "the thinned surface has no triangles: give a smaller spacing"));
     }
-    Ok((Cow::Owned(kept), faces))
+    Ok((Cow::Owned(kept), faces, edge))
 }
 
 /// Meshes with known geodesics, shared by the geodesic tests.

@@ -172,7 +172,7 @@ mod tests {
                 }
             }
         }
-        let (coarse, faces) =
+        let (coarse, faces, _) =
             crate::mesh::surface_mesh("points", &v, None, Some(0.75), crate::mesh::Spacing::Fixed(4.0)).unwrap();
         assert!(coarse.len() < v.len() / 10);
         // Its outline's ends are kept, and no triangle reaches into the notch beyond the full

@@ -59,11 +59,11 @@ fn isometric_match<'py>(
         (tp.rows::<3>()?, ap.rows::<3>()?, tl.rows::<3>()?, al.rows::<3>()?, tm.rows::<3>()?);
     let air = ai.as_ref().map(|a| a.rows::<3>()).transpose()?;
     let r = enter(py, || {
-        let (tv, tf) = surface_mesh("theoretical_points", tpr, tf, max_edge, spacing)?;
-        let (av, af) = surface_mesh("actual_points", apr, af, max_edge, spacing)?;
+        let (tv, tf, t_edge) = surface_mesh("theoretical_points", tpr, tf, max_edge, spacing)?;
+        let (av, af, a_edge) = surface_mesh("actual_points", apr, af, max_edge, spacing)?;
         run_isometric_match(
-            Surface { vertices: &tv, faces: &tf },
-            Surface { vertices: &av, faces: &af },
+            Surface { vertices: &tv, faces: &tf, given_edge: t_edge },
+            Surface { vertices: &av, faces: &af, given_edge: a_edge },
             tlr,
             alr,
             tmr,

@@ -3,7 +3,7 @@ use super::convert::{
     count, enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array,
 };
 use super::mesh::surface;
-use crate::mesh::surface_faces;
+use crate::mesh::{surface_mesh, Spacing};
 use crate::toolpath::bead_chain::{bead_chain as run_bead_chain, Chain};
 use crate::toolpath::grinding::{
     grinding_paths as run_grinding_paths, simulate_removal as run_simulate_removal, GrindingOptions, RemovalModel,
@@ -57,8 +57,10 @@ fn compensate_toolpath<'py>(
     };
     let (tmr, amr, apr) = (tm.rows::<3>()?, am.rows::<3>()?, ap.rows::<3>()?);
     let r = enter(py, || {
-        let af = surface_faces("actual_surface", apr, af, max_edge)?;
-        run_compensate(&points, axes.as_deref(), tmr, amr, apr, &af, options)
+        // Meshed as isometric_match meshes it (the long triangles Delaunay adds across a concave
+        // outline peeled off, not thinned): `on_scan` then tells where the scan has no points.
+        let (av, af, _) = surface_mesh("actual_surface", apr, af, max_edge, Spacing::Full)?;
+        run_compensate(&points, axes.as_deref(), tmr, amr, &av, &af, options)
     })?;
     let m = r.points.len();
     let d = PyDict::new(py);

@@ -83,10 +83,6 @@ const QUADRIC_POINTS: usize = 12;
 /// (0.70711, 0.70711 has length 1 + 4.6e-6); each is normalised, so only a length this far off
 /// says the columns are not an axis.
 const AXIS_TOLERANCE: f64 = 1e-3;
-/// How far a mapped point may lie from the scan mesh, in median edge lengths of the mesh, and
-/// still count as on the scan (`Compensated::on_scan`): the mapping's own error is microns, a
-/// scan's points lie within a fraction of their spacing of its mesh.
-const OFF_SCAN_EDGES: f64 = 0.5;
 /// How many times the foot of an offset tool point is refined (the normal at the foot moves it).
 const FOOT_ITERATIONS: usize = 4;
 
@@ -95,9 +91,10 @@ pub struct Compensated {
     pub points: Vec<[f64; 3]>,
     pub axes: Vec<[f64; 3]>,
     pub inside: Vec<bool>,
-    /// Whether the mapped point lies on the scan: within `OFF_SCAN_EDGES` median edges of the
-    /// scan mesh. Where it does not, the scan does not cover it and the point was put on the
-    /// scan's edge nearest to it, which is not where the part is.
+    /// Whether the mapped point's x, y lies over the scan mesh (the surfaces are height fields
+    /// over xy). Where it does not (beyond the scan's outline, over a hole the mesh leaves open)
+    /// the scan does not cover it, and the point was put on the scan's edge nearest to it, which
+    /// is not where the part is.
     pub on_scan: Vec<bool>,
     /// Each tool point's offset h (mm) along the theoretical normal.
     pub offsets: Vec<f64>,
@@ -148,8 +145,8 @@ struct ActualSurface<'a> {
 }
 
 impl ActualSurface<'_> {
-    /// The surface point near `q`, its normal, and the distance from `q` to the scan mesh.
-    fn project(&self, q: Vector3<f64>, normals: Normals) -> (Vector3<f64>, Vector3<f64>, f64) {
+    /// The surface point near `q` and its normal.
+    fn project(&self, q: Vector3<f64>, normals: Normals) -> (Vector3<f64>, Vector3<f64>) {
         let c = self.bvh.closest(&q.into());
         let f = self.faces[c.triangle].map(|v| Vector3::from(self.vertices[v as usize]));
         let triangle_normal = upward((f[1] - f[0]).cross(&(f[2] - f[0])).normalize());
@@ -159,7 +156,7 @@ impl ActualSurface<'_> {
         } else {
             self.quadric(on_mesh, triangle_normal).unwrap_or((on_mesh, triangle_normal))
         };
-        (point, normal, c.distance)
+        (point, normal)
     }
 
     /// A quadric height field over the plane of the scan points within `radius` of `q` (over a
@@ -291,13 +288,14 @@ pub fn compensate_toolpath(
     let radius = options.radius.unwrap_or(5.0 * edge);
     // The actual matching points lie on the scan (`isometric_match` puts them there); one off it
     // is a wrong point, and the mapping would carry the toolpath to it.
-    let limit = off_surface_limit(actual_vertices, actual_faces);
+    let limit = off_surface_limit(edge);
     for (i, p) in actual_matching.iter().enumerate() {
         let d = bvh.closest(p).distance;
         if !(d <= limit) {
             return Err(off_surface("actual_matching", i, *p, d, limit));
         }
     }
+    let scan_outline = XyLocator::new(actual_vertices, actual_faces);
     let actual = ActualSurface {
         vertices: actual_vertices,
         faces: actual_faces,
@@ -356,8 +354,8 @@ pub fn compensate_toolpath(
                 ));
             }
             let inside = hull.locate(xy.0, xy.1).is_some();
-            let (a, na, off) = actual.project(mapped, options.normals);
-            let on_scan = off <= OFF_SCAN_EDGES * edge;
+            let (a, na) = actual.project(mapped, options.normals);
+            let on_scan = scan_outline.locate(mapped.x, mapped.y).is_some();
             let axis = match tool_axes.map(|axes| axes[i]) {
                 Some(given) if !given[0].is_nan() => {
                     Rotation3::rotation_between(&nt, &na).unwrap_or_else(Rotation3::identity) * Vector3::from(given)
