@@ -512,14 +512,9 @@ def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
     start = next((i for i, line in enumerate(lines) if line.split("#")[0].strip()), len(lines))
     first = lines[start].split("#")[0] if start < len(lines) else ""
 
-    def number(field: str) -> bool:
-        try:
-            float(field)
-            return True
-        except ValueError:
-            return False
+    from machscan.cad import _is_number
 
-    header = not all(number(f) for f in first.split(",")) and any(c.isalpha() for c in first)
+    header = not all(_is_number(f) for f in first.split(",")) and any(c.isalpha() for c in first)
     body = lines[start + 1 :] if header else lines
     try:
         with warnings.catch_warnings():
