@@ -500,6 +500,13 @@ def _grind(args: argparse.Namespace) -> int:
     return 0 if holds else 3
 
 
+def _check_finite(name: str, path: Path, rows: np.ndarray) -> None:
+    """Refuses rows read from ``path`` (for ``name``) that are not all finite, naming the first."""
+    bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
+    if bad.size:
+        raise ValueError(f"{name}: {path} has {bad.size} rows that are not finite, the first at row {bad[0]}")
+
+
 def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
     """A CSV table of numbers of one of ``widths`` columns; ``#`` starts a comment; a first line with a field
     that is not a number and letters in it is a header (``x,y,z``)."""
@@ -524,9 +531,7 @@ def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
         raise ValueError(f"{name}: {path} is not a comma-separated table of numbers ({e})") from None
     if rows.size == 0:
         raise ValueError(f"{name}: {path} holds no rows of numbers")
-    bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
-    if bad.size:
-        raise ValueError(f"{name}: {path}: row {bad[0]} of its numbers is not finite")
+    _check_finite(name, path, rows)
     if rows.shape[1] not in widths:
         raise ValueError(f"{name}: {path} has {rows.shape[1]} columns, expected {' or '.join(map(str, widths))}")
     return rows
@@ -542,10 +547,8 @@ def _compensate(args: argparse.Namespace) -> int:
     if args.theoretical is None or args.scan is None or args.toolpath is None or args.locating is None or args.matching is None:
         raise ValueError("compensate: give THEORETICAL SCAN TOOLPATH --locating and --matching (or --simulate)")
     theoretical, scan = read_points(args.theoretical), read_points(args.scan)
-    for name, path, points in (("THEORETICAL", args.theoretical, theoretical), ("SCAN", args.scan, scan)):
-        bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
-        if bad.size:
-            raise ValueError(f"{name}: {path} has {bad.size} points that are not finite, the first at row {bad[0]}")
+    _check_finite("THEORETICAL", args.theoretical, theoretical)
+    _check_finite("SCAN", args.scan, scan)
     locating = _read_rows(args.locating, "--locating", (6,))
     if len(locating) != 2:
         raise ValueError(f"--locating: {args.locating} has {len(locating)} rows, expected the 2 locating points")

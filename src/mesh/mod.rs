@@ -171,14 +171,15 @@ pub fn surface_mesh<'a>(
     }
     let given = faces.is_some();
     let full = surface_faces(name, points, faces, max_edge)?;
+    // The surface as given: the points' own spacing (for `off_surface_limit`) and the peel's scale.
+    let edge = median_edge(points, &full);
     if given {
-        let edge = median_edge(points, &full);
         return Ok((Cow::Borrowed(points), full, edge));
     }
     let full = match max_edge {
         Some(_) => full,
         None => {
-            let trim = EDGE_TRIM * median_edge(points, &full);
+            let trim = EDGE_TRIM * edge;
             let kept = peel_long_edges(points, full, trim);
             if kept.is_empty() {
                 return Err(Error::invalid(name, "no triangle is left after the long-edge trim: give max_edge"));
@@ -195,7 +196,6 @@ pub fn surface_mesh<'a>(
             (wanted > 1.5 * data).then_some(wanted)
         }
     };
-    let edge = median_edge(points, &full);
     let Some(s) = spacing else {
         return Ok((Cow::Borrowed(points), full, edge));
     };

@@ -151,12 +151,10 @@ impl ActualSurface<'_> {
         let f = self.faces[c.triangle].map(|v| Vector3::from(self.vertices[v as usize]));
         let triangle_normal = upward((f[1] - f[0]).cross(&(f[2] - f[0])).normalize());
         let on_mesh = Vector3::from(c.point);
-        let (point, normal) = if normals == Normals::Triangle {
-            (on_mesh, triangle_normal)
-        } else {
-            self.quadric(on_mesh, triangle_normal).unwrap_or((on_mesh, triangle_normal))
-        };
-        (point, normal)
+        if normals == Normals::Triangle {
+            return (on_mesh, triangle_normal);
+        }
+        self.quadric(on_mesh, triangle_normal).unwrap_or((on_mesh, triangle_normal))
     }
 
     /// A quadric height field over the plane of the scan points within `radius` of `q` (over a
