@@ -507,6 +507,12 @@ def _check_finite(name: str, path: Path, rows: np.ndarray) -> None:
         raise ValueError(f"{name}: {path} has {bad.size} rows that are not finite, the first at row {bad[0]}")
 
 
+def _check_positive_mm(option: str, value: float) -> None:
+    """Refuses an option's length in mm that is not a positive number (nan, inf, 0 and below)."""
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{option}: must be a positive number of mm, got {value:g}")
+
+
 def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
     """A CSV table of numbers of one of ``widths`` columns; ``#`` starts a comment; a first line with a field
     that is not a number and letters in it is a header (``x,y,z``)."""
@@ -540,8 +546,7 @@ def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
 def _compensate(args: argparse.Namespace) -> int:
     from machscan.io import read_points, read_toolpath
 
-    if not (np.isfinite(args.max_error) and args.max_error > 0):
-        raise ValueError(f"--max-error: must be a positive number of mm, got {args.max_error:g}")
+    _check_positive_mm("--max-error", args.max_error)
     if args.simulate:
         return _compensate_simulated(args)
     if args.theoretical is None or args.scan is None or args.toolpath is None or args.locating is None or args.matching is None:
@@ -654,8 +659,7 @@ def _compensate_simulated(args: argparse.Namespace) -> int:
     from machscan.io import Toolpath, write_points, write_toolpath
     from machscan.synth import BentSkin, misplacement
 
-    if not (np.isfinite(args.scan_spacing) and args.scan_spacing > 0):
-        raise ValueError(f"--scan-spacing: must be a positive number of mm, got {args.scan_spacing:g}")
+    _check_positive_mm("--scan-spacing", args.scan_spacing)
     skin = BentSkin(pose=misplacement(args.seed, translation=1.0, rotation=np.deg2rad(0.5)))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
