@@ -96,7 +96,7 @@ def test_contour_error_equals_brute_force_eq_21_23(seed):
     Q += rng.normal(0, 0.03, Q.shape) + [0.05, -0.08, 0.3]
     Q[::97] += rng.normal(0, 0.5, Q[::97].shape)  # strays
     E, e = brute_contour_error(P, Q, 1.0, 0.7)
-    r = machscan.contour_error(P, Q, 1.0, 0.7)
+    r = machscan.contour_error(P, Q, delta1=1.0, delta2=0.7, cad_spacing=None, actual_spacing=None)
     np.testing.assert_allclose(r.offset, E, atol=1e-12)
     np.testing.assert_allclose(r.errors, e, atol=1e-12)
     assert r.mean == pytest.approx(e.mean()) and r.std == pytest.approx(e.std()) and r.max == pytest.approx(e.max())

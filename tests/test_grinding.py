@@ -68,13 +68,33 @@ def test_the_allowance_at_each_path_point_is_the_field_within_2_microns(panel_pa
     assert np.abs(paths.allowance[edge] - panel.allowance_at(paths.points[edge])).max() < 0.002
 
 
-def test_feeds_are_the_models_closed_form_clamped_to_the_limits(panel_paths):
-    _, _, paths = panel_paths
+def _wanted_feed(allowance):
     c, (e1, e2, e3), vb, force, (lo, hi) = (MODEL[k] for k in ("C", "exponents", "belt_speed", "force", "feed_limits"))
-    expected = np.clip((paths.allowance / (c * vb**e1 * force**e3)) ** (1.0 / e2), lo, hi)
-    np.testing.assert_allclose(paths.feed, expected, rtol=1e-12)
+    return np.clip((allowance / (c * vb**e1 * force**e3)) ** (1.0 / e2), lo, hi)
+
+
+def test_feeds_are_the_models_closed_form_clamped_to_the_limits(panel_paths):
+    _, cloud, _ = panel_paths
+    every = machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), MODEL, feed_step=0.0)
+    np.testing.assert_allclose(every.feed, _wanted_feed(every.allowance), rtol=1e-12)
     model = machscan.RemovalModel.of(MODEL)
-    np.testing.assert_allclose(model.removal(paths.feed), paths.allowance, rtol=1e-12)
+    np.testing.assert_allclose(model.removal(every.feed), every.allowance, rtol=1e-12)
+
+
+def test_a_feed_is_held_until_the_wanted_one_departs_by_the_feed_step(panel_paths):
+    _, _, paths = panel_paths
+    wanted, feed, step = _wanted_feed(paths.allowance), paths.feed, machscan.toolpath.FEED_STEP
+    assert step == 0.03
+    # Within the step of the wanted feed everywhere; a new feed exactly where the wanted one left the band, and it
+    # is then the wanted feed.
+    assert np.all(np.abs(feed / wanted - 1) <= step * feed / wanted + 1e-12)
+    changes = np.flatnonzero(np.diff(feed)) + 1
+    np.testing.assert_allclose(feed[changes], wanted[changes], rtol=1e-12)
+    held = np.ones(len(feed), dtype=bool)
+    held[changes] = False
+    held[0] = False
+    assert np.all(np.abs(wanted[held] - feed[held]) <= step * feed[held] + 1e-12)
+    assert len(changes) < 0.5 * len(feed)
 
 
 def test_feed_limits_clamp_and_nothing_to_remove_gets_the_feed_that_removes_least():
@@ -99,10 +119,18 @@ def test_apt_round_trip_to_a_tenth_of_a_micron(tmp_path, panel_paths):
     back = machscan.io.read_toolpath(path)
     assert np.abs(back.points - paths.points).max() < 1e-4
     assert np.abs(back.axes - paths.normals).max() < 1e-4
-    np.testing.assert_allclose(back.feeds, paths.feed, rtol=1e-9)
+    # The model's feeds are mm/s (the paper's calibration); a CL file's are mm/min, with the unit word.
+    np.testing.assert_allclose(back.feeds, 60.0 * paths.feed, rtol=1e-12)
+    np.testing.assert_allclose(back.feeds, paths.feed_per_minute(), rtol=0)
     text = path.read_text()
     assert text.count("GOTO/") == len(paths.points)
-    assert text.count("FEDRAT/") == 1 + int((np.diff(paths.feed) != 0).sum())
+    assert text.count("FEDRAT/MMPM,") == text.count("FEDRAT") == 1 + int((np.diff(paths.feed) != 0).sum())
+    assert "UNITS/MM" in text
+    # A model calibrated in mm/min writes its feeds as they are.
+    per_minute = machscan.RemovalModel.of(dict(MODEL, feed_unit="mm/min"))
+    np.testing.assert_allclose(per_minute.per_minute([10.0, 20.0]), [10.0, 20.0])
+    with pytest.raises(ValueError, match="feed_unit"):
+        machscan.RemovalModel.of(dict(MODEL, feed_unit="ipm")).feed(0.1)
     # Without a removal model there is no feed to write.
     bare = machscan.grinding_paths(paths.points[:2000], paths.normals[:2000], paths.allowance[:2000], 8.0, 0.01, (0, 1, 0))
     assert np.isnan(bare.feed).all()
@@ -111,13 +139,22 @@ def test_apt_round_trip_to_a_tenth_of_a_micron(tmp_path, panel_paths):
 
 
 def test_the_simulated_pass_leaves_only_the_scallop_on_the_panel(panel_paths):
-    _, cloud, paths = panel_paths
+    _, cloud, held = panel_paths
+    # Every feed programmed: what is left is the scallop.
+    paths = machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), MODEL, feed_step=0.0)
     check = machscan.simulate_removal(paths, cloud.points, cloud.normals, cloud.allowance)
     inside = (cloud.points[:, 1] > paths.row_offsets[0]) & (cloud.points[:, 1] < paths.row_offsets[-1])
     assert check.deviation[inside].max() <= 1.1 * paths.scallop_height
     assert check.deviation.min() > -1e-4
     assert np.median(check.deviation[inside]) > 0.1 * paths.scallop_height
     assert len(check.mean) == len(paths.row_offsets) and np.isfinite(check.mean).all()
+    # A feed held within 3 % of the wanted one removes within (1 ± 0.03)^-0.7 of the allowance: up to 2.1 % of it
+    # more or less.
+    check = machscan.simulate_removal(held, cloud.points, cloud.normals, cloud.allowance)
+    inside = (cloud.points[:, 1] > held.row_offsets[0]) & (cloud.points[:, 1] < held.row_offsets[-1])
+    bound = cloud.allowance.max() * (1.03**0.7 - 1)
+    assert check.deviation[inside].max() <= 1.1 * held.scallop_height + bound
+    assert check.deviation.min() > -bound
 
 
 def test_clamped_feeds_leave_the_stock_the_model_could_not_remove(panel_paths):

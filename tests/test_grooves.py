@@ -321,3 +321,33 @@ def test_criteria_apply_and_defaults_are_each_methods_own():
     d = machscan.grooves.CRITERIA_DEFAULTS
     assert d["section"]["max_iterations"] == 15 and d["tanh"]["max_iterations"] == 100
     assert machscan.FitCriteria() == machscan.FitCriteria(None, None, None, None)
+
+
+def test_invalid_readings_are_invalid_to_the_groove_fit_as_to_every_function_that_takes_frames():
+    # Issue #32 §2: raw frames holding the vendor's no-reading code fit exactly as the same frames with NaN there,
+    # by the rule machscan.Profiler.valid_mask and scan_to_wcs apply (NaN, the sentinel, outside the range).
+    g = synth.groove_frames("v", 300, seed=5)
+    raw = g.z.copy()
+    rng = np.random.default_rng(6)
+    holes = rng.random(raw.shape) < 0.05
+    raw[holes] = machscan.SENTINEL
+    raw[:, 90:95] = machscan.SENTINEL  # a dropout across the middle of the window in every frame
+    raw[::7, 10] = 55.0  # out of the measuring range below
+    with_nan = np.where(raw == machscan.SENTINEL, np.nan, raw)
+    with_nan[::7, 10] = np.nan
+    a = machscan.fit_grooves(g.x, raw, window=150, valid_range=(-20.0, 20.0))
+    b = machscan.fit_grooves(g.x, with_nan, window=150)
+    assert a.ok.sum() >= 0.95 * len(a)
+    np.testing.assert_array_equal(a.status, b.status)
+    np.testing.assert_array_equal(a.width, b.width)
+    # The mask a Profiler gives is the core's rule: the same readings.
+    profiler = machscan.Profiler(readings=raw.shape[1], pitch=0.025, valid_range=(-20.0, 20.0))
+    np.testing.assert_array_equal(profiler.valid_mask(raw), ~np.isnan(with_nan))
+    points, _ = machscan.profile_to_points(raw, 0.025, valid_range=(-20.0, 20.0))
+    assert len(points) == int(profiler.valid_mask(raw).sum())
+    # One frame as the fit sees it drops them too.
+    view = machscan.level_groove_frame(g.x, raw[0], window=150)
+    assert np.isfinite(view.z).all() and len(view.z) <= int((~np.isnan(with_nan[0])).sum())
+    # Without a sentinel the code is a reading (far below: the frame has no groove it can measure).
+    kept = machscan.fit_grooves(g.x, raw, window=150, sentinel=None)
+    assert kept.ok.sum() < a.ok.sum()

@@ -53,6 +53,26 @@ def test_contour_error_recovers_the_truth(run):
         assert abs(c.offset_error - np.linalg.norm(truth.offsets[c.cad_index])) <= 0.005
 
 
+def test_the_contour_error_building_block_gives_the_reports_figure(run):
+    # Issue #32 §2: machscan.contour_error as the README shows it, on the report's own inputs (the contour's CAD
+    # points and its groove centers), gives the report's figure; from the bare CAD polyline too (resampled alike).
+    _scan, truth, r = run
+    for c in r.contours:
+        centers = r.center_wcs[r.contour == c.cad_index]
+        err = machscan.contour_error(c.theoretical, centers)
+        np.testing.assert_array_equal(err.errors, c.error.errors)
+        assert err.mean == c.error.mean and err.max == c.error.max
+        polyline = np.asarray(truth.nominal_polylines[c.cad_index], dtype=float)
+        if polyline.shape[1] == 2:
+            polyline = np.column_stack([polyline, np.zeros(len(polyline))])
+        from_cad = machscan.contour_error(polyline, centers)
+        assert abs(from_cad.mean - c.error.mean) < 0.001 and abs(from_cad.max - c.error.max) < 0.003
+    # The paper's formula on the bare centers measures the gaps between frames as well: further off.
+    c = r.contours[0]
+    bare = machscan.contour_error(c.theoretical, r.center_wcs[r.contour == c.cad_index], actual_spacing=None)
+    assert bare.mean > c.error.mean + 0.01
+
+
 def test_decomposition_shares_within_5_points_of_truth(run):
     _scan, truth, r = run
     off = np.linalg.norm(truth.center_offset, axis=1).mean()

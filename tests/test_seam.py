@@ -176,6 +176,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
             tolerance=None,
             fit_radius=None,
             removal=(0.05, (0.6, -0.7, 0.8), 20.0, 15.0, (0.5, 200.0)),
+            feed_step=None,
         ),
         "_RemovalArrays": _core.simulate_removal(
             grid,

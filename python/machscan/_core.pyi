@@ -15,6 +15,7 @@ __all__ = [
     "__version__",
     "SENTINEL",
     "ALLOWANCE_NEIGHBORS",
+    "GRINDING_FEED_STEP",
     "FileFormatError",
     "KinematicChain",
     "ab_mirror_support_points",
@@ -25,6 +26,7 @@ __all__ = [
     "closest_points",
     "coarse_align",
     "compensate_toolpath",
+    "valid_readings",
     "contour_error",
     "crop_box",
     "delaunay_xy",
@@ -80,6 +82,7 @@ __all__ = [
 __version__: str
 SENTINEL: float
 ALLOWANCE_NEIGHBORS: int
+GRINDING_FEED_STEP: float
 
 _Path = str | PathLike[str]
 _F64 = NDArray[np.float64]
@@ -237,6 +240,8 @@ class _GrooveOptions(TypedDict):
     cost_tolerance: float | None
     step_tolerance: float | None
     gradient_tolerance: float | None
+    sentinel: float | None
+    valid_range: tuple[float, float] | None
 
 class _Criteria(TypedDict):
     max_iterations: int
@@ -259,6 +264,14 @@ class _ContourErrorArrays(TypedDict):
     max: float
 
 # ---- kinematics -------------------------------------------------------------------------------
+
+def valid_readings(
+    readings: ArrayLike, *, valid_range: ArrayLike | None = None, sentinel: float | None = -99999.0
+) -> NDArray[np.bool_]:
+    """Which readings are valid (SPEC K1): finite, not the ``sentinel`` and inside
+    ``valid_range``: the one rule of every function that takes frames; ``Profiler.valid_mask``
+    documents it and reshapes the flat ``readings`` it hands over.
+    """
 
 def profile_to_points(
     frames: ArrayLike,
@@ -588,6 +601,7 @@ def grinding_paths(
     tolerance: float | None,
     fit_radius: float | None,
     removal: _RemovalArgs | None,
+    feed_step: float | None,
 ) -> _GrindingPathArrays:
     """Grinding paths (SPEC P1–P5); ``machscan.grinding_paths`` documents it and wraps the
     ``_GrindingPathArrays`` this returns.

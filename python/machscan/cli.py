@@ -34,12 +34,21 @@ from typing import get_args
 
 import numpy as np
 
+#: Point files that hold x, y, z per line and nothing else (what Open3D and PCL read as such).
+_TEXT_POINTS = (".xyz", ".csv", ".txt", ".pts", ".asc")
 
-def _write_cloud(path: Path, points: np.ndarray, frame_index: np.ndarray, binary: bool) -> None:
+
+def _write_cloud(path: Path, points: np.ndarray, frame_index: np.ndarray, binary: bool) -> str:
+    """Writes the workpiece points; PLY and PCD keep each point's frame as a scalar field, text files hold x, y, z
+    only. Returns what the file holds, for the console."""
     from machscan.io import write_points
 
     path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() in _TEXT_POINTS:
+        write_points(path, points)
+        return "x, y, z in mm (a text point file keeps no frame index: write .ply or .pcd for it)"
     write_points(path, points, scalars={"frame": frame_index}, binary=binary)
+    return "x, y, z in mm and the frame of each point"
 
 
 def _warn(text: str) -> None:
@@ -268,10 +277,10 @@ def _points(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     points, frame_index = scan.wcs_points()
     seconds = time.perf_counter() - t0
-    _write_cloud(args.out, points, frame_index, binary=not args.ascii)
+    holds = _write_cloud(args.out, points, frame_index, binary=not args.ascii)
     for line in _scan_summary(scan, points, seconds):
         print(line)
-    print(f"written   : {args.out}")
+    print(f"written   : {args.out} ({holds})")
     return 0
 
 
@@ -460,10 +469,18 @@ def _grind(args: argparse.Namespace) -> int:
     model = None
     if args.removal is not None:
         c, e1, e2, e3, vb, force, lo, hi = _floats(args.removal, 8, "--removal")
-        model = RemovalModel(C=c, exponents=(e1, e2, e3), belt_speed=vb, force=force, feed_limits=(lo, hi))
+        model = RemovalModel(C=c, exponents=(e1, e2, e3), belt_speed=vb, force=force, feed_limits=(lo, hi), feed_unit="mm/s")
     section = _floats(args.section_normal, 3, "--section-normal")
     paths = grinding_paths(
-        points, normals, stock, args.tool_radius, args.scallop_height, section, model, spacing=args.path_spacing
+        points,
+        normals,
+        stock,
+        args.tool_radius,
+        args.scallop_height,
+        section,
+        model,
+        spacing=args.path_spacing,
+        feed_step=args.feed_step,
     )
     check = simulate_removal(paths, points, normals, stock)
     out = Path(args.out)
@@ -471,8 +488,8 @@ def _grind(args: argparse.Namespace) -> int:
     paths.to_apt(out / "grind.cl")
     _write_table(
         out / "path.csv",
-        "x,y,z,nx,ny,nz,row,curvature,allowance,feed",
-        np.column_stack([paths.points, paths.normals, paths.row, paths.curvature, paths.allowance, paths.feed]),
+        "x_mm,y_mm,z_mm,nx,ny,nz,row,curvature_per_mm,allowance_mm,feed_mm_per_min",
+        np.column_stack([paths.points, paths.normals, paths.row, paths.curvature, paths.allowance, paths.feed_per_minute()]),
     )
     rows = len(paths.row_offsets)
     count = np.bincount(paths.row, minlength=rows)
@@ -486,7 +503,13 @@ def _grind(args: argparse.Namespace) -> int:
     print(f"points    : {len(paths.points):,}")
     if model is not None:
         clamped = int(np.sum((paths.feed <= model.feed_limits[0]) | (paths.feed >= model.feed_limits[1])))
-        print(f"feed      : {np.nanmin(paths.feed):.4g} … {np.nanmax(paths.feed):.4g} ({clamped} points at a limit)")
+        per_minute = paths.feed_per_minute()
+        changes = 1 + int(np.count_nonzero(np.diff(paths.feed)))
+        print(
+            f"feed      : {per_minute.min():.4g} … {per_minute.max():.4g} mm/min ({paths.feed.min():.4g} … "
+            f"{paths.feed.max():.4g} {model.feed_unit}), {changes:,} FEDRAT (a new feed where it changes by more than "
+            f"{100 * args.feed_step:g} %), {clamped} points at a limit"
+        )
     print(f"simulated : stock left over the model {check.deviation.min():+.4f} … {check.deviation.max():+.4f} mm")
     print(f"written   : {out / 'grind.cl'}, {out / 'path.csv'}, {out / 'report.csv'}")
     holds = True
@@ -791,10 +814,16 @@ def build_parser() -> argparse.ArgumentParser:
     _progress_argument(gr)
     gr.set_defaults(run=_grooves)
 
-    pts = sub.add_parser("points", help="turn a raw scan into a workpiece point cloud (PLY)")
+    pts = sub.add_parser("points", help="turn a raw scan into a workpiece point cloud (PLY, PCD or a text point file)")
     _scan_arguments(pts)
-    pts.add_argument("--out", type=Path, default=Path("cloud.ply"), help="output PLY (default: %(default)s)")
-    pts.add_argument("--ascii", action="store_true", help="write ASCII PLY instead of binary")
+    pts.add_argument(
+        "--out",
+        type=Path,
+        default=Path("cloud.ply"),
+        help="output point file: .ply, .pcd (with each point's frame) or .xyz, .csv, .txt, .pts, .asc (x, y, z) "
+        "(default: %(default)s)",
+    )
+    pts.add_argument("--ascii", action="store_true", help="write ASCII PLY or PCD instead of binary")
     pts.set_defaults(run=_points)
 
     import inspect
@@ -919,6 +948,8 @@ def build_parser() -> argparse.ArgumentParser:
     co.add_argument("--seed", type=int, default=0, help="seed of the simulated misplacement and noise (default: %(default)s)")
     co.set_defaults(run=_compensate)
 
+    from machscan.toolpath import FEED_STEP
+
     gr = sub.add_parser("grind", help="belt-grinding paths from an allowance cloud, spaced by the scallop height")
     gr.add_argument(
         "source",
@@ -935,7 +966,15 @@ def build_parser() -> argparse.ArgumentParser:
     gr.add_argument(
         "--removal",
         metavar="C,E_BELT,E_FEED,E_FORCE,BELT_SPEED,FORCE,FEED_LO,FEED_HI",
-        help="removal model r = C·Vb^e1·Vw^e2·F^e3 and feed limits; without it no feeds are written",
+        help="removal model r = C·Vb^e1·Vw^e2·F^e3 in the paper's units (r mm, belt speed Vb m/s, feed Vw mm/s, "
+        "force F N) and the feed limits in mm/s; grind.cl gets the feeds in mm/min (FEDRAT/MMPM); without it no "
+        "feeds are written",
+    )
+    gr.add_argument(
+        "--feed-step",
+        type=float,
+        default=FEED_STEP,
+        help="program a new feed where the wanted one changes by more than this share (default: %(default)s)",
     )
     gr.add_argument("--path-spacing", type=float, default=None, help="path point spacing along a row, mm (default: the cloud's)")
     gr.add_argument(

@@ -14,6 +14,8 @@ Conventions every function here follows:
 
 The kernels are in Rust and run in parallel with the GIL released; results do not depend on the
 number of threads.
+
+The formulas and their papers: ``docs/clouds.md``.
 """
 
 from machscan._core import (

@@ -10,6 +10,8 @@ and depth are the template's w and d.
 
 Every default is defined once, in the Rust core (``GrooveOptions::default()``), and read from
 there by the signatures below: :data:`DEFAULTS`.
+
+The formulas and their papers: ``docs/grooves.md``.
 """
 
 from __future__ import annotations
@@ -214,7 +216,18 @@ class GrooveFits:
 
 
 def _options(
-    template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
+    template,
+    alpha,
+    nominal_width,
+    window,
+    window_center,
+    fit_alpha,
+    spike_threshold,
+    min_depth,
+    min_valid,
+    criteria,
+    sentinel,
+    valid_range,
 ) -> dict:
     """The options dict of the core (the `_GrooveOptions` keys)."""
     c = FitCriteria() if criteria is None else criteria
@@ -234,6 +247,8 @@ def _options(
         cost_tolerance=c.cost_tolerance,
         step_tolerance=c.step_tolerance,
         gradient_tolerance=c.gradient_tolerance,
+        sentinel=sentinel,
+        valid_range=None if valid_range is None else tuple(valid_range),
     )
 
 
@@ -251,6 +266,8 @@ def fit_grooves(
     min_depth: float = DEFAULTS["min_depth"],
     min_valid: int = DEFAULTS["min_valid"],
     criteria: FitCriteria | None = None,
+    sentinel: float | None = DEFAULTS["sentinel"],
+    valid_range: tuple[float, float] | None = DEFAULTS["valid_range"],
     progress: bool | None = False,
 ) -> GrooveFits:
     """Measure the groove in every profiler frame (SPEC G): width, depth and center.
@@ -291,8 +308,8 @@ def fit_grooves(
     x : array_like, shape (N,)
         Abscissa of each reading along the laser line, mm (shared by all frames).
     z : array_like, shape (F, N) or (N,)
-        Readings (heights), mm; NaN marks an invalid reading. One frame may be given as (N,):
-        the result then has length 1.
+        Readings (heights), mm, raw as the profiler gives them or with NaN for invalid readings. One frame may be
+        given as (N,): the result then has length 1.
     alpha : float
         The tanh template's shape coefficient, mm⁻¹ (paper: 20).
     nominal_width : float
@@ -315,6 +332,12 @@ def fit_grooves(
         Fewest valid readings in the window.
     criteria : FitCriteria, optional
         When each fit stops; default each method's own.
+    sentinel : float or None
+        The profiler's "no reading" code, mm (default :data:`machscan.SENTINEL`, −99999). Readings equal to it, NaN
+        and readings outside ``valid_range`` are invalid and left out, by the same rule as
+        :func:`machscan.scan_to_wcs` and :meth:`machscan.Profiler.valid_mask`.
+    valid_range : (float, float), optional
+        The profiler's measuring range ``(lo, hi)``, mm.
     progress : bool or None
         Show a progress bar (frames done, rate, time left) on stderr; None: when stderr is a
         terminal. The frames are then fitted in 50 blocks; the result is the same.
@@ -330,7 +353,18 @@ def fit_grooves(
     >>> fits.width[fits.ok].mean(), fits.model_counts()
     """
     options = _options(
-        template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
+        template,
+        alpha,
+        nominal_width,
+        window,
+        window_center,
+        fit_alpha,
+        spike_threshold,
+        min_depth,
+        min_valid,
+        criteria,
+        sentinel,
+        valid_range,
     )
     if np.ndim(z) == 1:  # one frame
         z = np.asarray(z, dtype=np.float64)[np.newaxis, :]
@@ -408,6 +442,8 @@ def level_groove_frame(
     min_depth: float = DEFAULTS["min_depth"],
     min_valid: int = DEFAULTS["min_valid"],
     criteria: FitCriteria | None = None,
+    sentinel: float | None = DEFAULTS["sentinel"],
+    valid_range: tuple[float, float] | None = DEFAULTS["valid_range"],
 ) -> LevelledFrame:
     """One frame levelled exactly as :func:`fit_grooves` levels it, with the shape it fits.
 
@@ -420,7 +456,18 @@ def level_groove_frame(
     >>> lf.model, lf.fit.width[0]
     """
     options = _options(
-        template, alpha, nominal_width, window, window_center, fit_alpha, spike_threshold, min_depth, min_valid, criteria
+        template,
+        alpha,
+        nominal_width,
+        window,
+        window_center,
+        fit_alpha,
+        spike_threshold,
+        min_depth,
+        min_valid,
+        criteria,
+        sentinel,
+        valid_range,
     )
     out = _core.view_groove_frame(x, z, options)
     fit = GrooveFits(**out.pop("fit"), template=template)

@@ -4,6 +4,8 @@ film-coated skin and the CAD contours to the paper's tables.
 Steps (SPEC G and C): per-frame groove fit → groove centers in the WCS → Euclidean clustering
 into engraved contours → matching to the CAD contours (one to one, by centroid) → contour error
 per contour → decomposition of the error into offset, bending and local parts.
+
+The formulas and their papers: ``docs/contours.md`` (and ``docs/grooves.md`` for the groove fit).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan._core import euclidean_clusters, match_contours, nearest_neighbors, resample_polyline
-from machscan.contours import ContourErrorResult, contour_error
+from machscan.contours import ACTUAL_SPACING, CAD_SPACING, ContourErrorResult, contour_error
 from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
 from machscan.grooves import GrooveFits, Template, fit_grooves
 from machscan.scan import Scan
@@ -400,8 +402,8 @@ def inspect_grooves(
     cluster_radius: float = 5.0,
     cluster_k: int | None = 5,
     min_cluster_frames: int = 20,
-    cad_spacing: float = 0.005,
-    actual_spacing: float = 0.002,
+    cad_spacing: float = CAD_SPACING,
+    actual_spacing: float = ACTUAL_SPACING,
     max_match_distance: float = 10.0,
     bending_degree: int = 4,
     max_se_ratio: float | None = None,
@@ -560,12 +562,14 @@ def inspect_grooves(
             frames = np.nonzero(cluster == c)[0]
             q = center[frames]
             p = theoretical[m]
-            dense = _join_centers(q, actual_spacing)
-            err = contour_error(p, dense)
+            # The building block on the same inputs gives the same figure: machscan.contour_error(c.theoretical,
+            # the contour's centers) with these spacings.
+            err = contour_error(p, q, cad_spacing=None if cad_cloud else cad_spacing, actual_spacing=actual_spacing)
+            dense = err.actual
             bend_q = _poly_eval(ex, coef, dense[:, 0], dense[:, 1], bend_center, scale)
             flat = dense - np.column_stack([np.zeros((len(dense), 2)), bend_q])
             bend_p = np.abs(_poly_eval(ex, coef, p[:, 0], p[:, 1], bend_center, scale))
-            flat_err = contour_error(p, flat)
+            flat_err = contour_error(p, flat, cad_spacing=None, actual_spacing=None)
             offset_error = float(np.linalg.norm(flat_err.offset))
             results.append(
                 ContourResult(
@@ -622,29 +626,3 @@ def _cluster_k(k: int | None, n: int) -> int | None:
     if k is None or n < 2:
         return None if n < 2 else k
     return min(k, n - 1)
-
-
-def _join_centers(q: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
-    """The groove centers of one contour, in scan order, joined into a polyline and resampled
-    every ``spacing`` mm. Frames are far apart next to the CAD points (0.4 mm at a typical
-    decimation), and nearest-point distances to bare centers would measure those gaps, not the
-    deviation. Gaps longer than 5× the median step (a skipped stretch) are not bridged, and
-    the contour is closed when its ends meet."""
-    if len(q) < 2:
-        return q.copy()
-    steps = np.linalg.norm(np.diff(q, axis=0), axis=1)
-    limit = 5.0 * float(np.median(steps))
-    close = np.linalg.norm(q[-1] - q[0]) <= limit
-    pts = np.vstack([q, q[:1]]) if close else q
-    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    # Split at unbridged gaps; each piece is resampled at equal arc-length steps.
-    cuts = np.nonzero(seg > limit)[0]
-    if len(cuts) == 0 and close:
-        return resample_polyline(q, spacing, closed=True)
-    out = []
-    start = 0
-    for end in list(cuts) + [len(pts) - 1]:
-        piece = pts[start : end + 1]
-        out.append(piece if len(piece) == 1 else resample_polyline(piece, spacing, closed=False))
-        start = end + 1
-    return np.vstack(out)

@@ -20,6 +20,8 @@ Errors: a file that cannot be opened raises the ``OSError`` of its cause
 (``FileNotFoundError``, ``PermissionError``, ``IsADirectoryError``, ...); a file whose content
 is not what its format says raises :class:`FileFormatError` (a ``ValueError``) naming the file;
 bad arguments raise ``ValueError`` naming the argument.
+
+The formats and their papers: ``docs/clouds.md``.
 """
 
 from __future__ import annotations

@@ -4,6 +4,8 @@ calibration (SPEC K4) with its result object.
 
 Invalid readings — NaN, the profiler's "no reading" code :data:`SENTINEL` (−99999 by default)
 and anything outside a ``valid_range`` — are dropped by every function that makes points.
+
+The formulas and their papers: ``docs/kinematics.md``.
 """
 
 from __future__ import annotations

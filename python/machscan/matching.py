@@ -9,6 +9,8 @@ carries the toolpath along.
 
 The assumption is the method's limit: where the skin stretches (a doubly curved part pressed onto a fixture,
 heat), geodesic distances change and the matched points are off by about the stretch.
+
+The formulas and their papers: ``docs/matching.md``.
 """
 
 from __future__ import annotations

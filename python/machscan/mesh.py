@@ -3,7 +3,7 @@ that mirror-milling compensation works on. :func:`delaunay_xy` meshes a height-f
 the Delaunay triangulation of its xy projection; :func:`closest_points` finds the nearest point
 of a mesh to each query; :func:`insert_points` makes points of the surface vertices of its mesh;
 :func:`geodesic_distances` measures along the surface, and :class:`GeodesicSolver` does so again and again on
-one mesh prepared once."""
+one mesh prepared once. The formulas and their papers: ``docs/mesh.md``."""
 
 from __future__ import annotations
 

@@ -3,6 +3,8 @@ model. :func:`icp` is the kernel the positioning and allowance workflows stand o
 definitions and stop rule are Open3D's ``registration_icp``, so results carry over.
 
 Each default is read from the core (:data:`ICP_DEFAULTS`), where it is written once.
+
+The formulas and their papers: ``docs/registration.md``.
 """
 
 from __future__ import annotations

@@ -20,6 +20,8 @@ The methods that compute points call the compiled core (``machscan.profile_to_po
 Building a scan from your own data: a ``Scan`` takes NumPy arrays of frames, poses and frame
 times with a :class:`Profiler` and the machine's C2 offset and mount; a CSV export (one frame per
 row, one pose per row) is read by :func:`read_scan_csv`.
+
+The formulas and their papers: ``docs/kinematics.md``.
 """
 
 from __future__ import annotations
@@ -196,14 +198,8 @@ class Profiler:
         Valid means finite, not the sentinel, and inside ``valid_range`` (inclusive).
         """
         d = np.asarray(frames, dtype=np.float64)
-        mask = np.isfinite(d)
-        if self.sentinel is not None:
-            mask &= d != self.sentinel
-        if self.valid_range is not None:
-            lo, hi = self.valid_range
-            with np.errstate(invalid="ignore"):
-                mask &= (d >= lo) & (d <= hi)
-        return mask
+        flat = _core.valid_readings(d.ravel(), valid_range=self.valid_range, sentinel=self.sentinel)
+        return flat.reshape(d.shape)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able description (inverse of :meth:`from_dict`)."""

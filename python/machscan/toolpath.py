@@ -8,6 +8,8 @@ design wants them.
 found them) and the scan. Each tool point is split into its foot on the theoretical surface and its offset
 along the theoretical normal (0 for a contact point, −h for a pocket floor h deep); the foot is mapped onto the
 actual surface and the offset put back along the actual normal; a tool axis turns with the normal.
+
+The formulas and their papers: ``docs/matching.md`` (compensation) and ``docs/grinding.md`` (grinding paths).
 """
 
 from __future__ import annotations
@@ -25,9 +27,11 @@ from machscan.io import Toolpath, write_toolpath
 from machscan.mesh import _surface
 
 __all__ = [
+    "FEED_STEP",
     "BeadChain",
     "ChainMethod",
     "CompensatedToolpath",
+    "FeedUnit",
     "GrindingPaths",
     "Interpolation",
     "RemovalCheck",
@@ -52,6 +56,10 @@ Interpolation = Literal["cubic", "linear"]
 #: with the scan's noise: ~0.2° at 5 µm noise and 1.3 mm spacing).
 SurfaceNormals = Literal["smooth", "triangle"]
 
+
+#: Default share of the feed by which the wanted feed must change before :func:`grinding_paths` programs a new one
+#: (the core's ``DEFAULT_FEED_STEP``).
+FEED_STEP: float = _core.GRINDING_FEED_STEP
 
 #: How :func:`bead_chain` orders a section: ``"tree"`` (default) along the diameter of the points' minimum
 #: spanning tree; ``"nearest"``, the paper's rule, always to the nearest unvisited point.
@@ -295,11 +303,23 @@ def bead_chain(
     return BeadChain(out["order"], bool(out["closed"]))
 
 
+#: The feed unit of a :class:`RemovalModel`: the unit its calibration data gives the feed in.
+FeedUnit = Literal["mm/s", "mm/min"]
+
+#: Minutes per feed unit's time: what a feed is multiplied by to give mm/min (the CL file's unit).
+_PER_MINUTE = {"mm/s": 60.0, "mm/min": 1.0}
+
+
 @dataclass(frozen=True)
 class RemovalModel:
     """The removal model of belt grinding (SPEC P4; paper 004 eq 11): the depth removed is
-    ``r = C · Vb^e₁ · Vw^e₂ · F^e₃`` for belt speed ``Vb``, feed ``Vw`` and contact force ``F``, in the units the
-    model was calibrated in (the paper's: mm, m/s, mm/s, N).
+    ``r = C · Vb^e₁ · Vw^e₂ · F^e₃`` for belt speed ``Vb``, feed ``Vw`` and contact force ``F``.
+
+    The model stays in the units its calibration data comes in. Those of the paper, and the defaults
+    here: ``r`` in mm, ``Vb`` in m/s, ``Vw`` in mm/s, ``F`` in N — so ``C`` carries whatever units make
+    that product mm. The feeds it gives (:meth:`feed`, :attr:`GrindingPaths.feed`) and its
+    ``feed_limits`` are in ``feed_unit``; CL files are written in mm/min (``FEDRAT/MMPM,f``, 60 × a
+    feed in mm/s), which is what :func:`machscan.io.read_toolpath` reads back.
 
     Attributes
     ----------
@@ -307,18 +327,23 @@ class RemovalModel:
         Coefficient, > 0.
     exponents : (float, float, float)
         ``(e_belt, e_feed, e_force)``; ``e_feed`` ≠ 0 (negative: a faster feed removes less).
-    belt_speed, force : float
-        The belt speed and contact force the path is ground at, > 0.
+    belt_speed : float
+        The belt speed the path is ground at, m/s (the calibration's unit), > 0.
+    force : float
+        The contact force, N (the calibration's unit), > 0.
     feed_limits : (float, float)
-        The machine's lowest and highest feed, ``0 < low ≤ high``.
+        The machine's lowest and highest feed, ``0 < low ≤ high``, in ``feed_unit``.
+    feed_unit : {"mm/s", "mm/min"}
+        The unit of the feed in the calibration (the paper's: mm/s).
 
     Examples
     --------
     >>> model = machscan.RemovalModel(C=0.3, exponents=(0.6, -0.7, 0.8), belt_speed=20.0, force=15.0,
     ...                               feed_limits=(1.0, 50.0))
-    >>> feed = model.feed([0.10, 0.25])          # removes 0.10 and 0.25 mm
+    >>> feed = model.feed([0.10, 0.25])          # mm/s that remove 0.10 and 0.25 mm
     >>> model.removal(feed)
     array([0.1 , 0.25])
+    >>> model.per_minute(feed)                   # the same feeds in mm/min, as a CL file has them
     """
 
     C: float
@@ -326,6 +351,7 @@ class RemovalModel:
     belt_speed: float
     force: float
     feed_limits: tuple[float, float]
+    feed_unit: FeedUnit = "mm/s"
 
     @classmethod
     def of(cls, model: RemovalModel | Mapping[str, object]) -> RemovalModel:
@@ -334,13 +360,21 @@ class RemovalModel:
             return model
         if not isinstance(model, Mapping):
             raise TypeError(f"removal_model: expected a RemovalModel or a dict of its fields, got {type(model).__name__}")
-        fields = {"C", "exponents", "belt_speed", "force", "feed_limits"}
-        missing, extra = fields - set(model), set(model) - fields
+        fields = {"C", "exponents", "belt_speed", "force", "feed_limits", "feed_unit"}
+        missing, extra = fields - set(model) - {"feed_unit"}, set(model) - fields
         if missing or extra:
             raise ValueError(f"removal_model: missing keys {sorted(missing)}, unknown keys {sorted(extra)}")
         return cls(**model)  # type: ignore[arg-type]
 
+    def per_minute(self, feed: ArrayLike) -> NDArray[np.float64]:
+        """Feeds of this model (in :attr:`feed_unit`) in mm/min, the unit of CL files."""
+        if self.feed_unit not in _PER_MINUTE:
+            raise ValueError(f"removal_model.feed_unit: expected one of {sorted(_PER_MINUTE)}, got {self.feed_unit!r}")
+        return _PER_MINUTE[self.feed_unit] * np.asarray(feed, dtype=np.float64)
+
     def _args(self) -> tuple[float, tuple[float, float, float], float, float, tuple[float, float]]:
+        if self.feed_unit not in _PER_MINUTE:
+            raise ValueError(f"removal_model.feed_unit: expected one of {sorted(_PER_MINUTE)}, got {self.feed_unit!r}")
         e = tuple(float(x) for x in self.exponents)
         lim = tuple(float(x) for x in self.feed_limits)
         if len(e) != 3 or len(lim) != 2:
@@ -376,7 +410,10 @@ class GrindingPaths:
     allowance : ndarray, shape (M,)
         The allowance field at each point, mm.
     feed : ndarray, shape (M,)
-        Feed removing that allowance under the removal model, clamped to its limits; NaN without a model.
+        The feed programmed at each point, in the removal model's ``feed_unit`` (mm/s for the paper's
+        calibration): the feed removing the point's allowance, clamped to the limits, and held along the path
+        while that stays within ``feed_step`` of the feed in force (so a CL file gets a FEDRAT per real change).
+        NaN without a model. :meth:`feed_per_minute` gives it in mm/min, as :meth:`to_apt` writes it.
     tool_fits : ndarray of bool, shape (M,)
         False where the surface is concave with a radius no larger than the tool's: the tool cannot reach there.
     row_offsets : ndarray, shape (rows,)
@@ -414,11 +451,18 @@ class GrindingPaths:
             return self.allowance.copy()
         return self.removal_model.removal(self.feed)
 
+    def feed_per_minute(self) -> NDArray[np.float64]:
+        """The programmed feed at each path point in mm/min (the unit of CL files); NaN without a removal model."""
+        if self.removal_model is None:
+            return self.feed.copy()
+        return self.removal_model.per_minute(self.feed)
+
     def to_apt(self, path: str | os.PathLike[str]) -> None:
-        """Write the path as APT/CL: ``GOTO/x,y,z,i,j,k`` per point (contact point and outward normal), ``FEDRAT/``
-        where the feed changes (none without a removal model). Reads back through :func:`machscan.io.read_toolpath`.
+        """Write the path as APT/CL: ``UNITS/MM``, ``GOTO/x,y,z,i,j,k`` per point (contact point and outward
+        normal), ``FEDRAT/MMPM,f`` in mm/min where the programmed feed changes (none without a removal model).
+        :func:`machscan.io.read_toolpath` reads it back with ``feeds`` equal to :meth:`feed_per_minute`.
         """
-        feeds = self.feed if np.isfinite(self.feed).all() else None
+        feeds = self.feed_per_minute() if np.isfinite(self.feed).all() else None
         write_toolpath(path, self.points, axes=self.normals, feeds=feeds)
 
 
@@ -435,6 +479,7 @@ def grinding_paths(
     spacing: float | None = None,
     tolerance: float | None = None,
     fit_radius: float | None = None,
+    feed_step: float = FEED_STEP,
 ) -> GrindingPaths:
     """Belt-grinding paths over an allowance cloud, rows spaced by the scallop height (SPEC P1–P5; paper 004 §2–3).
 
@@ -478,6 +523,10 @@ def grinding_paths(
         the edge.
     fit_radius : float, optional
         Radius of the curvature fits, mm; default the flat step-over, at least four point spacings.
+    feed_step : float
+        A new feed is programmed where the feed that removes the allowance departs from the one in force by
+        more than this share of it (default 0.03: at the paper's feed exponent −0.7 the removal then differs
+        from the wanted by at most 2.1 %); 0 programs every change.
 
     Returns
     -------
@@ -503,6 +552,7 @@ def grinding_paths(
         tolerance=tolerance,
         fit_radius=fit_radius,
         removal=None if model is None else model._args(),
+        feed_step=feed_step,
     )
     return GrindingPaths(
         **out,

@@ -1,5 +1,6 @@
 //! Point cloud preparation (SPEC F, papers 002 §2 and 004 §1.1): filters, normals and
 //! curvature, octree simplification keeping features and the boundary.
+//! The formulas: docs/clouds.md.
 mod filters;
 mod normals;
 mod octree;

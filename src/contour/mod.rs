@@ -1,5 +1,6 @@
 //! Contours (SPEC C, paper 000 §2.2): polyline discretisation, matching actual to theoretical
 //! contours, and the contour error with the bidirectional nearest-point correction.
+//! The formulas: docs/contours.md.
 mod error;
 mod matching;
 mod polyline;

@@ -1,5 +1,6 @@
 //! Small shared geometry: elementary rotations, the Euler forms the papers use, rigid
 //! transforms and the Kabsch fit.
+//! The formulas: docs/kinematics.md.
 mod rigid;
 mod rotation;
 

@@ -7,6 +7,7 @@ use super::measure::{measure_frame, MeasureSettings, SECTION_CRITERIA};
 use super::section::SectionModel;
 use super::template::{gradient, tanh_pair, TanhTemplate};
 use crate::error::{Error, Result};
+use crate::kinematics::ValidReadings;
 use crate::optim::{levenberg_marquardt, LeastSquares, LmOptions, LmStop};
 use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
@@ -182,6 +183,9 @@ pub struct GrooveOptions {
     pub min_valid: usize,
     /// When each fit stops.
     pub criteria: FitCriteria,
+    /// Which readings are valid: the others (NaN, the vendor's no-reading code, outside the
+    /// measuring range) are left out, by the rule every function that takes frames applies.
+    pub valid: ValidReadings,
 }
 
 impl Default for GrooveOptions {
@@ -197,6 +201,7 @@ impl Default for GrooveOptions {
             min_depth: 0.03,
             min_valid: 12,
             criteria: FitCriteria::default(),
+            valid: ValidReadings::default(),
         }
     }
 }
@@ -789,6 +794,8 @@ pub fn view_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> Result<FrameView> 
     if x.len() != z.len() {
         return Err(Error::shape("z", format!("({},): one value per x", x.len()), format!("({},)", z.len())));
     }
+    let masked = o.valid.masked(z);
+    let z = &masked[..];
     const SAMPLES: usize = 400;
     let empty = |fit: GrooveFit| FrameView {
         x: Vec::new(),
@@ -863,7 +870,7 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<G
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
         return Err(Error::invalid("x", format!("must be finite, found {} at index {i}", x[i])));
     }
-    Ok(z.par_chunks(n).map(|row| fit_frame(x, row, options)).collect())
+    Ok(z.par_chunks(n).map(|row| fit_frame(x, &options.valid.masked(row), options)).collect())
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Groove cross-section extraction (SPEC G, paper 000 §2.1): per profiler frame, the groove's
 //! width, depth and center. The default measures the groove's geometry with section models
 //! (`measure`, `section`); the paper's tanh template stays available (`fit`, `template`).
+//! The formulas: docs/grooves.md.
 mod fit;
 mod measure;
 mod section;

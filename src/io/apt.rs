@@ -163,7 +163,8 @@ pub fn read_apt(path: &Path) -> Result<Toolpath> {
     parse_apt(path, &text)
 }
 
-/// Writes a CL file: `GOTO/x, y, z[, i, j, k]` per point (tool axes when given), `FEDRAT/f`
+/// Writes a CL file: `GOTO/x, y, z[, i, j, k]` per point (tool axes when given), `FEDRAT/MMPM,f`
+/// (`feeds` in mm per minute, the unit word written so no post-processor has to assume it)
 /// whenever the feed changes, `RAPID` before the first point of every segment but the first
 /// (`segments` labels each point; a new label starts a segment).
 pub fn write_apt(
@@ -226,7 +227,9 @@ pub fn write_apt(
     }
     let io = |e: std::io::Error| Error::io(path, "write", &e);
     let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
-    writeln!(w, "PARTNO/ MACHSCAN TOOLPATH\n$$ written by machscan {}", env!("CARGO_PKG_VERSION")).map_err(io)?;
+    // The units said in the file, so that a post-processor assumes neither: mm, feeds per minute.
+    writeln!(w, "PARTNO/ MACHSCAN TOOLPATH\n$$ written by machscan {}\nUNITS/MM", env!("CARGO_PKG_VERSION"))
+        .map_err(io)?;
     if axes.is_some() {
         writeln!(w, "MULTAX").map_err(io)?;
     }
@@ -239,7 +242,7 @@ pub fn write_apt(
         }
         if let Some(f) = feeds {
             if f[i].is_finite() && f[i] != last_feed {
-                writeln!(w, "FEDRAT/{}", f[i]).map_err(io)?;
+                writeln!(w, "FEDRAT/MMPM,{}", f[i]).map_err(io)?;
                 last_feed = f[i];
             }
         }
@@ -320,6 +323,8 @@ mod tests {
         let segments: Vec<f64> = tp.segments.iter().map(|&s| s as f64).collect();
         write_apt(&path, &tp.points, Some(&tp.axes), Some(&tp.feeds), Some(&segments)).unwrap();
         let back = read_apt(&path).unwrap();
+        let written = std::fs::read_to_string(&path).unwrap();
+        assert!(written.contains("UNITS/MM\n") && written.contains("FEDRAT/MMPM,800\n"), "{written}");
         assert_eq!(back.points, tp.points);
         assert_eq!((back.feeds, back.segments), (tp.feeds, tp.segments));
         assert!(back.axes.iter().zip(&tp.axes).all(|(a, b)| a == b || (a.is_nan() && b.is_nan())));

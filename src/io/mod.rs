@@ -1,6 +1,7 @@
 //! Point cloud, mesh and toolpath files (SPEC F formats). `read_file` and `write_file` choose
 //! the format by the extension; the list of formats is `FileFormat::ALL`, the one place the
 //! extensions are spelled.
+//! The formats: docs/clouds.md.
 mod apt;
 mod lzf;
 mod obj;

@@ -11,17 +11,57 @@ use crate::error::{Error, Result};
 /// profilers that write NaN instead.
 pub const VENDOR_SENTINEL: f64 = -99999.0;
 
+/// Which readings count (SPEC K1): a finite number inside the measuring range that is not the
+/// profiler's "no reading" code. The one rule of every function that takes frames (points,
+/// groove fits, masks), so that a reading dropped by one is dropped by all.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ValidReadings {
+    /// Readings outside `[lo, hi]` are invalid.
+    pub lo: f64,
+    pub hi: f64,
+    /// A reading equal to this is invalid (the profiler's "no reading" code); NaN never is valid.
+    pub sentinel: Option<f64>,
+}
+
+impl Default for ValidReadings {
+    /// Any finite reading but the vendor sentinel.
+    fn default() -> Self {
+        ValidReadings { lo: f64::NEG_INFINITY, hi: f64::INFINITY, sentinel: Some(VENDOR_SENTINEL) }
+    }
+}
+
+impl ValidReadings {
+    /// Checks the range (`lo ≤ hi`, no NaN; None: unbounded); a NaN sentinel means "the profiler
+    /// writes NaN", which is invalid anyway.
+    pub fn new(valid_range: Option<(f64, f64)>, sentinel: Option<f64>) -> Result<Self> {
+        let (lo, hi) = valid_range.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+        if lo.is_nan() || hi.is_nan() || lo > hi {
+            return Err(Error::invalid("valid_range", format!("must be (lo, hi) with lo <= hi, got ({lo}, {hi})")));
+        }
+        Ok(ValidReadings { lo, hi, sentinel: sentinel.filter(|s| !s.is_nan()) })
+    }
+
+    /// A reading is valid when it is a number inside the measuring range and not the sentinel.
+    #[inline]
+    pub fn is_valid(&self, d: f64) -> bool {
+        // NaN fails both comparisons.
+        d >= self.lo && d <= self.hi && d.is_finite() && Some(d) != self.sentinel
+    }
+
+    /// The readings with every invalid one turned into NaN (what the groove fits take).
+    pub fn masked(&self, readings: &[f64]) -> Vec<f64> {
+        readings.iter().map(|&d| if self.is_valid(d) { d } else { f64::NAN }).collect()
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Profiler {
     /// Reading spacing δ along the laser line, mm.
     pub pitch: f64,
     /// Index i0 of the reading at SCS x = 0 (paper 000: N/2).
     pub center: f64,
-    /// Readings outside `[lo, hi]` are invalid.
-    pub valid_lo: f64,
-    pub valid_hi: f64,
-    /// A reading equal to this is invalid (the profiler's "no reading" code); NaN never is valid.
-    pub sentinel: Option<f64>,
+    /// Which readings are valid.
+    pub valid: ValidReadings,
 }
 
 impl Profiler {
@@ -43,20 +83,13 @@ impl Profiler {
         if !center.is_finite() {
             return Err(Error::invalid("center", format!("must be finite, got {center}")));
         }
-        let (lo, hi) = valid_range.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-        if lo.is_nan() || hi.is_nan() || lo > hi {
-            return Err(Error::invalid("valid_range", format!("must be (lo, hi) with lo <= hi, got ({lo}, {hi})")));
-        }
-        // A NaN sentinel means "the profiler writes NaN", which is invalid anyway.
-        let sentinel = sentinel.filter(|s| !s.is_nan());
-        Ok(Profiler { pitch, center, valid_lo: lo, valid_hi: hi, sentinel })
+        Ok(Profiler { pitch, center, valid: ValidReadings::new(valid_range, sentinel)? })
     }
 
     /// A reading is valid when it is a number inside the measuring range and not the sentinel.
     #[inline]
     pub fn is_valid(&self, d: f64) -> bool {
-        // NaN fails both comparisons.
-        d >= self.valid_lo && d <= self.valid_hi && d.is_finite() && Some(d) != self.sentinel
+        self.valid.is_valid(d)
     }
 
     /// SCS x of reading `i`.

@@ -162,7 +162,7 @@ mod tests {
         assert_eq!(out.frame_index, vec![0, 1, 1]);
         assert_eq!(out.dropped, 3);
         let none = Profiler::new(0.5, 3, None, None, Some(f64::NAN)).unwrap();
-        assert_eq!(none.sentinel, None);
+        assert_eq!(none.valid.sentinel, None);
         let kept = super::super::profile_to_points(&frames, 3, &Profiler::new(0.5, 3, None, None, None).unwrap());
         assert_eq!(kept.unwrap().frame_index.len(), 5, "without a sentinel −99999 is a reading");
         assert!(Profiler::new(0.5, 0, None, None, None).is_err());

@@ -13,6 +13,7 @@
 //! differentiated) or the gradient of a's distance field at p'ⱼ (SPEC S4 Beyond), fitted over
 //! the two rings of mesh vertices around p'ⱼ. The Jacobian only steers the steps: both end at
 //! the same matched points; the gradient takes fewer steps.
+//! The formulas: docs/matching.md.
 use crate::error::{check_finite_points, Error, Result};
 use crate::mesh::{
     closest_points, geodesic_distances, insert_points, off_surface, off_surface_limit, GeodesicMethod, XyLocator,

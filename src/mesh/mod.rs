@@ -1,6 +1,7 @@
 //! Surface meshes of scanned and theoretical surfaces (SPEC S1–S3; paper 002 §3): the Delaunay
 //! triangulation of a height-field surface in its xy projection, closest points on a mesh, and
 //! points inserted as vertices.
+//! The formulas: docs/mesh.md.
 pub mod closest;
 pub mod delaunay;
 pub mod geodesic;

@@ -2,6 +2,7 @@
 //! Tingleff 2004), for small fixed-size problems: the parameter count is a const generic, the
 //! normal equations live on the stack, and the problem accumulates JᵀJ and Jᵀf itself so no
 //! Jacobian matrix is ever stored (a groove frame has ~200 residuals, a calibration thousands).
+//! The formulas: docs/grooves.md ("The optimiser").
 use nalgebra::{SMatrix, SVector};
 
 mod bounded;

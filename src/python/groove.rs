@@ -2,15 +2,16 @@
 //! travel as one dict with exactly the keys of `groove_defaults()` (the `_GrooveOptions`
 //! TypedDict of the stub), so they are spelled and defaulted in one place each: here from
 //! `GrooveOptions::default()`, and by the Python signatures that read `groove_defaults()`.
-use super::convert::{count, enter, to_numpy, Dim, F64Array};
+use super::convert::{count, enter, f64_vector_opt, to_numpy, Dim, F64Array};
 use crate::groove::{
     fit_frames, view_frame, FitCriteria, GrooveFit, GrooveOptions, TemplateKind, SECTION_CRITERIA, TANH_CRITERIA,
 };
+use crate::kinematics::ValidReadings;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-const KEYS: [&str; 13] = [
+const KEYS: [&str; 15] = [
     "template",
     "alpha",
     "nominal_width",
@@ -24,6 +25,8 @@ const KEYS: [&str; 13] = [
     "cost_tolerance",
     "step_tolerance",
     "gradient_tolerance",
+    "sentinel",
+    "valid_range",
 ];
 
 /// `GrooveOptions` from the options dict; a missing or unknown key is an error naming it.
@@ -62,6 +65,10 @@ fn options(d: &Bound<'_, PyDict>) -> PyResult<GrooveOptions> {
             step_tolerance: opt_float("step_tolerance")?,
             gradient_tolerance: opt_float("gradient_tolerance")?,
         },
+        valid: ValidReadings::new(
+            f64_vector_opt::<2>(Some(&get("valid_range")?), "valid_range", "(lo, hi) in mm")?.map(|[lo, hi]| (lo, hi)),
+            opt_float("sentinel")?,
+        )?,
     })
 }
 
@@ -84,6 +91,9 @@ fn groove_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("cost_tolerance", o.criteria.cost_tolerance)?;
     d.set_item("step_tolerance", o.criteria.step_tolerance)?;
     d.set_item("gradient_tolerance", o.criteria.gradient_tolerance)?;
+    d.set_item("sentinel", o.valid.sentinel)?;
+    let range = (o.valid.lo, o.valid.hi);
+    d.set_item("valid_range", (range.0.is_finite() || range.1.is_finite()).then_some(range))?;
     Ok(d)
 }
 

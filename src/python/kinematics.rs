@@ -557,7 +557,27 @@ impl PyKinematicChain {
     }
 }
 
+/// Which readings are valid (SPEC K1): finite, not the ``sentinel`` and inside
+/// ``valid_range``: the one rule of every function that takes frames; ``Profiler.valid_mask``
+/// documents it and reshapes the flat ``readings`` it hands over.
+#[pyfunction]
+#[pyo3(signature = (readings, *, valid_range=None, sentinel=Some(VENDOR_SENTINEL)))]
+fn valid_readings<'py>(
+    py: Python<'py>,
+    readings: &Bound<'py, PyAny>,
+    valid_range: Option<&Bound<'py, PyAny>>,
+    sentinel: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let arr = F64Array::extract(readings, "readings", &[Dim::Any("N")], "(readings, mm)")?;
+    let valid_range = f64_vector_opt::<2>(valid_range, "valid_range", "(lo, hi) in mm")?.map(|[lo, hi]| (lo, hi));
+    let rule = kin::ValidReadings::new(valid_range, sentinel)?;
+    let values = arr.values()?;
+    let n = values.len();
+    to_numpy(py, values.iter().map(|&d| rule.is_valid(d)).collect::<Vec<bool>>(), &[n])
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(valid_readings, m)?)?;
     m.add_function(wrap_pyfunction!(profile_to_points, m)?)?;
     m.add_function(wrap_pyfunction!(scan_to_wcs, m)?)?;
     m.add_function(wrap_pyfunction!(ac_head_transforms, m)?)?;

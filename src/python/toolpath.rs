@@ -171,7 +171,7 @@ fn column<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<F64Array<'py>> {
 #[pyfunction]
 #[pyo3(signature = (
     points, normals, allowance, *, tool_radius, scallop_height, section_normal, thickness, spacing, tolerance, fit_radius,
-    removal
+    removal, feed_step
 ))]
 #[allow(clippy::too_many_arguments)]
 fn grinding_paths<'py>(
@@ -187,6 +187,7 @@ fn grinding_paths<'py>(
     tolerance: Option<f64>,
     fit_radius: Option<f64>,
     removal: Option<RemovalArgs>,
+    feed_step: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let p = F64Array::points(points, "points")?;
     let nn = F64Array::points(normals, "normals")?;
@@ -203,6 +204,7 @@ fn grinding_paths<'py>(
             tolerance,
             fit_radius,
             removal: removal.map(removal_model).transpose()?,
+            feed_step,
         };
         run_grinding_paths(pr, nr, av, &options)
     })?;
@@ -300,6 +302,7 @@ fn simulate_removal<'py>(
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("GRINDING_FEED_STEP", crate::toolpath::grinding::DEFAULT_FEED_STEP)?;
     m.add_function(wrap_pyfunction!(grinding_paths, m)?)?;
     m.add_function(wrap_pyfunction!(removal_feeds, m)?)?;
     m.add_function(wrap_pyfunction!(removal_depths, m)?)?;

@@ -1,5 +1,6 @@
 //! Registration (SPEC R; papers 003 and 004 §1): where a measured part really sits against its
 //! model. `icp` is the kernel the positioning and allowance workflows stand on.
+//! The formulas: docs/registration.md.
 pub mod allowance;
 pub mod coarse;
 pub mod envelope;

@@ -1,6 +1,7 @@
 //! Neighborhood queries over point clouds, in one place for clustering, filters, normals and
 //! registration: `PointIndex` (kiddo) for queries from arbitrary points, `CloudNeighbors` for
 //! the neighborhoods of every point of a cloud at once; and Euclidean clustering (SPEC C1).
+//! The formulas: docs/clouds.md (neighbors), docs/contours.md (clustering).
 mod cluster;
 mod index;
 mod neighbors;

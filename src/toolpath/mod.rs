@@ -23,6 +23,7 @@
 //! Tool points whose foot lies outside the xy hull of the theoretical matching points are
 //! extrapolated (by the spline, or by the plane of the nearest triangle) and flagged in
 //! `inside`.
+//! The formulas: docs/matching.md (compensation), docs/grinding.md (grinding paths).
 pub mod bead_chain;
 mod edge;
 pub mod grinding;
