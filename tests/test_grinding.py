@@ -247,14 +247,34 @@ def test_bad_arguments_are_refused_by_name(panel_paths, kwargs, name):
         machscan.grinding_paths(**args)
 
 
+def test_points_without_stock_are_left_out_and_counted_by_every_consumer(panel_paths):
+    # Issue #32 §2: NaN allowance = no stock measured (the blank does not cover the point). grinding_paths leaves
+    # those points out and counts them; the removal check gives them NaN and its section figures skip them.
+    _, cloud, _ = panel_paths
+    a = cloud.allowance.copy()
+    hole = np.linalg.norm(cloud.points[:, :2] - [20.0, 40.0], axis=1) < 3.0
+    a[hole] = np.nan
+    paths = machscan.grinding_paths(cloud.points, cloud.normals, a, 8.0, 0.01, (0, 1, 0), MODEL)
+    assert paths.without_stock == int(hole.sum()) > 0
+    assert f"{paths.without_stock} cloud points without stock" in repr(paths)
+    assert np.isfinite(paths.allowance).all() and np.isfinite(paths.feed).all()
+    # The rows do not cross the hole (the nearest path point is more than half a spacing from its middle).
+    assert np.linalg.norm(paths.points[:, :2] - [20.0, 40.0], axis=1).min() > 2.0
+    check = machscan.simulate_removal(paths, cloud.points, cloud.normals, a)
+    np.testing.assert_array_equal(np.isnan(check.deviation), hole)
+    assert np.isfinite(check.mean).all() and np.isfinite(check.minimum).all()
+
+
 def test_bad_clouds_are_refused_by_name(panel_paths):
     _, cloud, _ = panel_paths
     p, n, a = cloud.points[:500], cloud.normals[:500], cloud.allowance[:500].copy()
     with pytest.raises(ValueError, match="normals"):
         machscan.grinding_paths(p, n[:-1], a, 8.0, 0.01, (0, 1, 0))
-    a[7] = np.nan
+    a[7] = np.inf
     with pytest.raises(ValueError, match="allowance"):
         machscan.grinding_paths(p, n, a, 8.0, 0.01, (0, 1, 0))
+    with pytest.raises(ValueError, match="allowance"):
+        machscan.grinding_paths(p, n, np.full(len(p), np.nan), 8.0, 0.01, (0, 1, 0))
     with pytest.raises(ValueError, match="normals"):
         machscan.grinding_paths(p, np.zeros_like(n), cloud.allowance[:500], 8.0, 0.01, (0, 1, 0))
     with pytest.raises(ValueError, match="normals"):

@@ -163,6 +163,7 @@ class _GrindingPathArrays(TypedDict):
     tool_fits: NDArray[np.bool_]
     row_offsets: _F64
     row_closed: NDArray[np.bool_]
+    without_stock: int
 
 class _RemovalArrays(TypedDict):
     deviation: _F64

@@ -438,7 +438,8 @@ def _read_allowance(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     from machscan.io import read
 
     if path.suffix.lower() in (".csv", ".txt"):
-        rows = _read_rows(path, "ALLOWANCE", (7,))
+        # NaN in the allowance column: no stock measured there (as `machscan allowance` writes it).
+        rows = _read_rows(path, "ALLOWANCE", (7,), nan_columns=(6,))
         return rows[:, :3], rows[:, 3:6], rows[:, 6]
     f = read(path)
     if f.normals is None or "allowance" not in f.scalars:
@@ -462,8 +463,6 @@ def _grind(args: argparse.Namespace) -> int:
     elif args.blank is not None:
         points, normals = _read_model(args.source)
         stock = allowance(points, normals, read_points(args.blank))
-        keep = np.isfinite(stock)
-        points, normals, stock = points[keep], normals[keep], stock[keep]
     else:
         points, normals, stock = _read_allowance(args.source)
     model = None
@@ -523,9 +522,14 @@ def _grind(args: argparse.Namespace) -> int:
     return 0 if holds else 3
 
 
-def _check_finite(name: str, path: Path, rows: np.ndarray) -> None:
-    """Refuses rows read from ``path`` (for ``name``) that are not all finite, naming the first."""
-    bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
+def _check_finite(name: str, path: Path, rows: np.ndarray, nan_columns: tuple[int, ...] = ()) -> None:
+    """Refuses rows read from ``path`` (for ``name``) that are not all finite, naming the first; NaN is allowed in
+    ``nan_columns`` (a value not measured)."""
+    finite = np.isfinite(rows)
+    for c in nan_columns:
+        if c < rows.shape[1]:
+            finite[:, c] |= np.isnan(rows[:, c])
+    bad = np.flatnonzero(~finite.all(axis=1))
     if bad.size:
         raise ValueError(f"{name}: {path} has {bad.size} rows that are not finite, the first at row {bad[0]}")
 
@@ -536,7 +540,7 @@ def _check_positive_mm(option: str, value: float) -> None:
         raise ValueError(f"{option}: must be a positive number of mm, got {value:g}")
 
 
-def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
+def _read_rows(path: Path, name: str, widths: tuple[int, ...], nan_columns: tuple[int, ...] = ()) -> np.ndarray:
     """A CSV table of numbers of one of ``widths`` columns; ``#`` starts a comment; a first line with a field
     that is not a number and letters in it is a header (``x,y,z``)."""
     try:
@@ -560,7 +564,7 @@ def _read_rows(path: Path, name: str, widths: tuple[int, ...]) -> np.ndarray:
         raise ValueError(f"{name}: {path} is not a comma-separated table of numbers ({e})") from None
     if rows.size == 0:
         raise ValueError(f"{name}: {path} holds no rows of numbers")
-    _check_finite(name, path, rows)
+    _check_finite(name, path, rows, nan_columns)
     if rows.shape[1] not in widths:
         raise ValueError(f"{name}: {path} has {rows.shape[1]} columns, expected {' or '.join(map(str, widths))}")
     return rows

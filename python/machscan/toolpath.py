@@ -420,6 +420,9 @@ class GrindingPaths:
         Each row's plane: offset along the unit section normal, mm (non-decreasing; the pieces of a cut row share it).
     row_closed : ndarray of bool, shape (rows,)
         Whether the row closes round the part (a blade section) or runs edge to edge.
+    without_stock : int
+        Cloud points left out because their allowance is NaN: no stock was measured there (the blank does not
+        cover them). The rows do not cross them; grind them once the blank is measured there.
     tool_radius, scallop_height : float
         As requested.
     section_normal : ndarray, shape (3,)
@@ -436,13 +439,18 @@ class GrindingPaths:
     tool_fits: NDArray[np.bool_]
     row_offsets: NDArray[np.float64]
     row_closed: NDArray[np.bool_]
+    without_stock: int
     tool_radius: float
     scallop_height: float
     section_normal: NDArray[np.float64]
     removal_model: RemovalModel | None
 
     def __repr__(self) -> str:
-        return f"GrindingPaths({len(self.points)} points in {len(self.row_offsets)} rows, tool radius {self.tool_radius} mm)"
+        left_out = f", {self.without_stock} cloud points without stock left out" if self.without_stock else ""
+        return (
+            f"GrindingPaths({len(self.points)} points in {len(self.row_offsets)} rows, tool radius {self.tool_radius} mm"
+            f"{left_out})"
+        )
 
     def removal(self) -> NDArray[np.float64]:
         """The depth removed at each path point: the removal model at the point's feed, or its allowance when the
@@ -502,7 +510,8 @@ def grinding_paths(
     normals : array_like, shape (N, 3)
         Outward normals there, pointing to the tool side (need not be unit).
     allowance : array_like, shape (N,)
-        Stock above the model at each point, mm.
+        Stock above the model at each point, mm; NaN where none was measured (as :func:`machscan.allowance` gives
+        where the blank does not cover the model): those points are left out and counted in ``without_stock``.
     tool_radius : float
         Contact radius R of the wheel across the rows, mm.
     scallop_height : float
@@ -570,11 +579,12 @@ class RemovalCheck:
     Attributes
     ----------
     deviation : ndarray, shape (N,)
-        Stock left over the model at each blank point after the pass, mm (negative: ground below the model).
+        Stock left over the model at each blank point after the pass, mm (negative: ground below the model); NaN
+        where the blank's allowance is NaN (no stock measured there).
     section : ndarray of int64, shape (N,)
         The row (section) each blank point belongs to: that of its nearest path point.
     minimum, maximum, mean : ndarray, shape (rows,)
-        The deviation over each section's points (NaN for a section with none).
+        The deviation over each section's points with stock (NaN for a section with none).
     """
 
     deviation: NDArray[np.float64]
@@ -604,7 +614,7 @@ def simulate_removal(paths: GrindingPaths, points: ArrayLike, normals: ArrayLike
     paths : GrindingPaths
     points, normals, allowance : array_like
         The blank as model points, their outward normals and the stock above them (e.g. the cloud the path was
-        made from, or a denser one).
+        made from, or a denser one); an allowance of NaN (no stock measured) gives a deviation of NaN.
 
     Returns
     -------
@@ -630,13 +640,14 @@ def simulate_removal(paths: GrindingPaths, points: ArrayLike, normals: ArrayLike
     section = paths.row[out["nearest"]]
     rows = len(paths.row_offsets)
     dev = out["deviation"]
-    count = np.bincount(section, minlength=rows)
+    measured = ~np.isnan(dev)
+    count = np.bincount(section[measured], minlength=rows)
     with np.errstate(invalid="ignore", divide="ignore"):
-        mean = np.bincount(section, weights=dev, minlength=rows) / count
+        mean = np.bincount(section[measured], weights=dev[measured], minlength=rows) / count
     minimum = np.full(rows, np.inf)
     maximum = np.full(rows, -np.inf)
-    np.minimum.at(minimum, section, dev)
-    np.maximum.at(maximum, section, dev)
+    np.minimum.at(minimum, section[measured], dev[measured])
+    np.maximum.at(maximum, section[measured], dev[measured])
     empty = count == 0
     minimum[empty] = maximum[empty] = np.nan
     return RemovalCheck(deviation=dev, section=section, minimum=minimum, maximum=maximum, mean=mean)

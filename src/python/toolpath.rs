@@ -219,6 +219,7 @@ fn grinding_paths<'py>(
     d.set_item("tool_fits", to_numpy(py, r.tool_fits, &[m])?)?;
     d.set_item("row_offsets", to_numpy(py, r.row_offsets, &[rows])?)?;
     d.set_item("row_closed", to_numpy(py, r.row_closed, &[rows])?)?;
+    d.set_item("without_stock", r.without_stock)?;
     Ok(d)
 }
 

@@ -202,6 +202,9 @@ pub struct GrindingPaths {
     /// whether it closes up.
     pub row_offsets: Vec<f64>,
     pub row_closed: Vec<bool>,
+    /// Cloud points left out because their allowance is NaN: no stock was measured there (the
+    /// blank does not cover the point).
+    pub without_stock: usize,
 }
 
 /// A quadric height field h(x, y) = c₀ + c₁x + c₂y + c₃x² + c₄xy + c₅y² over the frame
@@ -471,11 +474,14 @@ impl Cloud<'_> {
         // cloud) the fit extrapolates, and its error grows with the patch's size.
         let sigma = (self.p(near[near.len() / 3]) - q).norm().max(1e-9);
         let pts: Vec<V3> = near.iter().map(|&i| self.p(i)).collect();
+        // Where a neighbour has no stock measured the stock here is not known either: the fit
+        // gives the geometry, and the allowance is NaN (the row is cut there).
+        let unknown = near.iter().any(|&i| self.allowance[i].is_nan());
         let vals: Vec<[f64; CHANNELS]> = near
             .iter()
             .map(|&i| {
                 let m = self.normals[i];
-                [0.0, self.allowance[i], m.x, m.y, m.z]
+                [0.0, if unknown { 0.0 } else { self.allowance[i] }, m.x, m.y, m.z]
             })
             .collect();
         let fitted = || {
@@ -486,7 +492,7 @@ impl Cloud<'_> {
             // The normal interpolated from the given ones: a model's normals are exact, and a
             // scan's were estimated over more points than this patch holds.
             let normal = V3::new(nx, ny, nz);
-            (normal.norm() > 0.0).then(|| (on, normal.normalize(), allowance))
+            (normal.norm() > 0.0).then(|| (on, normal.normalize(), if unknown { f64::NAN } else { allowance }))
         };
         // Where the surface turns within the patch (a trailing edge a few point spacings round)
         // a fit says nothing reliable: it must agree with the nearest points' own normals, or q
@@ -517,8 +523,10 @@ impl Cloud<'_> {
         let sigma = 1.5 * found[found.len() / 3].1.sqrt();
         let points: Vec<V3> = found.iter().map(|&(i, _)| self.p(i)).collect();
         let normals: Vec<V3> = found.iter().map(|&(i, _)| self.normals[i]).collect();
-        let allowance: Vec<f64> = found.iter().map(|&(i, _)| self.allowance[i]).collect();
-        EdgePatch::fit(q, reference, &points, &normals, &allowance, sigma)?.place_in_plane(q, n)
+        let unknown = found.iter().any(|&(i, _)| self.allowance[i].is_nan());
+        let allowance: Vec<f64> = found.iter().map(|&(i, _)| if unknown { 0.0 } else { self.allowance[i] }).collect();
+        let (on, normal, value) = EdgePatch::fit(q, reference, &points, &normals, &allowance, sigma)?.place_in_plane(q, n)?;
+        Some((on, normal, if unknown { f64::NAN } else { value }))
     }
 
     /// The given normals and allowances of the 4 nearest points on one side, weighted by inverse
@@ -714,14 +722,17 @@ impl Row {
     fn pieces(self, tool_radius: f64, limit: f64) -> Vec<Row> {
         let n = self.points.len();
         let links = if self.closed { n } else { n.saturating_sub(1) };
+        // A path point whose stock is unknown (NaN allowance) is no path point: the links on both
+        // sides of it are cut, and the piece it alone makes is dropped below.
         let cut: Vec<usize> = (0..links)
             .filter(|&k| {
                 let (a, b) = (&self.points[k], &self.points[(k + 1) % n]);
-                centre_stray(a.0, a.1, b.0, b.1, tool_radius) > limit
+                a.3.is_nan() || b.3.is_nan() || centre_stray(a.0, a.1, b.0, b.1, tool_radius) > limit
             })
             .collect();
         if cut.is_empty() {
-            return vec![self];
+            // Only a row of one point can have nothing to cut; without stock it is no row.
+            return if self.points.iter().any(|p| p.3.is_nan()) { Vec::new() } else { vec![self] };
         }
         let mut points = self.points;
         let mut ends: Vec<usize> = cut.iter().map(|&k| k + 1).collect();
@@ -737,7 +748,7 @@ impl Row {
         let mut out = Vec::with_capacity(ends.len());
         let mut start = 0;
         for end in ends {
-            if end > start {
+            if end > start && !points[start].3.is_nan() {
                 out.push(Row { points: points[start..end].to_vec(), closed: false });
             }
             start = end;
@@ -747,7 +758,10 @@ impl Row {
 }
 
 fn check_inputs(cloud: Stock, o: &GrindingOptions) -> Result<V3> {
-    cloud.check("")?;
+    cloud.check("", true)?;
+    if cloud.allowance.iter().all(|a| a.is_nan()) {
+        return Err(Error::invalid("allowance", "is NaN at every point: no stock was measured anywhere"));
+    }
     let points = cloud.points;
     if points.len() < LOCAL_POINTS {
         return Err(Error::invalid(
@@ -788,7 +802,10 @@ fn check_inputs(cloud: Stock, o: &GrindingOptions) -> Result<V3> {
     Ok(n.normalize())
 }
 
-/// Grinding paths over an allowance cloud (module docs).
+/// Grinding paths over an allowance cloud (module docs). A point whose allowance is NaN has no
+/// stock measured (the blank does not cover it): its surface still guides the rows, but no path
+/// point is put where the stock is unknown — a row is cut there — and the points are counted in
+/// `without_stock`: the rule every consumer of an allowance field applies.
 pub fn grinding_paths(
     points: &[[f64; 3]],
     normals: &[[f64; 3]],
@@ -856,7 +873,7 @@ pub fn grinding_paths(
         .collect::<Result<_>>()?;
 
     // 3. Joining.
-    let mut out = GrindingPaths::default();
+    let mut out = GrindingPaths { without_stock: allowance.iter().filter(|a| a.is_nan()).count(), ..Default::default() };
     let mut open_rows = 0usize;
     let feed_step = options.feed_step.unwrap_or(DEFAULT_FEED_STEP);
     let mut held = f64::NAN;
@@ -942,10 +959,24 @@ pub struct Stock<'a> {
 }
 
 impl Stock<'_> {
-    fn check(&self, prefix: &str) -> Result<()> {
+    /// Finite points and non-zero normals, one allowance per point: finite, or NaN where
+    /// `without_stock` allows a point with no stock measured.
+    fn check(&self, prefix: &str, without_stock: bool) -> Result<()> {
         check_finite_points(&format!("{prefix}points"), self.points)?;
         check_finite_points(&format!("{prefix}normals"), self.normals)?;
-        check_finite(&format!("{prefix}allowance"), self.allowance, 1)?;
+        if without_stock {
+            if let Some(i) = self.allowance.iter().position(|a| a.is_infinite()) {
+                return Err(Error::invalid(
+                    &format!("{prefix}allowance"),
+                    format!(
+                        "must be finite, or NaN where no stock was measured; found {} at row {i}",
+                        self.allowance[i]
+                    ),
+                ));
+            }
+        } else {
+            check_finite(&format!("{prefix}allowance"), self.allowance, 1)?;
+        }
         if self.normals.len() != self.points.len() || self.allowance.len() != self.points.len() {
             return Err(Error::invalid(
                 &format!("{prefix}normals"),
@@ -967,7 +998,7 @@ impl Stock<'_> {
 /// The stock left over the model at every blank point after a spherical tool of radius
 /// `tool_radius` at each path point, sunk by `depths` below the blank (model + allowance) there,
 /// has swept the path (module docs), and the nearest path point of each blank point. Negative
-/// stock: cut below the model. The tool centre moves in straight lines between the points of a
+/// stock: cut below the model; NaN where the blank's allowance is NaN (no stock measured there). The tool centre moves in straight lines between the points of a
 /// row (`rows`: the row of each path point), as a machine interpolates between GOTOs.
 pub fn simulate_removal(
     blank: Stock,
@@ -976,8 +1007,8 @@ pub fn simulate_removal(
     depths: &[f64],
     tool_radius: f64,
 ) -> Result<(Vec<f64>, Vec<usize>)> {
-    blank.check("")?;
-    path.check("path_")?;
+    blank.check("", true)?;
+    path.check("path_", false)?;
     check_finite("depths", depths, 1)?;
     check_positive("tool_radius", tool_radius, "mm")?;
     let m = path.points.len();
@@ -1021,6 +1052,9 @@ pub fn simulate_removal(
     Ok((0..points.len())
         .into_par_iter()
         .map(|i| {
+            if allowance[i].is_nan() {
+                return (f64::NAN, contacts.nearest(&points[i]).0);
+            }
             let q = V3::from(points[i]);
             let nq = V3::from(normals[i]).normalize();
             // The chords of q's normal line inside each tool position; the stock's top comes
