@@ -38,7 +38,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument(
-        "--bunny", type=Path, default=Path(__file__).resolve().parents[2] / "shared/data/stanford-bunny-mesh/stanford_bunny.ply"
+        "--bunny", type=Path, default=Path(__file__).resolve().parents[1] / "data/stanford-bunny-mesh/stanford_bunny.ply"
     )
     args = ap.parse_args()
     rng = np.random.default_rng(0)

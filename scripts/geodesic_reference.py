@@ -3,8 +3,8 @@ geodesic kernel (`src/mesh/geodesic_exact.rs`), which read them when present:
 
     python scripts/geodesic_reference.py [out_dir]      # default target/georef
 
-Writes <out_dir>/<mesh>.txt for the flat and hedgehog meshes of /work/shared/data/geodesic-flat-mesh
-and the Stanford bunny of /work/shared/data/stanford-bunny-mesh: "nv nf ns", nv vertex lines (repr
+Writes <out_dir>/<mesh>.txt for the flat and hedgehog meshes of data/geodesic-flat-mesh
+and the Stanford bunny of data/stanford-bunny-mesh: "nv nf ns", nv vertex lines (repr
 floats: exactly the float64 coordinates given to pygeodesic), nf face lines, then per source a line
 "source s seconds" (pygeodesic's time for that source) and nv distances ("inf" where unreached).
 The files are data, not committed.
@@ -20,7 +20,7 @@ import numpy as np
 import pygeodesic.geodesic as geodesic
 import trimesh
 
-DATA = Path("/work/shared/data")
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 def read_txt(path: Path) -> tuple[np.ndarray, np.ndarray]:

@@ -1,5 +1,5 @@
-"""Fixtures shared by the test modules: the shared data folder and the synthetic scans, built
-once per session (a full groove scan takes seconds)."""
+"""Fixtures shared by the test modules: the data folder and the synthetic scans, built once per
+session (a full groove scan takes seconds)."""
 
 import sys
 from pathlib import Path
@@ -14,9 +14,9 @@ from paths import DATA
 
 
 @pytest.fixture(scope="session")
-def shared_data() -> Path:
-    """`../shared/data`: the PCL bunny scans, the exact geodesic meshes, the Stanford bunny."""
-    assert DATA.is_dir(), f"the shared data folder is missing: {DATA}"
+def data_dir() -> Path:
+    """`data/`: the PCL bunny scans, the exact geodesic meshes, the Stanford bunny."""
+    assert DATA.is_dir(), f"the data folder is missing: {DATA}"
     return DATA
 
 

@@ -56,8 +56,8 @@ def test_duplicates_are_left_out_and_degenerate_input_raises_naming_points():
 
 
 @pytest.fixture(scope="module")
-def bunny_mesh(shared_data):
-    m = machscan.read_mesh(shared_data / "stanford-bunny-mesh" / "stanford_bunny.ply")
+def bunny_mesh(data_dir):
+    m = machscan.read_mesh(data_dir / "stanford-bunny-mesh" / "stanford_bunny.ply")
     return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.triangles)
 
 
@@ -152,9 +152,9 @@ def read_txt_mesh(path):
     return v, f
 
 
-def test_fmm_on_the_flat_mesh_is_euclidean_and_its_published_value(shared_data):
+def test_fmm_on_the_flat_mesh_is_euclidean_and_its_published_value(data_dir):
     # pygeodesic's flat test mesh: geodesic = Euclidean distance, d(25 -> 97) = 1.2·√2.
-    v, f = read_txt_mesh(shared_data / "geodesic-flat-mesh" / "flat_triangular_mesh.txt")
+    v, f = read_txt_mesh(data_dir / "geodesic-flat-mesh" / "flat_triangular_mesh.txt")
     d = machscan.geodesic_distances(v, f, [25, 97], method="fmm")
     np.testing.assert_allclose(d[0], np.linalg.norm(v - v[25], axis=1), atol=1e-9)
     assert d[0, 97] == pytest.approx(1.697056274847714, abs=1e-9) and d[1, 25] == pytest.approx(d[0, 97])
@@ -207,10 +207,10 @@ def pygeodesic_rows(vertices, faces, sources):
 
 
 @pytest.mark.parametrize("name", ["flat_triangular_mesh", "hedgehog_mesh"])
-def test_exact_geodesics_equal_pygeodesic_on_the_shared_test_meshes(shared_data, name):
+def test_exact_geodesics_equal_pygeodesic_on_the_shared_test_meshes(data_dir, name):
     # Measured: 3.6e-15 on the flat mesh (where both are also the Euclidean distance), 3.1e-15 on the
     # hedgehog (closed, irregular, saddles everywhere).
-    v, f = read_txt_mesh(shared_data / "geodesic-flat-mesh" / f"{name}.txt")
+    v, f = read_txt_mesh(data_dir / "geodesic-flat-mesh" / f"{name}.txt")
     sources = [0, 25, 97, len(v) - 1]
     ours = machscan.geodesic_distances(v, f, sources, method="exact")
     np.testing.assert_allclose(ours, pygeodesic_rows(v, f, sources), rtol=0, atol=1e-9)
@@ -336,12 +336,12 @@ def test_geodesic_distances_mark_unreached_vertices_and_refuse_bad_input():
 
 
 @pytest.mark.parametrize("method", ["exact", "fmm", "heat"])
-def test_a_geodesic_solver_gives_the_rows_of_geodesic_distances_call_after_call(shared_data, method):
+def test_a_geodesic_solver_gives_the_rows_of_geodesic_distances_call_after_call(data_dir, method):
     # The hedgehog: closed, irregular, saddles everywhere; the exact method's buffers are reused from
     # call to call and from thread to thread, which must not change a bit of any row.
     from concurrent.futures import ThreadPoolExecutor
 
-    v, f = read_txt_mesh(shared_data / "geodesic-flat-mesh" / "hedgehog_mesh.txt")
+    v, f = read_txt_mesh(data_dir / "geodesic-flat-mesh" / "hedgehog_mesh.txt")
     sources = [0, 25, 97, len(v) - 1]
     once = machscan.geodesic_distances(v, f, sources, method=method)
     solver = machscan.GeodesicSolver(v, f, method=method)

@@ -33,8 +33,8 @@ def moved(p, m):
 
 
 @pytest.fixture(scope="module")
-def bunny(shared_data):
-    d = shared_data / "pcl-bunny-icp"
+def bunny(data_dir):
+    d = data_dir / "pcl-bunny-icp"
     return machscan.read_points(d / "bun0.pcd"), machscan.read_points(d / "bun4.pcd")
 
 

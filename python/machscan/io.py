@@ -181,7 +181,7 @@ def read(
 
     Examples
     --------
-    >>> cloud = machscan.io.read("../shared/data/pcl-bunny-icp/bun0.pcd")
+    >>> cloud = machscan.io.read("data/pcl-bunny-icp/bun0.pcd")
     >>> cloud.points.shape
     (397, 3)
     """
@@ -222,7 +222,7 @@ def read_points(path: str | os.PathLike[str]) -> NDArray[np.float64]:
 
     Examples
     --------
-    >>> pts = machscan.read_points("../shared/data/pcl-bunny-icp/bun0.pcd")
+    >>> pts = machscan.read_points("data/pcl-bunny-icp/bun0.pcd")
     """
     return read(path).points
 
@@ -236,7 +236,7 @@ def read_mesh(path: str | os.PathLike[str]) -> TriangleMesh:
 
     Examples
     --------
-    >>> mesh = machscan.io.read_mesh("../shared/data/stanford-bunny-mesh/stanford_bunny.ply")
+    >>> mesh = machscan.io.read_mesh("data/stanford-bunny-mesh/stanford_bunny.ply")
     >>> mesh.vertices.shape, mesh.triangles.shape
     """
     c = read(path)

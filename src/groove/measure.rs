@@ -1,7 +1,6 @@
 //! The default groove measurement: the groove's geometry, not a template's parameters.
 //!
-//! Per frame (`/work/groove_research/REPORT.md` §4 holds the derivation and the measured
-//! accuracy of every step):
+//! Per frame (`docs/grooves.md` gives the formulas, BENCHMARKS.md the measured accuracy):
 //! 1. valid readings; spikes dropped by a two-sided extrapolation test, which keeps V tips and
 //!    wall corners that a median test would drop;
 //! 2. a robust surface line (least squares, then least-trimmed-squares concentration steps),
@@ -187,9 +186,9 @@ fn spike_free(x: &[f64], z: &[f64], threshold: f64) -> Vec<bool> {
 /// A line through the surface of a grooved frame: least-trimmed-squares concentration steps
 /// (refit on the half of the readings nearest the line) from the line through the upper
 /// quartiles of the two halves of the frame (a groove is a dip, so upper quantiles lie on the
-/// surface; the least-squares line when the halves do not allow it). Three steps: the steps
-/// converge in two or three, and a second start (least squares) changed no result in the tests
-/// of `/work/groove_research` (REPORT.md §6) while costing a third of the frame's time.
+/// surface; the least-squares line when the halves do not allow it). One step: the steps
+/// converge in two or three from this start, and more steps or a second start (least squares)
+/// changed no result in the accuracy tests while costing a third of the frame's time.
 const C_STEPS: usize = 1;
 fn robust_line(x: &[f64], z: &[f64], scratch: &mut Vec<i64>) -> Option<(f64, f64)> {
     let n = x.len();

@@ -2441,7 +2441,7 @@ mod tests {
         }
     }
 
-    /// The Stanford bunny of `$BUNNY_PLY` (default /work/shared/data/stanford-bunny-mesh/):
+    /// The Stanford bunny of `$BUNNY_PLY` (default data/stanford-bunny-mesh/ in the repository):
     /// 35947 vertices, holes at its base, 1113 vertices no face uses. Published check:
     /// d(14558 → 13039) = 0.22686869313968416 (pygeodesic's notebook); with
     /// `target/georef/bunny.txt` every vertex of every reference source as well.
@@ -2449,9 +2449,12 @@ mod tests {
     /// One source on the bunny, timed: `cargo test --release --lib geodesic_exact::tests::bunny_time
     /// -- --ignored --nocapture`.
     #[test]
-    #[ignore = "reads the bunny from the shared data directory"]
+    #[ignore = "a timing, not a test (bench_mesh.py measures it)"]
     fn bunny_time() {
-        let Ok(text) = std::fs::read_to_string("/work/shared/data/stanford-bunny-mesh/stanford_bunny.ply") else {
+        let Ok(text) = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/data/stanford-bunny-mesh/stanford_bunny.ply"
+        )) else {
             return;
         };
         let (v, f) = read_ascii_ply(&text);
@@ -2472,10 +2475,11 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "reads the bunny from the shared data directory; slow in debug builds"]
+    #[ignore = "slow in debug builds"]
     fn bunny_matches_pygeodesic() {
-        let path = std::env::var("BUNNY_PLY")
-            .unwrap_or_else(|_| "/work/shared/data/stanford-bunny-mesh/stanford_bunny.ply".to_string());
+        let path = std::env::var("BUNNY_PLY").unwrap_or_else(|_| {
+            concat!(env!("CARGO_MANIFEST_DIR"), "/data/stanford-bunny-mesh/stanford_bunny.ply").to_string()
+        });
         let Ok(text) = std::fs::read_to_string(&path) else {
             eprintln!("{path}: not readable, skipped");
             return;

@@ -525,7 +525,8 @@ impl Cloud<'_> {
         let normals: Vec<V3> = found.iter().map(|&(i, _)| self.normals[i]).collect();
         let unknown = found.iter().any(|&(i, _)| self.allowance[i].is_nan());
         let allowance: Vec<f64> = found.iter().map(|&(i, _)| if unknown { 0.0 } else { self.allowance[i] }).collect();
-        let (on, normal, value) = EdgePatch::fit(q, reference, &points, &normals, &allowance, sigma)?.place_in_plane(q, n)?;
+        let (on, normal, value) =
+            EdgePatch::fit(q, reference, &points, &normals, &allowance, sigma)?.place_in_plane(q, n)?;
         Some((on, normal, if unknown { f64::NAN } else { value }))
     }
 
@@ -873,7 +874,8 @@ pub fn grinding_paths(
         .collect::<Result<_>>()?;
 
     // 3. Joining.
-    let mut out = GrindingPaths { without_stock: allowance.iter().filter(|a| a.is_nan()).count(), ..Default::default() };
+    let mut out =
+        GrindingPaths { without_stock: allowance.iter().filter(|a| a.is_nan()).count(), ..Default::default() };
     let mut open_rows = 0usize;
     let feed_step = options.feed_step.unwrap_or(DEFAULT_FEED_STEP);
     let mut held = f64::NAN;
