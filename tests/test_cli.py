@@ -50,7 +50,7 @@ def test_grooves_command_equals_the_library(small):
     assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--out", str(d / "out")]) == 0
     ref = inspect_grooves(scan, truth.nominal_polylines)
     rows = np.genfromtxt(d / "out" / "contour_errors.csv", delimiter=",", names=True)
-    np.testing.assert_allclose(rows["error_mean"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
+    np.testing.assert_allclose(rows["error_mean_mm"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
 
 
 def test_grooves_command_fits_the_template_asked_for(small):
@@ -79,7 +79,7 @@ def test_grooves_command_fits_the_template_asked_for(small):
     np.testing.assert_array_equal(rows["model"], ref.fits.model)
     assert set(rows["model"][ref.fits.ok]) == {machscan.GrooveModel.TANH}
     np.testing.assert_array_equal(rows["suspect"], ref.suspect)
-    np.testing.assert_allclose(rows["width"], ref.fits.width, rtol=1e-9)
+    np.testing.assert_allclose(rows["width_mm"], ref.fits.width, rtol=1e-9)
     with pytest.raises(SystemExit):
         main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--template", "gaussian"])
 

@@ -191,7 +191,7 @@ def test_batch_grooves_command(scan, tmp_path):
     ref = machscan.inspect_grooves(s, truth.nominal_polylines)
     for name in ("good", "good2"):
         table = np.genfromtxt(tmp_path / "out" / name / "contour_errors.csv", delimiter=",", names=True)
-        np.testing.assert_allclose(table["error_mean"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
+        np.testing.assert_allclose(table["error_mean_mm"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
 
 
 def pool_threads() -> set[str]:

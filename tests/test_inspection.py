@@ -92,7 +92,7 @@ def test_tables_and_csv(run, tmp_path):
     paths = r.to_csv(tmp_path)
     assert [p.name for p in paths] == ["frames.csv", "widths.csv", "contour_errors.csv"]
     rows = np.genfromtxt(tmp_path / "widths.csv", delimiter=",", names=True)
-    assert len(rows) == 12 and np.isfinite(rows["width_mean"]).all()
+    assert len(rows) == 12 and np.isfinite(rows["width_mean_mm"]).all()
     frames = np.genfromtxt(tmp_path / "frames.csv", delimiter=",", names=True)
     assert len(frames) == scan.n_frames
     # No NaN in a table: the per-contour tables are all numbers.

@@ -338,7 +338,7 @@ def _position(args: argparse.Namespace) -> int:
         _warn(f"only {r.hits} probe points found the part: no pose fitted")
         return 3
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    np.savetxt(args.out, r.transformation, fmt="%.12g")
+    np.savetxt(args.out, r.transformation, fmt="%.12g", header="pose: 4 x 4, model -> machine; rotation, translation in mm")
     print(f"\npose      : model → machine, written to {args.out}")
     print(
         f"correction: {r.correction * 1e3:.2f} µm RMS along the normals; probe again at the new pose while it "
@@ -354,7 +354,7 @@ def _write_plan(path: Path, points: np.ndarray, normals: np.ndarray, idx: np.nda
     from machscan.registration import probe_plan
 
     p, d = probe_plan(points, normals, idx, pose)
-    _write_table(path, "index,x,y,z,dx,dy,dz", np.column_stack([idx, p, d]))
+    _write_table(path, "index,x_mm,y_mm,z_mm,dx,dy,dz", np.column_stack([idx, p, d]))
 
 
 def _position_simulated(args: argparse.Namespace) -> int:
@@ -411,7 +411,7 @@ def _allowance(args: argparse.Namespace) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     if out.suffix.lower() in (".csv", ".xyz", ".txt"):
         # Text point files hold x, y, z only; the table keeps the normal and the allowance.
-        _write_table(out, "x,y,z,nx,ny,nz,allowance", np.column_stack([model, normals, a]))
+        _write_table(out, "x_mm,y_mm,z_mm,nx,ny,nz,allowance_mm", np.column_stack([model, normals, a]))
     else:
         write_points(out, model, normals=normals, scalars={"allowance": a})
     print(f"written   : {out} (model points, normals and the allowance, mm)")
@@ -494,7 +494,7 @@ def _grind(args: argparse.Namespace) -> int:
     count = np.bincount(paths.row, minlength=rows)
     _write_table(
         out / "report.csv",
-        "row,offset,points,closed,deviation_min,deviation_mean,deviation_max",
+        "row,offset_mm,points,closed,deviation_min_mm,deviation_mean_mm,deviation_max_mm",
         np.column_stack([np.arange(rows), paths.row_offsets, count, paths.row_closed, check.minimum, check.mean, check.maximum]),
     )
     steps = np.diff(paths.row_offsets)
@@ -624,11 +624,15 @@ def _run_compensation(args, theoretical, scan, locating, matching, toolpath, tru
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_toolpath(out / "compensated.cl", path.points, axes=path.axes, feeds=toolpath.feeds, segments=toolpath.segments)
-    _write_table(out / "matched.csv", "x,y,z,actual_x,actual_y,actual_z", np.column_stack([matching[:, :3], match.points]))
+    _write_table(
+        out / "matched.csv",
+        "x_mm,y_mm,z_mm,actual_x_mm,actual_y_mm,actual_z_mm",
+        np.column_stack([matching[:, :3], match.points]),
+    )
     moved = np.linalg.norm(path.points - toolpath.points, axis=1)
     _write_table(
         out / "report.csv",
-        "index,x,y,z,compensated_x,compensated_y,compensated_z,i,j,k,moved,inside,on_scan",
+        "index,x_mm,y_mm,z_mm,compensated_x_mm,compensated_y_mm,compensated_z_mm,i,j,k,moved_mm,inside,on_scan",
         np.column_stack([np.arange(len(moved)), toolpath.points, path.points, path.axes, moved, path.inside, path.on_scan]),
     )
     print(
@@ -701,8 +705,8 @@ def _compensate_simulated(args: argparse.Namespace) -> int:
     )
     write_points(out / "theoretical.ply", theoretical)
     write_points(out / "scan.ply", scan)
-    _write_table(out / "locating.csv", "x,y,z,actual_x,actual_y,actual_z", locating)
-    _write_table(out / "matching.csv", "x,y,z", matching)
+    _write_table(out / "locating.csv", "x_mm,y_mm,z_mm,actual_x_mm,actual_y_mm,actual_z_mm", locating)
+    _write_table(out / "matching.csv", "x_mm,y_mm,z_mm", matching)
     write_toolpath(out / "theoretical.cl", tools, axes=up, feeds=toolpath.feeds, segments=toolpath.segments)
     print(
         f"synthetic skin: 300 × 200 mm bent to R = 1000 mm, misplaced 1 mm / 0.5°, scanned at {args.scan_spacing:g} mm "

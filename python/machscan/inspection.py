@@ -292,9 +292,9 @@ class GrooveReport:
 
     def to_csv(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``frames.csv`` (per frame), ``widths.csv`` (table 1) and ``contour_errors.csv``
-        (table 2 with the decomposition) into ``directory``; returns the paths. In
-        ``frames.csv`` ``status`` and ``model`` are the :class:`GrooveStatus` and
-        :class:`GrooveModel` codes, empty cells are NaN."""
+        (table 2 with the decomposition) into ``directory``; returns the paths. Every column of a
+        length names its unit (``width_mm``, ``error_mean_mm``); in ``frames.csv`` ``status`` and
+        ``model`` are the :class:`GrooveStatus` and :class:`GrooveModel` codes, empty cells are NaN."""
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
         paths = []
@@ -304,16 +304,16 @@ class GrooveReport:
             "status": f.status,
             "model": f.model,
             "suspect": self.suspect.astype(np.int64),
-            "x0_scs": f.x0,
-            "z0_scs": f.z0,
-            "x_wcs": self.center_wcs[:, 0],
-            "y_wcs": self.center_wcs[:, 1],
-            "z_wcs": self.center_wcs[:, 2],
-            "width": f.width,
-            "depth": f.depth,
-            "se_width": f.se_width,
-            "se_depth": f.se_depth,
-            "rms": f.rms,
+            "x0_scs_mm": f.x0,
+            "z0_scs_mm": f.z0,
+            "x_wcs_mm": self.center_wcs[:, 0],
+            "y_wcs_mm": self.center_wcs[:, 1],
+            "z_wcs_mm": self.center_wcs[:, 2],
+            "width_mm": f.width,
+            "depth_mm": f.depth,
+            "se_width_mm": f.se_width,
+            "se_depth_mm": f.se_depth,
+            "rms_mm": f.rms,
             "cluster": self.cluster,
             "contour": self.contour,
         }
@@ -328,11 +328,17 @@ class GrooveReport:
             path = out / name
             with open(path, "w", newline="") as fh:
                 if rows:
-                    w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+                    # Counts are counts; every other column is a length in mm, and says so.
+                    names = {k: k if k in _COUNTS else f"{k}_mm" for k in rows[0]}
+                    w = csv.DictWriter(fh, fieldnames=list(names.values()))
                     w.writeheader()
-                    w.writerows(rows)
+                    w.writerows({names[k]: v for k, v in r.items()} for r in rows)
             paths.append(path)
         return paths
+
+
+#: Columns of the tables that are counts or labels, not lengths.
+_COUNTS = ("contour", "frames", "points")
 
 
 def _cell(v: object) -> str | int:
