@@ -453,3 +453,24 @@ def test_grind_simulate_runs_on_the_built_in_blade(tmp_path, capsys):
     assert main(["grind", "--simulate", "--spacing", "1.0", "--band", "0.5", "--out", str(tmp_path / "b")]) == 0
     text = capsys.readouterr().out
     assert "simulated blade" in text and "stock left" in text
+
+
+def test_grind_refuses_a_path_whose_simulated_pass_leaves_the_band(tmp_path, capsys):
+    # Issue #32 §5: the slowest feed allowed removes far more than the stock (0.6 mm/s removes ~3.8 mm): every
+    # pass over-cuts. grind.cl is not written (and an earlier run's is removed), the report names points and rows;
+    # --force writes it, still exit 3.
+    cloud = synth.WavyPanel().sample(1.0, seed=4)
+    source = tmp_path / "allowance.ply"
+    machscan.io.write_points(source, cloud.points, cloud.normals, scalars={"allowance": cloud.allowance}, dtype="float64")
+    out = tmp_path / "grinding"
+    out.mkdir()
+    (out / "grind.cl").write_text("GOTO/0,0,0\n")  # an earlier run's path
+    args = ["grind", str(source), "--section-normal", "0,1,0", "--tool-radius", "8", "--out", str(out)]
+    args += ["--removal", "0.05,0.6,-0.7,0.8,20,15,0.5,0.6"]
+    assert main(args) == 3
+    captured = capsys.readouterr()
+    assert not (out / "grind.cl").exists()
+    assert "refused" in captured.err and "over-cut" in captured.err and "rows 0, 1, 2" in captured.err
+    assert (out / "report.csv").exists() and (out / "path.csv").exists()
+    assert main(args + ["--force"]) == 3
+    assert (out / "grind.cl").exists() and "--force" in capsys.readouterr().err

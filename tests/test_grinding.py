@@ -282,3 +282,25 @@ def test_bad_clouds_are_refused_by_name(panel_paths):
         machscan.simulate_removal(paths, p, np.zeros_like(n), cloud.allowance[:500])
     with pytest.raises(TypeError, match="removal_model"):
         machscan.grinding_paths(p, n, cloud.allowance[:500], 8.0, 0.01, (0, 1, 0), removal_model=3.0)
+
+
+def test_a_path_whose_simulated_pass_leaves_the_band_is_not_written(panel_paths, tmp_path):
+    # Issue #32 §5: feed limits that can only remove far more than the stock over-cut everywhere; the path knows it
+    # (its check is the pass over its own cloud) and to_apt refuses it, naming points and rows, unless forced.
+    _, cloud, good = panel_paths
+    assert good.check.within_band and good.check.problem() is None
+    over = machscan.grinding_paths(
+        cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), dict(MODEL, feed_limits=(0.5, 0.6))
+    )
+    assert not over.check.within_band
+    assert over.check.deviation[over.check.outside].max() < -3.0  # ~3.8 mm removed from ≤ 0.33 mm of stock
+    problem = over.check.problem()
+    assert "over-cut" in problem and "rows 0, 1, 2" in problem and "the worst at (" in problem
+    with pytest.raises(machscan.toolpath.UnsafePathError, match="not written") as refused:
+        over.to_apt(tmp_path / "over.cl")
+    assert isinstance(refused.value, ValueError)
+    assert not (tmp_path / "over.cl").exists()
+    over.to_apt(tmp_path / "over.cl", force=True)
+    assert machscan.io.read_toolpath(tmp_path / "over.cl").points.shape == over.points.shape
+    # The band is the caller's: a wide one takes the same path.
+    assert machscan.simulate_removal(over, cloud.points, cloud.normals, cloud.allowance, band=5.0).within_band

@@ -451,8 +451,9 @@ def _grind(args: argparse.Namespace) -> int:
     from machscan.io import read_points
     from machscan.registration import allowance
     from machscan.synth import blade_allowance
-    from machscan.toolpath import RemovalModel, grinding_paths, simulate_removal
+    from machscan.toolpath import RemovalModel, grinding_paths
 
+    _check_positive_mm("--band", args.band)
     if args.simulate:
         cloud = blade_allowance(spacing=args.spacing, seed=args.seed)
         points, normals, stock = cloud.points, cloud.normals, cloud.allowance
@@ -480,26 +481,33 @@ def _grind(args: argparse.Namespace) -> int:
         model,
         spacing=args.path_spacing,
         feed_step=args.feed_step,
+        band=args.band,
     )
-    check = simulate_removal(paths, points, normals, stock)
+    check = paths.check
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    paths.to_apt(out / "grind.cl")
     _write_table(
         out / "path.csv",
         "x_mm,y_mm,z_mm,nx,ny,nz,row,curvature_per_mm,allowance_mm,feed_mm_per_min",
         np.column_stack([paths.points, paths.normals, paths.row, paths.curvature, paths.allowance, paths.feed_per_minute()]),
     )
-    rows = len(paths.row_offsets)
-    count = np.bincount(paths.row, minlength=rows)
+    pieces = len(paths.row_offsets)
+    count = np.bincount(paths.row, minlength=pieces)
     _write_table(
         out / "report.csv",
         "row,offset_mm,points,closed,deviation_min_mm,deviation_mean_mm,deviation_max_mm",
-        np.column_stack([np.arange(rows), paths.row_offsets, count, paths.row_closed, check.minimum, check.mean, check.maximum]),
+        np.column_stack(
+            [np.arange(pieces), paths.row_offsets, count, paths.row_closed, check.minimum, check.mean, check.maximum]
+        ),
     )
-    steps = np.diff(paths.row_offsets)
-    print(f"rows      : {rows} (spacing {steps.min():.3f} … {steps.max():.3f} mm)" if rows > 1 else f"rows      : {rows}")
+    sections = np.unique(paths.row_offsets)
+    steps = np.diff(sections)
+    cut = f", {pieces} pieces where a row is cut" if pieces > len(sections) else ""
+    spacing = f", spacing {steps.min():.3f} … {steps.max():.3f} mm" if len(sections) > 1 else ""
+    print(f"rows      : {len(sections)}{cut}{spacing}")
     print(f"points    : {len(paths.points):,}")
+    if paths.without_stock:
+        print(f"no stock  : {paths.without_stock:,} model points have no allowance (the blank does not cover them): left out")
     if model is not None:
         clamped = int(np.sum((paths.feed <= model.feed_limits[0]) | (paths.feed >= model.feed_limits[1])))
         per_minute = paths.feed_per_minute()
@@ -509,15 +517,33 @@ def _grind(args: argparse.Namespace) -> int:
             f"{paths.feed.max():.4g} {model.feed_unit}), {changes:,} FEDRAT (a new feed where it changes by more than "
             f"{100 * args.feed_step:g} %), {clamped} points at a limit"
         )
-    print(f"simulated : stock left over the model {check.deviation.min():+.4f} … {check.deviation.max():+.4f} mm")
-    print(f"written   : {out / 'grind.cl'}, {out / 'path.csv'}, {out / 'report.csv'}")
+    print(
+        f"simulated : stock left over the model {np.nanmin(check.deviation):+.4f} … {np.nanmax(check.deviation):+.4f} mm, "
+        f"{int(check.outside.sum()):,} points outside ±{args.band:g} mm"
+    )
+    written = [out / "path.csv", out / "report.csv"]
+    problem = check.problem()
+    if problem is None or args.force:
+        paths.to_apt(out / "grind.cl", force=args.force)
+        written.insert(0, out / "grind.cl")
+    elif (out / "grind.cl").exists():
+        # An earlier run's path beside this run's refusal would be taken for this one.
+        (out / "grind.cl").unlink()
+        written.append(f"(the grind.cl of an earlier run in {out} removed)")
+    print(f"written   : {', '.join(str(w) for w in written)}")
     holds = True
     if not paths.tool_fits.all():
         _warn(f"{int((~paths.tool_fits).sum())} path points lie on concave stretches tighter than the tool")
         holds = False
-    outside = int(np.sum(np.abs(check.deviation) > args.band))
-    if outside:
-        _warn(f"{outside} points end more than {args.band:g} mm off the model after the simulated pass")
+    if problem is not None:
+        if args.force:
+            _warn(f"{out / 'grind.cl'} written by --force although {problem}")
+        else:
+            print(
+                f"machscan: refused: {out / 'grind.cl'} not written: {problem}. report.csv has the stock left per row; "
+                "--force writes the path anyway",
+                file=sys.stderr,
+            )
         holds = False
     return 0 if holds else 3
 
@@ -956,7 +982,7 @@ def build_parser() -> argparse.ArgumentParser:
     co.add_argument("--seed", type=int, default=0, help="seed of the simulated misplacement and noise (default: %(default)s)")
     co.set_defaults(run=_compensate)
 
-    from machscan.toolpath import FEED_STEP
+    from machscan.toolpath import BAND, FEED_STEP
 
     gr = sub.add_parser("grind", help="belt-grinding paths from an allowance cloud, spaced by the scallop height")
     gr.add_argument(
@@ -986,7 +1012,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     gr.add_argument("--path-spacing", type=float, default=None, help="path point spacing along a row, mm (default: the cloud's)")
     gr.add_argument(
-        "--band", type=float, default=0.08, help="allowed deviation after the simulated pass, mm (default: %(default)s)"
+        "--band",
+        type=float,
+        default=BAND,
+        help="allowed deviation after the simulated pass, ±mm; a path that leaves it is not written (default: %(default)s)",
+    )
+    gr.add_argument(
+        "--force", action="store_true", help="write grind.cl even when the simulated pass leaves points outside --band"
     )
     gr.add_argument(
         "--out", type=Path, default=Path("grinding"), help="output folder: grind.cl, path.csv, report.csv (default: %(default)s)"

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -37,6 +37,7 @@ __all__ = [
     "RemovalCheck",
     "RemovalModel",
     "SurfaceNormals",
+    "UnsafePathError",
     "bead_chain",
     "compensate_toolpath",
     "grinding_paths",
@@ -60,6 +61,15 @@ SurfaceNormals = Literal["smooth", "triangle"]
 #: Default share of the feed by which the wanted feed must change before :func:`grinding_paths` programs a new one
 #: (the core's ``DEFAULT_FEED_STEP``).
 FEED_STEP: float = _core.GRINDING_FEED_STEP
+
+#: The band a ground section must end within, mm: paper 004 measures its ground sections within ±0.08 mm of the model.
+BAND: float = 0.08
+
+
+class UnsafePathError(ValueError):
+    """A grinding path whose simulated pass leaves points outside the band (an over-cut scraps the part): it is not
+    written as a usable path. The message names the points and rows; ``force=True`` writes it anyway."""
+
 
 #: How :func:`bead_chain` orders a section: ``"tree"`` (default) along the diameter of the points' minimum
 #: spanning tree; ``"nearest"``, the paper's rule, always to the nearest unvisited point.
@@ -428,6 +438,10 @@ class GrindingPaths:
     section_normal : ndarray, shape (3,)
         The unit section normal.
     removal_model : RemovalModel or None
+    check : RemovalCheck
+        The pass simulated over the cloud the path was made from (:func:`simulate_removal` with the path's own
+        feeds): ``check.within_band`` says whether every point ends within ±``band`` of the model; where it does
+        not, :meth:`to_apt` refuses to write the path.
     """
 
     points: NDArray[np.float64]
@@ -444,6 +458,7 @@ class GrindingPaths:
     scallop_height: float
     section_normal: NDArray[np.float64]
     removal_model: RemovalModel | None
+    check: RemovalCheck
 
     def __repr__(self) -> str:
         left_out = f", {self.without_stock} cloud points without stock left out" if self.without_stock else ""
@@ -465,11 +480,24 @@ class GrindingPaths:
             return self.feed.copy()
         return self.removal_model.per_minute(self.feed)
 
-    def to_apt(self, path: str | os.PathLike[str]) -> None:
+    def to_apt(self, path: str | os.PathLike[str], *, force: bool = False) -> None:
         """Write the path as APT/CL: ``UNITS/MM``, ``GOTO/x,y,z,i,j,k`` per point (contact point and outward
         normal), ``FEDRAT/MMPM,f`` in mm/min where the programmed feed changes (none without a removal model).
         :func:`machscan.io.read_toolpath` reads it back with ``feeds`` equal to :meth:`feed_per_minute`.
+
+        A path whose simulated pass (:attr:`check`) leaves any point outside the band is refused: an over-cut
+        scraps the part, and a path is not written as usable that the simulation says is not. ``force=True``
+        writes it anyway (e.g. to inspect it in a CAM viewer).
+
+        Raises
+        ------
+        UnsafePathError
+            The simulated pass leaves points outside the band; the message names how many, how far, the rows
+            and the worst point.
         """
+        problem = self.check.problem()
+        if problem and not force:
+            raise UnsafePathError(f"{os.fspath(path)} not written: {problem} (force=True writes it anyway)")
         feeds = self.feed_per_minute() if np.isfinite(self.feed).all() else None
         write_toolpath(path, self.points, axes=self.normals, feeds=feeds)
 
@@ -488,6 +516,7 @@ def grinding_paths(
     tolerance: float | None = None,
     fit_radius: float | None = None,
     feed_step: float = FEED_STEP,
+    band: float = BAND,
 ) -> GrindingPaths:
     """Belt-grinding paths over an allowance cloud, rows spaced by the scallop height (SPEC P1–P5; paper 004 §2–3).
 
@@ -536,6 +565,9 @@ def grinding_paths(
         A new feed is programmed where the feed that removes the allowance departs from the one in force by
         more than this share of it (default 0.03: at the paper's feed exponent −0.7 the removal then differs
         from the wanted by at most 2.1 %); 0 programs every change.
+    band : float
+        The band the simulated pass must end within, ±mm (paper 004: 0.08): the path's :attr:`GrindingPaths.check`
+        is the pass over this cloud, and :meth:`GrindingPaths.to_apt` refuses a path that leaves the band.
 
     Returns
     -------
@@ -563,12 +595,27 @@ def grinding_paths(
         removal=None if model is None else model._args(),
         feed_step=feed_step,
     )
+    depths = out["allowance"].copy() if model is None else model.removal(out["feed"])
+    check = _removal_check(
+        out["points"],
+        out["normals"],
+        out["allowance"],
+        out["row"],
+        depths,
+        float(tool_radius),
+        len(out["row_offsets"]),
+        points,
+        normals,
+        allowance,
+        band,
+    )
     return GrindingPaths(
         **out,
         tool_radius=float(tool_radius),
         scallop_height=float(scallop_height),
         section_normal=normal / np.linalg.norm(normal),
         removal_model=model,
+        check=check,
     )
 
 
@@ -585,6 +632,10 @@ class RemovalCheck:
         The row (section) each blank point belongs to: that of its nearest path point.
     minimum, maximum, mean : ndarray, shape (rows,)
         The deviation over each section's points with stock (NaN for a section with none).
+    points : ndarray, shape (N, 3)
+        The blank's model points the deviation is given at, mm.
+    band : float
+        The band the pass must end within, ±mm (:data:`BAND`).
     """
 
     deviation: NDArray[np.float64]
@@ -592,15 +643,55 @@ class RemovalCheck:
     minimum: NDArray[np.float64]
     maximum: NDArray[np.float64]
     mean: NDArray[np.float64]
+    points: NDArray[np.float64] = field(repr=False)
+    band: float = BAND
+
+    @property
+    def outside(self) -> NDArray[np.bool_]:
+        """Points whose stock left is more than ``band`` off the model (NaN, no stock measured, is not)."""
+        with np.errstate(invalid="ignore"):
+            return np.abs(self.deviation) > self.band
+
+    @property
+    def within_band(self) -> bool:
+        """Every point with stock ends within ±``band`` of the model."""
+        return not bool(self.outside.any())
+
+    def problem(self) -> str | None:
+        """What leaves the band, in words (points, how far, rows, where), or None when every point is within it."""
+        out = self.outside
+        if not out.any():
+            return None
+        dev = self.deviation
+        over = out & (dev < 0)
+        under = out & (dev > 0)
+        parts = []
+        if over.any():
+            parts.append(f"{int(over.sum()):,} points ground below the model by more than {self.band:g} mm (over-cut, "
+                         f"down to {dev[over].min():+.4f} mm)")
+        if under.any():
+            parts.append(f"{int(under.sum()):,} points left with more than {self.band:g} mm of stock (up to "
+                         f"{dev[under].max():+.4f} mm)")
+        rows = np.unique(self.section[out])
+        shown = ", ".join(str(r) for r in rows[:12]) + (f" … ({len(rows)} rows)" if len(rows) > 12 else "")
+        worst = int(np.nanargmax(np.where(out, np.abs(dev), -np.inf)))
+        x, y, z = self.points[worst]
+        return (
+            f"the simulated pass leaves {' and '.join(parts)}; rows {shown}; the worst at ({x:.3f}, {y:.3f}, {z:.3f}) mm "
+            f"(point {worst}, row {int(self.section[worst])})"
+        )
 
     def __repr__(self) -> str:
+        outside = int(self.outside.sum())
         return (
             f"RemovalCheck({len(self.deviation)} points in {len(self.mean)} sections, deviation "
-            f"{np.nanmin(self.minimum):+.4f} … {np.nanmax(self.maximum):+.4f} mm)"
+            f"{np.nanmin(self.minimum):+.4f} … {np.nanmax(self.maximum):+.4f} mm, {outside} outside ±{self.band:g} mm)"
         )
 
 
-def simulate_removal(paths: GrindingPaths, points: ArrayLike, normals: ArrayLike, allowance: ArrayLike) -> RemovalCheck:
+def simulate_removal(
+    paths: GrindingPaths, points: ArrayLike, normals: ArrayLike, allowance: ArrayLike, *, band: float = BAND
+) -> RemovalCheck:
     """Sweep the contact wheel along a grinding path over the blank and report the stock left over the model
     (SPEC P5 beyond; paper 004 measures ground sections within ±0.08 mm).
 
@@ -615,6 +706,8 @@ def simulate_removal(paths: GrindingPaths, points: ArrayLike, normals: ArrayLike
     points, normals, allowance : array_like
         The blank as model points, their outward normals and the stock above them (e.g. the cloud the path was
         made from, or a denser one); an allowance of NaN (no stock measured) gives a deviation of NaN.
+    band : float
+        The band the pass must end within, ±mm (paper 004: 0.08); ``.outside`` and ``.problem()`` use it.
 
     Returns
     -------
@@ -626,19 +719,30 @@ def simulate_removal(paths: GrindingPaths, points: ArrayLike, normals: ArrayLike
     >>> bool((np.abs(check.deviation) <= 0.08).all())   # the paper's band for ground sections
     True
     """
-    out = _core.simulate_removal(
-        points,
-        normals,
-        allowance,
+    return _removal_check(
         paths.points,
         paths.normals,
         paths.allowance,
         paths.row,
         paths.removal(),
-        tool_radius=paths.tool_radius,
+        paths.tool_radius,
+        len(paths.row_offsets),
+        points,
+        normals,
+        allowance,
+        band,
     )
-    section = paths.row[out["nearest"]]
-    rows = len(paths.row_offsets)
+
+
+def _removal_check(
+    path_points, path_normals, path_allowance, row, depths, tool_radius, rows, points, normals, allowance, band
+) -> RemovalCheck:
+    if not (np.isfinite(band) and band > 0):
+        raise ValueError(f"band: must be a positive number of mm, got {band!r}")
+    out = _core.simulate_removal(
+        points, normals, allowance, path_points, path_normals, path_allowance, row, depths, tool_radius=tool_radius
+    )
+    section = row[out["nearest"]]
     dev = out["deviation"]
     measured = ~np.isnan(dev)
     count = np.bincount(section[measured], minlength=rows)
@@ -650,4 +754,12 @@ def simulate_removal(paths: GrindingPaths, points: ArrayLike, normals: ArrayLike
     np.maximum.at(maximum, section[measured], dev[measured])
     empty = count == 0
     minimum[empty] = maximum[empty] = np.nan
-    return RemovalCheck(deviation=dev, section=section, minimum=minimum, maximum=maximum, mean=mean)
+    return RemovalCheck(
+        deviation=dev,
+        section=section,
+        minimum=minimum,
+        maximum=maximum,
+        mean=mean,
+        points=np.asarray(points, dtype=np.float64),
+        band=float(band),
+    )
