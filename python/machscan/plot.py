@@ -657,8 +657,8 @@ def allowance_map(
 ) -> Figure:
     """The machining allowance over the part (SPEC R7, paper 004 §1.2): the model points in 3D,
     colored by the stock the blank leaves there, the color scale centred on ``min_allowance``
-    (red short of it, blue above it); points short of it are ringed in black, points without an
-    allowance (NaN: the blank's plane grazes the normal) are grey.
+    (red short of it, blue above it); points short of it are ringed in black, points without stock
+    measured (NaN: the blank does not cover them) are grey and counted in the title.
 
     Parameters
     ----------
@@ -730,10 +730,11 @@ def allowance_map(
     ax.set_ylabel("y (mm)")
     if hasattr(ax, "set_zlabel"):
         ax.set_zlabel("z (mm)")
-    n_short = int(short.sum())
+    n_short, n_none = int(short.sum()), int((~finite).sum())
+    none = f"; {n_none} without stock measured (grey)" if n_none else ""
     ax.set_title(
         f"Allowance: min {lo:.3f}, mean {a[finite].mean():.3f}, max {hi:.3f} mm; "
-        f"{n_short} point{'s' if n_short != 1 else ''} below {min_allowance:g} mm"
+        f"{n_short} point{'s' if n_short != 1 else ''} below {min_allowance:g} mm{none}"
     )
     fig.colorbar(sc, ax=ax, label="allowance (mm)", shrink=0.7)
     return fig
