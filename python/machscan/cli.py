@@ -405,7 +405,10 @@ def _allowance(args: argparse.Namespace) -> int:
         ok = a[np.isfinite(a)]
         short = int(np.sum(ok < args.min_allowance))
         print(f"allowance (mm): min {ok.min():.4f}  mean {ok.mean():.4f}  max {ok.max():.4f}  std {ok.std():.4f}")
-        print(f"{short} of {len(ok)} points below {args.min_allowance:g} mm; {len(a) - len(ok)} without a value")
+        print(
+            f"{short} of {len(ok)} points below {args.min_allowance:g} mm; {len(a) - len(ok)} without stock measured "
+            "(NaN: the blank does not cover them; grind leaves them out)"
+        )
         holds = short == 0
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

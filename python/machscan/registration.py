@@ -727,10 +727,12 @@ class EnvelopeFit:
         a = self.allowance[np.isfinite(self.allowance)]
         short = int(np.sum(a < self.min_allowance - 1e-9))
         state = "holds" if self.feasible else "does NOT hold"
+        none = len(self.allowance) - len(a)
         return (
             f"allowance (mm): min {a.min():.4f}  mean {a.mean():.4f}  max {a.max():.4f}  "
             f"spread {a.max() - a.min():.4f}  std {a.std():.4f}\n"
             f"minimum {self.min_allowance:.4f} mm {state}: {short} of {len(a)} points below it"
+            + (f"; {none} without stock measured (NaN: the blank does not cover them)" if none else "")
         )
 
 
