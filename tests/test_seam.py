@@ -190,7 +190,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
             tool_radius=5.0,
         ),
         "_EnvelopeFitArrays": _core.envelope_fit(
-            10 * unit, unit, 10.5 * unit, min_allowance=0.0, k=8, surface="quadric", init=None
+            10 * unit, unit, 10.5 * unit, min_allowance=0.0, surface="quadric", k=None, spacing=None, init=None
         ),
     }
     assert set(results) == set(declared), "every TypedDict of the stub is checked here"

@@ -463,9 +463,15 @@ def interpolate_poses(
     array([[0.5]])
     """
 def allowance(
-    model_points: ArrayLike, model_normals: ArrayLike, blank_points: ArrayLike, k: int, surface: Literal["quadric", "plane"]
+    model_points: ArrayLike,
+    model_normals: ArrayLike,
+    blank_points: ArrayLike,
+    *,
+    surface: Literal["quadric", "plane"],
+    k: int | None,
+    spacing: float | None,
 ) -> _F64:
-    """Machining allowance (SPEC R7); ``machscan.allowance`` documents it (with the default of
+    """Machining allowance (SPEC R7); ``machscan.allowance`` documents it (with the plane's default
     ``k``, ``ALLOWANCE_NEIGHBORS``).
     """
 
@@ -682,8 +688,9 @@ def envelope_fit(
     blank_points: ArrayLike,
     *,
     min_allowance: float,
-    k: int,
     surface: Literal["quadric", "plane"],
+    k: int | None,
+    spacing: float | None,
     init: ArrayLike | None,
 ) -> _EnvelopeFitArrays:
     """The balanced envelope fit of a blank (SPEC R8); ``machscan.envelope_fit`` documents it."""

@@ -394,14 +394,16 @@ def _allowance(args: argparse.Namespace) -> int:
     model, normals = _read_model(args.model)
     blank = read_points(args.blank)
     if args.fit:
-        fit = envelope_fit(model, normals, blank, min_allowance=args.min_allowance, k=args.k, surface=args.surface)
+        fit = envelope_fit(
+            model, normals, blank, min_allowance=args.min_allowance, surface=args.surface, k=args.k, spacing=args.spacing
+        )
         a = fit.allowance
         print(fit.summary())
         print("blank pose (applied to the blank):")
         print(np.array2string(fit.transformation, precision=6, suppress_small=True))
         holds = fit.feasible
     else:
-        a = allowance(model, normals, blank, k=args.k, surface=args.surface)
+        a = allowance(model, normals, blank, surface=args.surface, k=args.k, spacing=args.spacing)
         ok = a[np.isfinite(a)]
         short = int(np.sum(ok < args.min_allowance))
         print(f"allowance (mm): min {ok.min():.4f}  mean {ok.mean():.4f}  max {ok.max():.4f}  std {ok.std():.4f}")
@@ -905,7 +907,15 @@ def build_parser() -> argparse.ArgumentParser:
     al.add_argument(
         "--fit", action="store_true", help="first move the blank to the balanced envelope fit (every allowance ≥ the minimum)"
     )
-    al.add_argument("--k", type=int, default=ALLOWANCE_NEIGHBORS, help="blank points per local surface (default: %(default)s)")
+    al.add_argument(
+        "--k", type=int, default=None, help=f"blank points per plane, --surface plane only (default: {ALLOWANCE_NEIGHBORS})"
+    )
+    al.add_argument(
+        "--spacing",
+        type=float,
+        default=None,
+        help="the blank's point spacing, mm (default: estimated from the blank; give it for a scan of far-apart lines)",
+    )
     al.add_argument(
         "--surface",
         choices=get_args(BlankSurface),

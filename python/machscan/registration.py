@@ -55,21 +55,25 @@ def allowance(
     model_points: ArrayLike,
     model_normals: ArrayLike,
     blank_points: ArrayLike,
-    k: int = ALLOWANCE_NEIGHBORS,
     *,
     surface: BlankSurface = ALLOWANCE_SURFACE,
+    k: int | None = None,
+    spacing: float | None = None,
 ) -> NDArray[np.float64]:
     """Machining allowance (SPEC R7; paper 004 §1.2): the stock the blank leaves over each model
-    point, measured along the point's outward normal to the blank's local surface fitted to the
-    ``k`` nearest blank points.
+    point, measured along the point's outward normal to the blank's surface there.
 
-    The paper's local surface is their least-squares plane (``surface="plane"``:
-    ``t = n·(q0 − p) / (n·v)``, eq 10 as SPEC R7 corrects it). On a curved blank that plane sits
-    below the surface by the mean sag of its points, κ·d²/2: 1.2 µm on a 20 mm radius and 5 µm on
-    a 5 mm radius sampled at 0.2 mm, tens of µm at a blade's leading edge. The default
-    ``surface="quadric"`` fits a second-degree height field over that plane and meets it
-    exactly to third order (0.1 µm on those spheres); where the points do not fix a quadric (all
-    on one scan line, or k < 6) it uses the plane.
+    The default ``surface="quadric"`` fits an implicit quadric to the blank points about a centre
+    on the line, Gaussian-weighted over 1.5 blank spacings, and moves the centre to where the line
+    meets it (four fits; ``docs/registration.md``). It holds circles and cylinders of any
+    orientation, so it follows a blade's edge of 1.5 point spacings' radius that turns by 90° and
+    more across the neighbourhood, where a plane or height field of nearby points cannot (those
+    were 0.1–0.3 mm wrong at a 0.8 mm edge sampled every 0.5 mm). Measured against exact offsets
+    of twisted elliptic and circular-arc blades (BENCHMARKS.md): within 3 µm on smooth edges of
+    radius ≥ 1.5 spacings, 0.2–1 mm apart; 4–13 µm where a fillet meets a flank tangentially at
+    spacings ≤ 0.5 mm, 15–30 µm at 0.75–1 mm. ``surface="plane"`` is the paper's least-squares
+    plane of the ``k`` nearest blank points, ``t = n·(q0 − p) / (n·v)`` (eq 10 as SPEC R7 corrects
+    it), which sits below a curved blank by the mean sag of its points, κ·d²/2.
 
     Parameters
     ----------
@@ -78,25 +82,34 @@ def allowance(
     model_normals : array_like, shape (N, 3)
         Their outward normals (normalised here; none may be zero).
     blank_points : array_like, shape (M, 3)
-        The measured blank, in the model's frame (e.g. after :func:`machscan.icp`), mm.
-    k : int
-        Blank points of each local surface, 3 ≤ k ≤ M.
+        The measured blank, in the model's frame (e.g. after :func:`machscan.align_blank`), mm.
     surface : {"quadric", "plane"}
-        The local surface fitted to them.
+        The blank's local surface.
+    k : int, optional
+        The plane's blank points, 3 ≤ k ≤ M (default :data:`ALLOWANCE_NEIGHBORS`, 8). The quadric's
+        neighbourhood follows the spacing instead (giving ``k`` with it is refused).
+    spacing : float, optional
+        The blank's point spacing, mm; by default estimated from the blank (the median over its
+        points of the radius holding eight neighbours, as an even grid's spacing). Give it for a
+        scan of lines much farther apart than their points: about √(line gap × point spacing),
+        or more.
 
     Returns
     -------
     ndarray, shape (N,)
-        Signed allowance, mm: negative where the blank does not envelop the model; NaN where
-        the blank's local surface is inclined more than 60° to the model surface (an edge, or
-        neighbours all from one scan line), so it is not the blank over the point.
+        Signed allowance, mm: negative where the blank does not envelop the model; NaN where no
+        stock is measured — the blank does not cover the point (beyond its end, over a hole), or
+        its surface is inclined more than 60° to the model's normal plane there. Every consumer
+        of an allowance (:func:`machscan.grinding_paths`, :func:`machscan.envelope_fit`,
+        :func:`machscan.plot.allowance_map`, ``machscan grind``) leaves such points out and
+        counts them.
 
     Examples
     --------
     >>> a = machscan.allowance(model, normals, blank)
     >>> short = a < 0  # where the part would come out short
     """
-    return _core.allowance(model_points, model_normals, blank_points, k, surface)
+    return _core.allowance(model_points, model_normals, blank_points, surface=surface, k=k, spacing=spacing)
 
 
 #: Defaults of :func:`icp`'s options, from ``IcpOptions::new`` in the core.
@@ -741,9 +754,10 @@ def envelope_fit(
     model_normals: ArrayLike,
     blank_points: ArrayLike,
     min_allowance: float = 0.0,
-    k: int = ALLOWANCE_NEIGHBORS,
     *,
     surface: BlankSurface = ALLOWANCE_SURFACE,
+    k: int | None = None,
+    spacing: float | None = None,
     init: ArrayLike | None = None,
 ) -> EnvelopeFit:
     """Where to hold the blank so that it envelops the part (SPEC R8; paper 004, datum alignment
@@ -765,9 +779,7 @@ def envelope_fit(
         The measured blank, mm.
     min_allowance : float
         The least stock to leave everywhere, mm.
-    k : int
-        Blank points of each local surface.
-    surface : {"quadric", "plane"}
+    surface, k, spacing
         The blank's local surface, as in :func:`allowance`.
     init : array_like, shape (4, 4), optional
         Start pose of the blank (blank → model frame; default identity).
@@ -783,7 +795,14 @@ def envelope_fit(
     >>> fit.feasible, fit.allowance.min()
     """
     out = _core.envelope_fit(
-        model_points, model_normals, blank_points, min_allowance=min_allowance, k=k, surface=surface, init=init
+        model_points,
+        model_normals,
+        blank_points,
+        min_allowance=min_allowance,
+        surface=surface,
+        k=k,
+        spacing=spacing,
+        init=init,
     )
     return EnvelopeFit(
         transformation=out["transformation"],

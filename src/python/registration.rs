@@ -7,8 +7,8 @@ use crate::error::Error;
 use crate::registration::{
     allowance as run_allowance, allowance::PLANE_POINTS, coarse_align as run_coarse_align,
     envelope_fit as run_envelope_fit, icp as run_icp, line_curvature, locating_points,
-    positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, probe_pattern, BlankSurface, IcpMethod,
-    IcpOptions, Robust, RobustKernel,
+    positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, probe_pattern, BlankOptions,
+    BlankSurface, IcpMethod, IcpOptions, Robust, RobustKernel,
 };
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
@@ -253,24 +253,30 @@ fn locating_points_grid<'py>(
     indices_to_numpy(py, chosen)
 }
 
-/// Machining allowance (SPEC R7); ``machscan.allowance`` documents it (with the default of
+/// The blank's surface options as ``machscan.allowance`` and ``machscan.envelope_fit`` take them.
+fn blank_options(surface: &str, k: Option<i64>, spacing: Option<f64>) -> PyResult<BlankOptions> {
+    Ok(BlankOptions { surface: BlankSurface::parse(surface)?, k: k.map(|k| count("k", k)).transpose()?, spacing })
+}
+
+/// Machining allowance (SPEC R7); ``machscan.allowance`` documents it (with the plane's default
 /// ``k``, ``ALLOWANCE_NEIGHBORS``).
 #[pyfunction]
-#[pyo3(signature = (model_points, model_normals, blank_points, k, surface))]
+#[pyo3(signature = (model_points, model_normals, blank_points, *, surface, k, spacing))]
 fn allowance<'py>(
     py: Python<'py>,
     model_points: &Bound<'py, PyAny>,
     model_normals: &Bound<'py, PyAny>,
     blank_points: &Bound<'py, PyAny>,
-    k: i64,
     surface: &str,
+    k: Option<i64>,
+    spacing: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let (k, surface) = (count("k", k)?, BlankSurface::parse(surface)?);
+    let options = blank_options(surface, k, spacing)?;
     let (model, normals) = model_with_normals(model_points, model_normals)?;
     let n = model.shape()[0];
     let blank = F64Array::points(blank_points, "blank_points")?;
     let (m, v, b) = (model.rows::<3>()?, normals.rows::<3>()?, blank.rows::<3>()?);
-    let a = enter(py, || run_allowance(m, v, b, k, surface))?;
+    let a = enter(py, || run_allowance(m, v, b, &options))?;
     to_numpy(py, a, &[n])
 }
 
@@ -326,7 +332,7 @@ fn probe_fit<'py>(
 
 /// The balanced envelope fit of a blank (SPEC R8); ``machscan.envelope_fit`` documents it.
 #[pyfunction]
-#[pyo3(signature = (model_points, model_normals, blank_points, *, min_allowance, k, surface, init))]
+#[pyo3(signature = (model_points, model_normals, blank_points, *, min_allowance, surface, k, spacing, init))]
 #[allow(clippy::too_many_arguments)]
 fn envelope_fit<'py>(
     py: Python<'py>,
@@ -334,17 +340,18 @@ fn envelope_fit<'py>(
     model_normals: &Bound<'py, PyAny>,
     blank_points: &Bound<'py, PyAny>,
     min_allowance: f64,
-    k: i64,
     surface: &str,
+    k: Option<i64>,
+    spacing: Option<f64>,
     init: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (k, surface) = (count("k", k)?, BlankSurface::parse(surface)?);
+    let options = blank_options(surface, k, spacing)?;
     let (model, normals) = model_with_normals(model_points, model_normals)?;
     let n = model.shape()[0];
     let blank = F64Array::points(blank_points, "blank_points")?;
     let init = transform_opt(init, "init")?;
     let (m, v, b) = (model.rows::<3>()?, normals.rows::<3>()?, blank.rows::<3>()?);
-    let fit = enter(py, || run_envelope_fit(m, v, b, min_allowance, k, surface, &init))?;
+    let fit = enter(py, || run_envelope_fit(m, v, b, min_allowance, &options, &init))?;
     let d = PyDict::new(py);
     d.set_item("transformation", transform_to_numpy(py, &fit.transformation)?)?;
     d.set_item("allowance", to_numpy(py, fit.allowance, &[n])?)?;

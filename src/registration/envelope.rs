@@ -11,11 +11,10 @@
 //! log-barrier interior point method; each step is checked against the exact allowance and
 //! shrunk by a trust region when it does not keep what the linearisation promised (SQP with an
 //! exact L∞ penalty).
-use super::allowance::{check_k, meet, BlankSurface};
+use super::allowance::{Blank, BlankOptions};
 use super::twist;
 use crate::error::{check_finite_points, Error, Result};
 use crate::geom::{transform_point, transform_vector};
-use crate::spatial::PointIndex;
 use nalgebra::{Matrix4, SMatrix, SVector, Vector3};
 use rayon::prelude::*;
 
@@ -78,10 +77,7 @@ impl Evaluation {
 struct Problem<'a> {
     model: &'a [[f64; 3]],
     normals: Vec<Vector3<f64>>,
-    blank: &'a [[f64; 3]],
-    index: PointIndex,
-    k: usize,
-    surface: BlankSurface,
+    blank: Blank<'a>,
     centre: Vector3<f64>,
     scale: f64,
 }
@@ -101,7 +97,7 @@ impl Problem<'_> {
             .map(|(p, v)| {
                 let pb = Vector3::from(transform_point(&inverse, *p));
                 let vb = Vector3::from(transform_vector(&inverse, [v[0], v[1], v[2]]));
-                let Some((a, n)) = meet(&self.index, self.blank, &pb, &vb, self.k, self.surface) else {
+                let Some((a, n)) = self.blank.meet(&pb, &vb.normalize()) else {
                     return (f64::NAN, None);
                 };
                 let n = Vector3::from(transform_vector(pose, [n[0], n[1], n[2]]));
@@ -137,14 +133,12 @@ pub fn envelope_fit(
     normals: &[[f64; 3]],
     blank: &[[f64; 3]],
     min_allowance: f64,
-    k: usize,
-    surface: BlankSurface,
+    options: &BlankOptions,
     init: &Matrix4<f64>,
 ) -> Result<EnvelopeFit> {
     check_finite_points("model_points", model)?;
-    check_finite_points("blank_points", blank)?;
     super::check_normals("model_normals", normals, model.len())?;
-    check_k(k, blank.len())?;
+    let blank = Blank::new(blank, options)?;
     if !min_allowance.is_finite() {
         return Err(Error::invalid("min_allowance", format!("must be finite, got {min_allowance}")));
     }
@@ -156,9 +150,6 @@ pub fn envelope_fit(
         model,
         normals: normals.iter().map(|v| Vector3::from(*v).normalize()).collect(),
         blank,
-        index: PointIndex::new(blank)?,
-        k,
-        surface,
         centre,
         scale,
     };
@@ -332,7 +323,7 @@ mod tests {
 
     /// Where the blank's centre ends up and the allowance of the blank put back concentric.
     fn centred(blank: &[[f64; 3]], model: &[[f64; 3]], normals: &[[f64; 3]]) -> Vec<f64> {
-        crate::registration::allowance(model, normals, blank, 8, BlankSurface::Quadric).unwrap()
+        crate::registration::allowance(model, normals, blank, &BlankOptions::default()).unwrap()
     }
 
     #[test]
@@ -350,8 +341,7 @@ mod tests {
             &normals,
             &moved(&displaced, &blank),
             0.0,
-            8,
-            BlankSurface::Quadric,
+            &BlankOptions::default(),
             &Matrix4::identity(),
         )
         .unwrap();
@@ -378,8 +368,7 @@ mod tests {
             &normals,
             &moved(&shifted, &blank),
             0.6,
-            8,
-            BlankSurface::Quadric,
+            &BlankOptions::default(),
             &Matrix4::identity(),
         )
         .unwrap();
@@ -393,7 +382,8 @@ mod tests {
     fn bad_input_is_refused_by_name() {
         let (model, normals) = sphere(50, 1.0);
         let e = |m: f64, k| {
-            envelope_fit(&model, &normals, &model, m, k, BlankSurface::Plane, &Matrix4::identity()).unwrap_err()
+            let options = BlankOptions { surface: super::super::BlankSurface::Plane, k: Some(k), spacing: None };
+            envelope_fit(&model, &normals, &model, m, &options, &Matrix4::identity()).unwrap_err()
         };
         assert!(e(f64::NAN, 8).to_string().contains("min_allowance"));
         assert!(e(0.0, 2).to_string().contains("k"));

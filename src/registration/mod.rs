@@ -8,7 +8,7 @@ pub mod icp;
 pub mod locating;
 pub mod positioning;
 
-pub use allowance::{allowance, BlankSurface};
+pub use allowance::{allowance, BlankOptions, BlankSurface};
 pub use coarse::coarse_align;
 pub use envelope::{envelope_fit, EnvelopeFit};
 pub use icp::{icp, IcpMethod, IcpOptions, IcpResult, IcpStep, Robust, RobustKernel};
