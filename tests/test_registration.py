@@ -5,6 +5,7 @@ import numpy as np
 import open3d
 import pytest
 
+import analytic_blades as parts
 import machscan
 
 reg = open3d.pipelines.registration
@@ -283,3 +284,96 @@ def test_positioning_errors_against_points_and_against_the_surface(part):
     _, j = cKDTree(target).query(probed)
     np.testing.assert_allclose(np.column_stack([points.e_x, points.e_y, points.e_z]), probed - target[j], atol=1e-12)
     assert "e_total" in points.summary()
+
+
+# ---- allowance round a blade's edges and the blank found from where a plant starts (issue #32 §3–4) ---------------
+# Parts unlike the built-in airfoil: twisted elliptic sections and circular-arc sections with filleted edges, blanks on
+# their own jittered grid, exact truth (tests/analytic_blades.py).
+
+TWISTED = dict(twist_deg=30, lean=(0.05, 0.02), bow=(5e-4, 0))
+
+
+@pytest.mark.parametrize(
+    ("section", "spacing", "tolerance"),
+    [
+        # The issue's blade: edges of 0.8 mm radius, blank every 0.5 mm (1.1 µm measured).
+        (parts.EllipseSection(20, 4), 0.5, 0.005),
+        # A fillet of 1.2 mm meeting circular flanks tangentially (the curvature jumps): 7.6 µm measured at 0.3 mm.
+        (parts.LenticularSection(20, 3, 2, 1.2), 0.3, 0.010),
+        # Thick edges, coarse blank: 2 mm radius every 1 mm.
+        (parts.EllipseSection.with_edge_radius(20, 2.0), 1.0, 0.005),
+    ],
+)
+@pytest.mark.parametrize("offset", [0.3, -0.1, "smooth"])
+def test_the_allowance_is_right_round_a_blades_edges(section, spacing, tolerance, offset):
+    blade = parts.Blade(section, 60, **TWISTED)
+    u, z = blade.model_grid(0.2, (20, 28), span_spacing=1.0)
+    p, v = blade.point(u, z), blade.normal(u, z)
+    d = parts.smooth_offset(blade) if offset == "smooth" else offset
+    blank = blade.sample_blank(spacing, (14, 34), d, np.random.default_rng(7), jitter=0.3)["points"]
+    truth = blade.truth(u, z, d)
+    a = machscan.allowance(p, v, blank)
+    assert not np.isnan(a).any(), "the blank covers every model point"
+    assert np.abs(a - truth).max() <= tolerance
+    # The paper's plane is far off at the edges, and stays an option.
+    plane = machscan.allowance(p, v, blank, surface="plane", k=8)
+    edge = blade.section.edge_distance(u) < 1.0
+    assert np.nanmax(np.abs(plane - truth)[edge]) > 0.03
+
+
+def test_no_allowance_beyond_the_blank_or_over_a_hole():
+    blade = parts.Blade(parts.EllipseSection(20, 4), 60, **TWISTED)
+    u, z = blade.model_grid(0.3, (10, 50), span_spacing=1.0)
+    p, v = blade.point(u, z), blade.normal(u, z)
+    sample = blade.sample_blank(0.5, (0, 30), 0.3, np.random.default_rng(2), jitter=0.3)
+    blank = sample["points"]
+    hole = np.linalg.norm(blank - blade.point(np.array([0.3]), np.array([20.0])), axis=1) < 1.5
+    a = machscan.allowance(p, v, blank[~hole])
+    beyond = z > 31.0
+    assert np.isnan(a[beyond]).all()
+    inside = (z < 28.0) & (np.linalg.norm(p - blade.point(np.array([0.3]), np.array([20.0])), axis=1) > 2.5)
+    assert np.isfinite(a[inside]).all() and np.abs(a[inside] - 0.3).max() < 0.005
+    over = np.linalg.norm(p + 0.3 * v - blade.point(np.array([0.3]), np.array([20.0])) - 0.3 * blade.normal(
+        np.array([0.3]), np.array([20.0])), axis=1) < 0.4
+    assert over.any() and np.isnan(a[over]).all()
+
+
+def test_bad_blank_options_are_refused_by_name():
+    model, normals = np.zeros((3, 3)), np.tile([0.0, 0.0, 1.0], (3, 1))
+    blank = np.random.default_rng(0).random((50, 3))
+    with pytest.raises(ValueError, match="k"):
+        machscan.allowance(model, normals, blank, k=8)  # the quadric follows the spacing
+    with pytest.raises(ValueError, match="spacing"):
+        machscan.allowance(model, normals, blank, spacing=-1.0)
+    with pytest.raises(ValueError, match="k"):
+        machscan.allowance(model, normals, blank, surface="plane", k=2)
+
+
+@pytest.mark.parametrize(("angle", "shift", "seed"), [(0.0, 0.3, 0), (1.0, 1.0, 1), (5.0, 5.0, 2)])
+def test_align_blank_recovers_a_misplaced_blank_to_the_even_allowance(angle, shift, seed):
+    # A whole blade, edges and ends included, blank 0.3 mm over it everywhere, clamped up to 5 mm / 5° off: the
+    # chain ends at the even allowance; the envelope fit alone stays where it started from 1 mm / 1° on.
+    blade = parts.Blade(parts.EllipseSection(20, 4), 60, **TWISTED)
+    u, z = blade.model_grid(1.0, (0, 60), span_spacing=1.0)
+    p, v = blade.point(u, z), blade.normal(u, z)
+    blank = blade.sample_blank(0.5, (0, 60), 0.3, np.random.default_rng(3), jitter=0.3)["points"]
+    rng = np.random.default_rng(seed)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    r = np.eye(3) + np.sin(np.radians(angle)) * k + (1 - np.cos(np.radians(angle))) * k @ k
+    t = rng.normal(size=3)
+    t *= shift / np.linalg.norm(t)
+    c = p.mean(axis=0)
+    moved = (blank - c) @ r.T + c + t
+    found = machscan.align_blank(p, v, moved, min_allowance=0.1)
+    a = found.allowance
+    assert np.isfinite(a).mean() > 0.99
+    assert np.nanstd(a) < 0.002 and abs(np.nanmean(a) - 0.3) < 0.002 and found.feasible
+    assert [s.name for s in found.stages][:2] == ["start", "coarse"] and found.stages[-1].name == "envelope"
+    np.testing.assert_array_equal(found.stages[-1].allowance, a)
+    text = found.summary()
+    assert "moved" in text and "mm" in text and "°" in text
+    if angle >= 1.0:
+        alone = machscan.envelope_fit(p, v, moved, min_allowance=0.1)
+        assert np.nanstd(alone.allowance) > 0.05

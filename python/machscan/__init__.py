@@ -93,10 +93,12 @@ from machscan.mesh import (
     insert_points,
 )
 from machscan.registration import (
+    BlankAlignment,
     EnvelopeFit,
     IcpResult,
     PositioningErrors,
     PositioningResult,
+    align_blank,
     allowance,
     coarse_align,
     envelope_fit,
@@ -124,6 +126,7 @@ from machscan.toolpath import (
 __all__ = [
     "SENTINEL",
     "BeadChain",
+    "BlankAlignment",
     "ClosestPoints",
     "CloudFile",
     "CompensatedToolpath",
@@ -156,6 +159,7 @@ __all__ = [
     "ab_mirror_support_points",
     "ac_head_transforms",
     "ac_table_rotate",
+    "align_blank",
     "allowance",
     "bead_chain",
     "cad",

@@ -21,6 +21,7 @@ __all__ = [
     "ab_mirror_support_points",
     "ac_head_transforms",
     "ac_table_rotate",
+    "align_blank",
     "allowance",
     "calibrate_mount",
     "closest_points",
@@ -119,6 +120,17 @@ class _EnvelopeFitArrays(TypedDict):
     feasible: bool
     iterations: int
     converged: bool
+
+class _AlignmentStageArrays(TypedDict):
+    name: str
+    transformation: _F64
+    fitness: float
+    rmse: float
+    allowance: _F64
+
+class _BlankAlignmentArrays(TypedDict):
+    stages: list[_AlignmentStageArrays]
+    fit: _EnvelopeFitArrays
 
 class _ClosestArrays(TypedDict):
     points: _F64
@@ -694,6 +706,21 @@ def envelope_fit(
     init: ArrayLike | None,
 ) -> _EnvelopeFitArrays:
     """The balanced envelope fit of a blank (SPEC R8); ``machscan.envelope_fit`` documents it."""
+
+def align_blank(
+    model_points: ArrayLike,
+    model_normals: ArrayLike,
+    blank_points: ArrayLike,
+    *,
+    min_allowance: float,
+    surface: Literal["quadric", "plane"],
+    k: int | None,
+    spacing: float | None,
+    init: ArrayLike | None,
+) -> _BlankAlignmentArrays:
+    """The blank found from where a plant starts: coarse alignment, ICP, the envelope fit;
+    ``machscan.align_blank`` documents it and wraps the ``_BlankAlignmentArrays`` this returns.
+    """
 
 def icp_defaults() -> _IcpDefaults:
     """The defaults of the ICP options (``IcpOptions::new`` in the core), by name."""

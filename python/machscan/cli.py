@@ -10,6 +10,9 @@ machscan position MODEL --plan plan.csv --measured probed.csv [--out pose.txt]
 machscan position --simulate                    the probe rounds on the built-in blade
 machscan allowance MODEL BLANK [--out a.ply]    stock per model point (PLY/PCD/XYZ/CSV);
                                                 exit status 3 when the minimum does not hold
+machscan allowance MODEL BLANK --fit [--start pose.txt] [--local]
+                                                the blank's pose first: coarse alignment, ICP, the
+                                                envelope fit (--local: the envelope fit alone)
 machscan compensate THEORETICAL SCAN TOOLPATH --locating loc.csv --matching match.csv [--out DIR]
                                                 mirror milling: toolpath onto the bent skin (CL)
                                                 and a report; exit status 3 when the match did
@@ -389,29 +392,46 @@ def _position_simulated(args: argparse.Namespace) -> int:
 
 def _allowance(args: argparse.Namespace) -> int:
     from machscan.io import read_points, write_points
-    from machscan.registration import allowance, envelope_fit
+    from machscan.registration import align_blank, allowance, envelope_fit
 
     model, normals = _read_model(args.model)
     blank = read_points(args.blank)
+    start = _read_pose(args.start, "--start") if args.start else None
+    if args.local and not args.fit:
+        raise ValueError("--local: is an option of --fit (the envelope fit alone, from --start)")
+    surface = dict(surface=args.surface, k=args.k, spacing=args.spacing)
     if args.fit:
-        fit = envelope_fit(
-            model, normals, blank, min_allowance=args.min_allowance, surface=args.surface, k=args.k, spacing=args.spacing
-        )
+        if args.local:
+            fit = envelope_fit(model, normals, blank, min_allowance=args.min_allowance, init=start, **surface)
+            print("envelope fit from the start pose (--local)")
+        else:
+            found = align_blank(model, normals, blank, min_allowance=args.min_allowance, init=start, **surface)
+            fit = found.fit
+            print("blank found by coarse alignment, ICP and the envelope fit (each stage from the start pose):")
+            print(found.summary())
+        if args.local:
+            print(fit.summary())
         a = fit.allowance
-        print(fit.summary())
-        print("blank pose (applied to the blank):")
+        pose_out = args.pose_out or out_pose_path(args.out)
+        pose_out.parent.mkdir(parents=True, exist_ok=True)
+        np.savetxt(pose_out, fit.transformation, fmt="%.12g", header="blank pose: 4 x 4, blank -> model frame; translation in mm")
+        print("blank pose (applied to the blank; blank -> model frame, mm):")
         print(np.array2string(fit.transformation, precision=6, suppress_small=True))
+        print(f"written   : {pose_out} (the blank pose)")
         holds = fit.feasible
     else:
-        a = allowance(model, normals, blank, surface=args.surface, k=args.k, spacing=args.spacing)
+        if start is not None:
+            blank = blank @ start[:3, :3].T + start[:3, 3]
+        a = allowance(model, normals, blank, **surface)
         ok = a[np.isfinite(a)]
         short = int(np.sum(ok < args.min_allowance))
-        print(f"allowance (mm): min {ok.min():.4f}  mean {ok.mean():.4f}  max {ok.max():.4f}  std {ok.std():.4f}")
+        if len(ok):
+            print(f"allowance (mm): min {ok.min():.4f}  mean {ok.mean():.4f}  max {ok.max():.4f}  std {ok.std():.4f}")
         print(
             f"{short} of {len(ok)} points below {args.min_allowance:g} mm; {len(a) - len(ok)} without stock measured "
             "(NaN: the blank does not cover them; grind leaves them out)"
         )
-        holds = short == 0
+        holds = short == 0 and len(ok) > 0
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     if out.suffix.lower() in (".csv", ".xyz", ".txt"):
@@ -424,6 +444,23 @@ def _allowance(args: argparse.Namespace) -> int:
         _warn(f"the blank leaves less than {args.min_allowance:g} mm somewhere")
         return 3
     return 0
+
+
+def out_pose_path(out: Path) -> Path:
+    """Where ``machscan allowance --fit`` writes the blank pose by default: beside the allowance file."""
+    out = Path(out)
+    return out.with_name(out.stem + ".pose.txt")
+
+
+def _read_pose(path: Path, name: str) -> np.ndarray:
+    """A 4 × 4 rigid pose from a text file (as machscan writes them; ``#`` comments)."""
+    try:
+        pose = np.loadtxt(path, ndmin=2)
+    except ValueError as e:
+        raise ValueError(f"{name}: {path} is not a 4 x 4 matrix of numbers ({e})") from None
+    if pose.size != 16 or not np.isfinite(pose).all():
+        raise ValueError(f"{name}: {path} holds {pose.size} values, expected a finite 4 x 4 pose")
+    return pose.reshape(4, 4)
 
 
 def _floats(text: str, count: int, name: str) -> tuple[float, ...]:
@@ -905,8 +942,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     al.add_argument("--min-allowance", type=float, default=0.0, help="least stock wanted, mm (default: %(default)s)")
     al.add_argument(
-        "--fit", action="store_true", help="first move the blank to the balanced envelope fit (every allowance ≥ the minimum)"
+        "--fit",
+        action="store_true",
+        help="first find the blank's pose: coarse alignment, ICP, then the balanced envelope fit (every allowance ≥ the "
+        "minimum, as even as possible); the pose is written beside --out",
     )
+    al.add_argument("--start", type=Path, help="start pose of the blank, 4 × 4 text (blank → model frame; default identity)")
+    al.add_argument("--local", action="store_true", help="with --fit: the envelope fit alone, from --start (no alignment)")
+    al.add_argument("--pose-out", type=Path, help="where --fit writes the blank pose (default: OUT with .pose.txt)")
     al.add_argument(
         "--k", type=int, default=None, help=f"blank points per plane, --surface plane only (default: {ALLOWANCE_NEIGHBORS})"
     )

@@ -5,10 +5,10 @@ use super::convert::{count, enter, indices_to_numpy, to_numpy, Dim, F64Array};
 use crate::cloud::{estimate_normals, Neighborhood};
 use crate::error::Error;
 use crate::registration::{
-    allowance as run_allowance, allowance::PLANE_POINTS, coarse_align as run_coarse_align,
-    envelope_fit as run_envelope_fit, icp as run_icp, line_curvature, locating_points,
-    positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, probe_pattern, BlankOptions,
-    BlankSurface, IcpMethod, IcpOptions, Robust, RobustKernel,
+    align_blank as run_align_blank, allowance as run_allowance, allowance::PLANE_POINTS,
+    coarse_align as run_coarse_align, envelope_fit as run_envelope_fit, icp as run_icp, line_curvature,
+    locating_points, positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, probe_pattern,
+    BlankOptions, BlankSurface, IcpMethod, IcpOptions, Robust, RobustKernel,
 };
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
@@ -347,11 +347,16 @@ fn envelope_fit<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let options = blank_options(surface, k, spacing)?;
     let (model, normals) = model_with_normals(model_points, model_normals)?;
-    let n = model.shape()[0];
     let blank = F64Array::points(blank_points, "blank_points")?;
     let init = transform_opt(init, "init")?;
     let (m, v, b) = (model.rows::<3>()?, normals.rows::<3>()?, blank.rows::<3>()?);
     let fit = enter(py, || run_envelope_fit(m, v, b, min_allowance, &options, &init))?;
+    envelope_dict(py, fit)
+}
+
+/// The envelope fit's arrays (the ``_EnvelopeFitArrays`` keys).
+fn envelope_dict<'py>(py: Python<'py>, fit: crate::registration::EnvelopeFit) -> PyResult<Bound<'py, PyDict>> {
+    let n = fit.allowance.len();
     let d = PyDict::new(py);
     d.set_item("transformation", transform_to_numpy(py, &fit.transformation)?)?;
     d.set_item("allowance", to_numpy(py, fit.allowance, &[n])?)?;
@@ -361,7 +366,47 @@ fn envelope_fit<'py>(
     Ok(d)
 }
 
+/// The blank found from where a plant starts: coarse alignment, ICP, the envelope fit;
+/// ``machscan.align_blank`` documents it and wraps the ``_BlankAlignmentArrays`` this returns.
+#[pyfunction]
+#[pyo3(signature = (model_points, model_normals, blank_points, *, min_allowance, surface, k, spacing, init))]
+#[allow(clippy::too_many_arguments)]
+fn align_blank<'py>(
+    py: Python<'py>,
+    model_points: &Bound<'py, PyAny>,
+    model_normals: &Bound<'py, PyAny>,
+    blank_points: &Bound<'py, PyAny>,
+    min_allowance: f64,
+    surface: &str,
+    k: Option<i64>,
+    spacing: Option<f64>,
+    init: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let options = blank_options(surface, k, spacing)?;
+    let (model, normals) = model_with_normals(model_points, model_normals)?;
+    let n = model.shape()[0];
+    let blank = F64Array::points(blank_points, "blank_points")?;
+    let init = transform_opt(init, "init")?;
+    let (m, v, b) = (model.rows::<3>()?, normals.rows::<3>()?, blank.rows::<3>()?);
+    let r = enter(py, || run_align_blank(m, v, b, min_allowance, &options, &init))?;
+    let stages = pyo3::types::PyList::empty(py);
+    for stage in r.stages {
+        let d = PyDict::new(py);
+        d.set_item("name", stage.name)?;
+        d.set_item("transformation", transform_to_numpy(py, &stage.transformation)?)?;
+        d.set_item("fitness", stage.fitness)?;
+        d.set_item("rmse", stage.rmse)?;
+        d.set_item("allowance", to_numpy(py, stage.allowance, &[n])?)?;
+        stages.append(d)?;
+    }
+    let d = PyDict::new(py);
+    d.set_item("stages", stages)?;
+    d.set_item("fit", envelope_dict(py, r.fit)?)?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(align_blank, m)?)?;
     m.add("ALLOWANCE_NEIGHBORS", PLANE_POINTS)?;
     m.add_function(wrap_pyfunction!(probe_fit, m)?)?;
     m.add_function(wrap_pyfunction!(envelope_fit, m)?)?;

@@ -80,6 +80,9 @@ struct Problem<'a> {
     blank: Blank<'a>,
     centre: Vector3<f64>,
     scale: f64,
+    /// How far a step of size 1 (the largest component of ξ) moves a model point at most, mm:
+    /// √3 for the translation, and √3 times its distance from the centre over `scale` for the turn.
+    reach: f64,
 }
 
 impl Problem<'_> {
@@ -146,12 +149,14 @@ pub fn envelope_fit(
         return Err(Error::invalid("model_points", "must hold at least one point"));
     }
     let (centre, scale) = super::spread(model);
+    let farthest = model.iter().map(|p| (Vector3::from(*p) - centre).norm()).fold(0.0, f64::max);
     let problem = Problem {
         model,
         normals: normals.iter().map(|v| Vector3::from(*v).normalize()).collect(),
         blank,
         centre,
         scale,
+        reach: 3f64.sqrt() * (1.0 + farthest / scale),
     };
     let mut pose = *init;
     let mut here = problem.evaluate(&pose)?;
@@ -171,7 +176,15 @@ pub fn envelope_fit(
         let trial_pose =
             twist(&(Vector3::new(xi[0], xi[1], xi[2]) / scale), &Vector3::new(xi[3], xi[4], xi[5]), &centre) * pose;
         let trial = problem.evaluate(&trial_pose)?;
-        let actual = if measured.iter().zip(&trial.allowance).any(|(m, a)| *m && a.is_nan()) {
+        // A step may not escape the constraint by moving the blank until a point that could bind
+        // loses its allowance (the blank's surface turned away, or moved off it). A point with stock
+        // to spare beyond the step's reach may: where the blank ends at the model's end, its last
+        // row is covered or not by a hair, and holding it would freeze the fit there.
+        let reach = size * problem.reach;
+        let escapes = (0..measured.len()).any(|i| {
+            measured[i] && trial.allowance[i].is_nan() && !(here.allowance[i] - min_allowance > reach)
+        });
+        let actual = if escapes {
             f64::NEG_INFINITY
         } else {
             here.merit(min_allowance) - trial.merit(min_allowance)

@@ -2,6 +2,7 @@
 //! model. `icp` is the kernel the positioning and allowance workflows stand on.
 //! The formulas: docs/registration.md.
 pub mod allowance;
+pub mod blank_alignment;
 pub mod coarse;
 pub mod envelope;
 pub mod icp;
@@ -9,6 +10,7 @@ pub mod locating;
 pub mod positioning;
 
 pub use allowance::{allowance, BlankOptions, BlankSurface};
+pub use blank_alignment::{align_blank, AlignmentStage, BlankAlignment};
 pub use coarse::coarse_align;
 pub use envelope::{envelope_fit, EnvelopeFit};
 pub use icp::{icp, IcpMethod, IcpOptions, IcpResult, IcpStep, Robust, RobustKernel};
