@@ -637,17 +637,21 @@ impl Cloud<'_> {
     /// normals turned by up to `RESOLVED_TURN` between neighbouring points, so the spacing given
     /// is that turn over the fastest one measured here (per mm), and less than the cloud's.
     fn too_sparse(&self, u: Unresolved, h: f64, limit: f64) -> Error {
-        let found = self.index.knn(&u.at.into(), 9);
-        let (first, p0) = (self.normals[found[0].0], self.p(found[0].0));
+        // The fastest turn between neighbouring points (at most 1.5 spacings apart) round the
+        // place: where the fits fail is often beside the tightest stretch, not on it.
+        let s = self.spacing;
+        let found = self.index.knn(&u.at.into(), LOCAL_POINTS);
         let (mut turn, mut rate) = (0.0f64, 0.0f64);
-        for &(i, _) in &found[1..] {
-            let (angle, apart) = (self.normals[i].angle(&first), (self.p(i) - p0).norm());
-            turn = turn.max(angle);
-            if apart > 0.0 {
-                rate = rate.max(angle / apart);
+        for (k, &(i, _)) in found.iter().enumerate() {
+            for &(j, _) in &found[k + 1..] {
+                let apart = (self.p(i) - self.p(j)).norm();
+                if apart > 0.0 && apart <= 1.5 * s {
+                    let angle = self.normals[i].angle(&self.normals[j]);
+                    turn = turn.max(angle);
+                    rate = rate.max(angle / apart);
+                }
             }
         }
-        let s = self.spacing;
         let needed = if rate > 0.0 { (RESOLVED_TURN / rate).min(0.9 * s) } else { 0.5 * s };
         let what = if u.disagreement.is_finite() {
             format!(
@@ -1413,6 +1417,58 @@ mod tests {
         let side = Row { points: points[..10].to_vec(), closed: true }.pieces(10.0, 0.005);
         assert_eq!(side.len(), 1);
         assert!(side[0].closed);
+    }
+
+    /// A straight row along x whose fits give the normal +z up to x = 0.5 and one tilted by
+    /// `jump` about x beyond: the halving closes in on x = 0.5.
+    fn row_with_a_jump(jump: f64, open: bool, gap: bool) -> std::result::Result<Vec<(V3, V3, f64)>, Unresolved> {
+        let line = Polyline::new(&[V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0)], false);
+        let eval = |q: V3| {
+            if gap && q.x > 0.4 && q.x < 0.6 {
+                return None;
+            }
+            let normal = if q.x < 0.5 { V3::z() } else { V3::new(0.0, -jump.sin(), jump.cos()) };
+            Some((q, normal, 0.3))
+        };
+        row_points(&line, false, 0.25, 0.0025, 0.02, 10.0, eval, |_| open)
+    }
+
+    #[test]
+    fn the_wheel_rolls_over_fits_that_disagree_a_little_and_a_row_is_refused_where_they_disagree_more() {
+        // 3° between the two fits: a straight move would stray 6.9 µm (R θ²/8), within twice the scallop height
+        // (20 µm), so the wheel turns over the point in moves of at most the tolerance, and the row is whole.
+        let points = row_with_a_jump(3f64.to_radians(), false, false).unwrap();
+        assert!(points.windows(2).all(|w| centre_stray(w[0].0, w[0].1, w[1].0, w[1].1, 10.0) <= 0.0025 + 1e-12));
+        let row = Row { points: points.iter().map(|&(p, m, a)| (p, m, 0.0, a)).collect(), closed: false };
+        assert_eq!(row.pieces(10.0, 0.005).len(), 1);
+        // 8°: 49 µm. Before, the row was cut there (342 pieces for 157 rows on a 1.5 mm blade cloud); now the
+        // cloud is too sparse for the surface at the point, and how far the fits disagree is told.
+        let refused = row_with_a_jump(8f64.to_radians(), false, false).unwrap_err();
+        assert!((refused.at.x - 0.5).abs() < 1e-3);
+        assert!((refused.disagreement - 10.0 * 8f64.to_radians().powi(2) / 8.0).abs() < 1e-3);
+        // Where the row runs off the cloud the same disagreement is a gap in the data: the link is left for
+        // `Row::pieces` to cut.
+        let points = row_with_a_jump(8f64.to_radians(), true, false).unwrap();
+        let row = Row { points: points.iter().map(|&(p, m, a)| (p, m, 0.0, a)).collect(), closed: false };
+        assert_eq!(row.pieces(10.0, 0.005).len(), 2);
+        // No fit at all in the middle: cut where the cloud ends, refused where it surrounds the row.
+        assert_eq!(row_with_a_jump(8f64.to_radians(), true, true).map(|p| p.len()).ok(), Some(4));
+        assert!(row_with_a_jump(8f64.to_radians(), false, true).unwrap_err().disagreement.is_infinite());
+    }
+
+    #[test]
+    fn the_simulation_reports_a_cut_at_its_full_depth() {
+        // One blank point on the plane z = 0 with 0.3 mm of stock, and a row of wheels (R 10 mm) whose centres
+        // step down its normal line from z = 9 to z = -31: each cuts from the top down into the next, so the
+        // stock left is -41 mm. The stretch of the line looked at first ends at the lowest sinking (z = 0); before,
+        // the cut was followed only as far as wheels within reach of that stretch (-20 mm).
+        let blank = Stock { points: &[[0.0, 0.0, 0.0]], normals: &[[0.0, 0.0, 1.0]], allowance: &[0.3] };
+        let path: Vec<[f64; 3]> = (0..11).map(|k| [0.0, 0.0, -1.0 - 4.0 * k as f64]).collect();
+        let normals = vec![[0.0, 0.0, 1.0]; 11];
+        let allowance = vec![0.3; 11];
+        let path = Stock { points: &path, normals: &normals, allowance: &allowance };
+        let (left, _) = simulate_removal(blank, path, &[0; 11], &[0.3; 11], 10.0).unwrap();
+        assert!((left[0] + 41.0).abs() < 1e-9, "{}", left[0]);
     }
 
     #[test]

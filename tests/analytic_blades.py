@@ -1,0 +1,294 @@
+"""Analytic blades with exact normals, for grinding paths on parts no generator in machscan makes (pure NumPy).
+
+Independent of the package (it does not import it), so its truth is independent of the code it tests.
+
+A part is a *blade*: a closed planar section curve C(u), u in [0, 1) counter-clockwise, swept
+along the span z with a twist about the z axis and a lean/bow of the sections:
+
+    S(u, z) = [R(theta(z)) C(u), z] + lean(z),   theta(z) = twist * (z / span - 1/2)
+    lean(z) = (lx z + bx z^2, ly z + by z^2, 0)
+
+Its unit outward normal n(u, z) is exact (S_u x S_z from analytic derivatives). A blank is the
+offset surface O(u, z) = S(u, z) + d(u, z) n(u, z): the allowance at S(u, z) along its normal is
+d(u, z) exactly (`smooth_offset` gives a smooth d).
+
+Sections:
+  EllipseSection(a, b)            semi-axes a (chord / 2, along x) and b; edge radius b^2 / a.
+  LenticularSection(a, hu, hl, r) two circular arcs through (+-a, 0) with sagittas hu (upper,
+                                  > 0) and hl (lower; > 0 bulges down = biconvex, < 0 bulges up
+                                  = crescent, concave lower side), the corners rounded by
+                                  tangent fillets of radius r (curvature jumps at the joins).
+
+Example:
+    blade = Blade(EllipseSection(20, 4), span=60, twist_deg=30, lean=(0.05, 0.02))
+    u, z = blade.model_grid(0.3)
+    p, v = blade.point(u, z), blade.normal(u, z)
+    height = blade.height(path_points)     # signed distance of points from the surface, mm
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+TAU = 2.0 * np.pi
+
+
+class Section:
+    """A closed planar curve C(u), u in [0, 1), counter-clockwise (outward normal (C'y, -C'x))."""
+
+    edge_radius: float
+    edge_u: np.ndarray  # parameters of the edge tips (leading/trailing)
+
+    def point(self, u):
+        raise NotImplementedError
+
+    def deriv(self, u):
+        raise NotImplementedError
+
+    def _arclength_table(self, n=200_000):
+        if not hasattr(self, "_tab"):
+            uu = np.linspace(0.0, 1.0, n + 1)
+            sp = np.linalg.norm(self.deriv(uu), axis=-1)
+            s = np.concatenate([[0.0], np.cumsum(0.5 * (sp[1:] + sp[:-1]) * np.diff(uu))])
+            self._tab = (uu, s)
+        return self._tab
+
+    @property
+    def length(self):
+        return self._arclength_table()[1][-1]
+
+    def arclength(self, u):
+        uu, s = self._arclength_table()
+        u = np.mod(u, 1.0)
+        return np.interp(u, uu, s)
+
+    def u_at(self, s):
+        """Parameter at arc length s (periodic)."""
+        uu, ss = self._arclength_table()
+        return np.interp(np.mod(s, ss[-1]), ss, uu)
+
+    def edge_distance(self, u):
+        """Arc length from C(u) to the nearest edge tip, mm."""
+        s, L = self.arclength(u), self.length
+        d = np.full(np.shape(u), np.inf)
+        for ue in self.edge_u:
+            ds = np.abs(s - self.arclength(ue))
+            d = np.minimum(d, np.minimum(ds, L - ds))
+        return d
+
+
+class EllipseSection(Section):
+    """Ellipse x = a cos(2 pi u), y = b sin(2 pi u); edges (u = 0, 1/2) of radius b^2 / a."""
+
+    def __init__(self, a, b):
+        self.a, self.b = float(a), float(b)
+        self.edge_radius = self.b**2 / self.a
+        self.edge_u = np.array([0.0, 0.5])
+
+    @classmethod
+    def with_edge_radius(cls, a, r):
+        return cls(a, np.sqrt(r * a))
+
+    def point(self, u):
+        w = TAU * np.asarray(u, float)
+        return np.stack([self.a * np.cos(w), self.b * np.sin(w)], -1)
+
+    def deriv(self, u):
+        w = TAU * np.asarray(u, float)
+        return TAU * np.stack([-self.a * np.sin(w), self.b * np.cos(w)], -1)
+
+    def __repr__(self):
+        return f"Ellipse(a={self.a:g}, b={self.b:.3g}, r_e={self.edge_radius:.3g})"
+
+
+class LenticularSection(Section):
+    """Two circular arcs through (+-a, 0), sagittas hu (up) and hl (down; < 0: crescent), corners
+    rounded by fillets of radius r tangent to both arcs. Unit speed in arc length: u = s / L."""
+
+    def __init__(self, a, hu, hl, r):
+        assert hu > 0 and hu + hl > 0 and r > 0
+        self.a, self.hu, self.hl, self.edge_radius = float(a), float(hu), float(hl), float(r)
+        yu = (hu**2 - a**2) / (2 * hu)
+        Ru = hu - yu
+        yl = (a**2 - hl**2) / (2 * hl)
+        Rl = abs(yl + hl)
+        convex_lower = hl > 0
+        du = Ru - r
+        dl = Rl - r if convex_lower else Rl + r
+        yf = 0.5 * (yu + yl) + (du**2 - dl**2) / (2 * (yl - yu))
+        xf = np.sqrt(du**2 - (yf - yu) ** 2)
+        cu, cl = np.array([0.0, yu]), np.array([0.0, yl])
+        fr, fl = np.array([xf, yf]), np.array([-xf, yf])
+
+        def toward(c, R, f):
+            d = f - c
+            return c + R * d / np.linalg.norm(d)
+
+        tur, tul = toward(cu, Ru, fr), toward(cu, Ru, fl)
+        tlr, tll = toward(cl, Rl, fr), toward(cl, Rl, fl)
+
+        def ang(c, q):
+            return np.arctan2(q[1] - c[1], q[0] - c[0])
+
+        def arc(c, R, q0, q1, ccw):
+            a0, a1 = ang(c, q0), ang(c, q1)
+            sweep = np.mod(a1 - a0, TAU) if ccw else -np.mod(a0 - a1, TAU)
+            return (c, R, a0, sweep)
+
+        # CCW: upper arc (right -> left), left fillet, lower arc (left -> right), right fillet.
+        self.pieces = [
+            arc(cu, Ru, tur, tul, True),
+            arc(fl, r, tul, tll, True),
+            arc(cl, Rl, tll, tlr, convex_lower),
+            arc(fr, r, tlr, tur, True),
+        ]
+        self.lens = np.array([R * abs(sw) for (_, R, _, sw) in self.pieces])
+        self.starts = np.concatenate([[0.0], np.cumsum(self.lens)])
+        self._L = self.starts[-1]
+        # edge tips: middle of each fillet
+        self.edge_u = np.array([(self.starts[1] + 0.5 * self.lens[1]) / self._L, (self.starts[3] + 0.5 * self.lens[3]) / self._L])
+
+    @property
+    def length(self):
+        return self._L
+
+    def arclength(self, u):
+        return np.mod(u, 1.0) * self._L
+
+    def u_at(self, s):
+        return np.mod(s, self._L) / self._L
+
+    def _eval(self, u, which):
+        s = np.mod(np.asarray(u, float), 1.0) * self._L
+        out = np.empty(s.shape + (2,))
+        k = np.clip(np.searchsorted(self.starts, s, side="right") - 1, 0, 3)
+        for i, (c, R, a0, sw) in enumerate(self.pieces):
+            m = k == i
+            sg = np.sign(sw)
+            phi = a0 + sg * (s[m] - self.starts[i]) / R
+            if which == 0:
+                out[m] = c + R * np.stack([np.cos(phi), np.sin(phi)], -1)
+            else:
+                out[m] = self._L * sg * np.stack([-np.sin(phi), np.cos(phi)], -1)
+        return out
+
+    def point(self, u):
+        return self._eval(u, 0)
+
+    def deriv(self, u):
+        return self._eval(u, 1)
+
+    def __repr__(self):
+        return f"Lenticular(a={self.a:g}, hu={self.hu:g}, hl={self.hl:g}, r_e={self.edge_radius:g})"
+
+
+class Blade:
+    """A section swept along z in [0, span] with a twist (deg, total) and lean/bow (see module)."""
+
+    def __init__(self, section, span=60.0, twist_deg=30.0, lean=(0.0, 0.0), bow=(0.0, 0.0)):
+        self.section, self.span = section, float(span)
+        self.twist = np.radians(twist_deg)
+        self.lean, self.bow = np.asarray(lean, float), np.asarray(bow, float)
+
+    def __repr__(self):
+        return f"Blade({self.section}, twist={np.degrees(self.twist):g} deg)"
+
+    def _theta(self, z):
+        return self.twist * (np.asarray(z, float) / self.span - 0.5)
+
+    def point(self, u, z):
+        u, z = np.broadcast_arrays(np.asarray(u, float), np.asarray(z, float))
+        c = self.section.point(u)
+        th = self._theta(z)
+        co, si = np.cos(th), np.sin(th)
+        x = co * c[..., 0] - si * c[..., 1] + self.lean[0] * z + self.bow[0] * z * z
+        y = si * c[..., 0] + co * c[..., 1] + self.lean[1] * z + self.bow[1] * z * z
+        return np.stack([x, y, z], -1)
+
+    def derivs(self, u, z):
+        """(S_u, S_z), exact."""
+        u, z = np.broadcast_arrays(np.asarray(u, float), np.asarray(z, float))
+        c, dc = self.section.point(u), self.section.deriv(u)
+        th = self._theta(z)
+        co, si = np.cos(th), np.sin(th)
+        su = np.stack([co * dc[..., 0] - si * dc[..., 1], si * dc[..., 0] + co * dc[..., 1], np.zeros_like(z)], -1)
+        w = self.twist / self.span
+        sz = np.stack(
+            [
+                w * (-si * c[..., 0] - co * c[..., 1]) + self.lean[0] + 2 * self.bow[0] * z,
+                w * (co * c[..., 0] - si * c[..., 1]) + self.lean[1] + 2 * self.bow[1] * z,
+                np.ones_like(z),
+            ],
+            -1,
+        )
+        return su, sz
+
+    def normal(self, u, z):
+        """Unit outward normal."""
+        su, sz = self.derivs(u, z)
+        n = np.cross(su, sz)
+        return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+    def offset_point(self, u, z, offset):
+        """O(u, z) = S + d(u, z) n; `offset` is a number or a callable d(u, z)."""
+        d = offset(u, z) if callable(offset) else offset
+        return self.point(u, z) + np.asarray(d)[..., None] * self.normal(u, z)
+
+    def model_grid(self, spacing, z_range=None, span_spacing=None, stagger=0.0):
+        """(u, z) of model points: rows every `span_spacing` (default `spacing`) in z, points
+        every `spacing` of section arc length along each row, each row's points shifted along it
+        by `stagger` × spacing more than the row before's (a scan's lines do not line up).
+        Flattened arrays."""
+        z0, z1 = z_range if z_range is not None else (0.0, self.span)
+        dz = span_spacing or spacing
+        zs = np.arange(z0, z1 + 1e-9, dz)
+        L = self.section.length
+        s = np.arange(0.0, L - 1e-9, spacing)
+        U = [self.section.u_at(s + np.mod(k * stagger, 1.0) * spacing) for k in range(len(zs))]
+        return np.concatenate(U), np.repeat(zs, len(s))
+
+    def height(self, points):
+        """Signed distance of `points` from the surface (positive outside), mm."""
+        q = np.asarray(points, float).reshape(-1, 3)
+        u, z = self.foot(q)
+        return np.sum((q - self.point(u, z)) * self.normal(u, z), -1)
+
+    def foot(self, points, iters=30):
+        """(u, z) of the surface point nearest each of `points`: Newton on (u, z), started from the
+        nearest of a grid every 0.1 mm of section and 0.5 mm of span about the point's z (a point
+        lies within a few mm of its foot)."""
+        q = np.asarray(points, float).reshape(-1, 3)
+        us = self.section.u_at(np.arange(0.0, self.section.length, 0.1))
+        dz = np.linspace(-1.0, 1.0, 5)
+        u, z = np.empty(len(q)), np.empty(len(q))
+        for k in range(0, len(q), 256):
+            p = q[k : k + 256]
+            zs = np.clip(p[:, 2:3] + dz, 0.0, self.span)  # (m, 5)
+            grid = self.point(us[None, None, :], zs[:, :, None])  # (m, 5, nu, 3)
+            d2 = np.sum((grid - p[:, None, None, :]) ** 2, axis=-1).reshape(len(p), -1)
+            i = np.argmin(d2, axis=1)
+            u[k : k + 256], z[k : k + 256] = us[i % len(us)], zs[np.arange(len(p)), i // len(us)]
+        for _ in range(iters):
+            su, sz = self.derivs(u, z)
+            f = self.point(u, z) - q
+            g = np.stack([np.sum(f * su, -1), np.sum(f * sz, -1)], -1)
+            j = np.stack([np.sum(su * su, -1), np.sum(su * sz, -1), np.sum(su * sz, -1), np.sum(sz * sz, -1)], -1)
+            j = j.reshape(-1, 2, 2)
+            step = np.linalg.solve(j, g[..., None])[..., 0]
+            u, z = u - step[:, 0], z - step[:, 1]
+            if np.max(np.abs(step)) < 1e-13:
+                break
+        return u, z
+
+
+def smooth_offset(blade, lo=0.1, hi=0.5, waves=(1, 1.5), phase=(0.3, 0.7)):
+    """A smooth offset d(u, z) in [lo, hi], varying around the section (`waves[0]` periods)
+    and along the span (`waves[1]` periods over the span)."""
+    mid, amp = 0.5 * (lo + hi), 0.5 * (hi - lo)
+
+    def d(u, z):
+        return mid + amp * np.sin(TAU * waves[0] * np.asarray(u) + TAU * phase[0]) * np.cos(
+            TAU * waves[1] * np.asarray(z) / blade.span + TAU * phase[1]
+        )
+
+    return d
