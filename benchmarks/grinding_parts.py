@@ -77,9 +77,12 @@ def measure(blade: Blade, spacing: float, scallop: float, check) -> dict:
 
 def refusal(message: str) -> str:
     """The refusal in a table cell: why, and the spacing the call says the cloud needs."""
-    why = "no fit" if "no surface fit" in message else "fits disagree by " + message.split("disagree by ")[1].split(" mm")[0]
+    if "no surface fit" in message:
+        why = "no fit"
+    else:
+        why = "fits disagree by " + message.split("disagree by ")[1].split(" mm")[0] + " mm"
     needed = message.split("points every ")[1].split(" mm")[0]
-    return f"refused ({why} mm; needs ≤ {needed} mm)"
+    return f"refused: {why}; needs ≤ {needed} mm"
 
 
 def main() -> None:

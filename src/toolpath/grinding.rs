@@ -610,11 +610,29 @@ impl Cloud<'_> {
     }
 
     /// Whether the row's plane (normal `n`) at `q` runs off the cloud — its nearest points all lie
-    /// on one side of the plane — or grazes the surface: a point without a fit there is a gap in
-    /// the data, where the row is cut, not a cloud too sparse for the surface.
+    /// on one side of the plane — or grazes the surface, or runs along an edge: a point without a
+    /// fit there is a gap in what the rows can grind, where the row is cut, not a cloud too sparse
+    /// for the surface.
     fn open(&self, q: V3, n: V3) -> bool {
-        let (nearest, _) = self.index.nearest(&q.into());
-        self.one_sided(q, n) || self.normals[nearest].cross(&n).norm() < MIN_CROSSING
+        let found = self.index.knn(&q.into(), LOCAL_POINTS);
+        let Some(&(nearest, _)) = found.first() else { return true };
+        self.one_sided(q, n) || self.normals[nearest].cross(&n).norm() < MIN_CROSSING || self.along_edge(n, &found)
+    }
+
+    /// Whether the plane of normal n runs along an edge among `found` (their normals turn by more
+    /// than `LOCAL_TURN`): it holds the edge's axis — the direction the normals are all nearly
+    /// perpendicular to — within asin(`MIN_CROSSING`). A section there follows the edge instead of
+    /// crossing it (planes along a blade's span): no fit places a point on it.
+    fn along_edge(&self, n: V3, found: &[(usize, f64)]) -> bool {
+        let reference = self.normals[found[0].0];
+        if found.iter().all(|&(i, _)| self.normals[i].dot(&reference) >= LOCAL_TURN) {
+            return false;
+        }
+        let scatter: nalgebra::Matrix3<f64> =
+            found.iter().map(|&(i, _)| self.normals[i] * self.normals[i].transpose()).sum();
+        let eigen = scatter.symmetric_eigen();
+        let axis = eigen.eigenvectors.column(eigen.eigenvalues.imin()).into_owned();
+        n.dot(&axis).abs() < MIN_CROSSING
     }
 
     /// Whether the cloud ends before the plane through q of normal n: its points within a slab's
