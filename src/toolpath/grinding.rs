@@ -89,9 +89,9 @@ const MIN_CROSSING: f64 = 0.2;
 /// the sweep is sampled finely enough that it is continuous to this.
 const SWEEP_TOLERANCE: f64 = 1e-4;
 /// Times the removal simulation lengthens the stretch of a point's normal line it looks for tools
-/// along (by a tool radius each time) while a cut runs on below it: a cut through a part 20 tool
-/// radii thick is reported as that deep, at least.
-const SIMULATION_REACHES: usize = 20;
+/// along (down to the cut's end each time) while a cut runs on below it: a cut carried down by
+/// a chain of tools is followed that many links deep, at least.
+const SIMULATION_REACHES: usize = 50;
 /// Smallest eigenvalue of the Jacobi-scaled normal matrix of a local cubic fit below which the
 /// local fields fall back to quadrics: over three scan lines it is 1.5e-6 (y³ is nearly a
 /// combination of 1, y, y²) and the cubic's height 45 µm off; over four, 0.04.
@@ -1330,11 +1330,13 @@ pub fn simulate_removal(
             // (a chord wholly below it is the line passing through the part to a tool on the
             // other side), so they are taken from the highest upper end down. The tools are
             // looked up along the stretch of the line from the top down to the lowest any tool
-            // sinks to; where the cut goes below that (a tool inside the part: a path point off
-            // the surface, or a wrong normal), the stretch is lengthened until the cut ends in it,
-            // so the depth reported is the cut's, not the end of the stretch looked at.
+            // sinks to, and a tenth of a radius more (a cut a few µm below the model, common
+            // where a feed removes a little more than asked, then needs no second look); where
+            // the cut goes below that (a tool inside the part: a path point off the surface, or a
+            // wrong normal), the stretch is lengthened until the cut ends in it, so the depth
+            // reported is the cut's, not the end of the stretch looked at.
             let high = allowance[i];
-            let mut low = bottom.min(high);
+            let mut low = bottom.min(high) - 0.1 * r;
             let mut left = high;
             for _ in 0..SIMULATION_REACHES {
                 let mut chords: Vec<(f64, f64)> = Vec::new();
@@ -1359,7 +1361,9 @@ pub fn simulate_removal(
                 if left >= low {
                     break;
                 }
-                low = left - r;
+                // A tool that carries the cut on below `left` holds a point of the line there:
+                // its centre lies within R of the stretch down to `left`.
+                low = left;
             }
             (left, contacts.nearest(&points[i]).0)
         })
