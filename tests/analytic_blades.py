@@ -1,4 +1,5 @@
-"""Analytic test parts for the machining allowance (pure NumPy).
+"""Analytic blades with exact normals, for the allowance and grinding paths on parts no generator in machscan makes
+(pure NumPy). Independent of the package (it does not import it), so its truth is independent of the code it tests.
 
 A part is a *blade*: a closed planar section curve C(u), u in [0, 1) counter-clockwise, swept
 along the span z with a twist about the z axis and a lean/bow of the sections:
@@ -26,6 +27,7 @@ Example:
     p, v = blade.point(u, z), blade.normal(u, z)
     bk = blade.sample_blank(0.5, z_range=(-3, 63), offset=0.3, rng=np.random.default_rng(1))
     t_true = blade.truth(u, z, offset=0.3)          # == 0.3 here
+    height = blade.height(path_points)              # signed distance of points from the surface, mm
 """
 from __future__ import annotations
 
@@ -232,16 +234,51 @@ class Blade:
         return self.point(u, z) + np.asarray(d)[..., None] * self.normal(u, z)
 
     # ---- sampling -------------------------------------------------------------------------
-    def model_grid(self, spacing, z_range=None, span_spacing=None):
+    def model_grid(self, spacing, z_range=None, span_spacing=None, stagger=0.0):
         """(u, z) of model points: rows every `span_spacing` (default `spacing`) in z, points
-        every `spacing` of section arc length along each row. Flattened arrays."""
+        every `spacing` of section arc length along each row, each row's points shifted along it
+        by `stagger` × spacing more than the row before's (a scan's lines do not line up).
+        Flattened arrays."""
         z0, z1 = z_range if z_range is not None else (0.0, self.span)
         dz = span_spacing or spacing
         zs = np.arange(z0, z1 + 1e-9, dz)
         L = self.section.length
-        us = self.section.u_at(np.arange(0.0, L - 1e-9, spacing))
-        U, Z = np.meshgrid(us, zs)
-        return U.ravel(), Z.ravel()
+        s = np.arange(0.0, L - 1e-9, spacing)
+        U = [self.section.u_at(s + np.mod(k * stagger, 1.0) * spacing) for k in range(len(zs))]
+        return np.concatenate(U), np.repeat(zs, len(s))
+
+    def height(self, points):
+        """Signed distance of `points` from the surface (positive outside), mm."""
+        q = np.asarray(points, float).reshape(-1, 3)
+        u, z = self.foot(q)
+        return np.sum((q - self.point(u, z)) * self.normal(u, z), -1)
+
+    def foot(self, points, iters=30):
+        """(u, z) of the surface point nearest each of `points`: Newton on (u, z), started from the
+        nearest of a grid every 0.1 mm of section and 0.5 mm of span about the point's z (a point
+        lies within a few mm of its foot)."""
+        q = np.asarray(points, float).reshape(-1, 3)
+        us = self.section.u_at(np.arange(0.0, self.section.length, 0.1))
+        dz = np.linspace(-1.0, 1.0, 5)
+        u, z = np.empty(len(q)), np.empty(len(q))
+        for k in range(0, len(q), 256):
+            p = q[k : k + 256]
+            zs = np.clip(p[:, 2:3] + dz, 0.0, self.span)  # (m, 5)
+            grid = self.point(us[None, None, :], zs[:, :, None])  # (m, 5, nu, 3)
+            d2 = np.sum((grid - p[:, None, None, :]) ** 2, axis=-1).reshape(len(p), -1)
+            i = np.argmin(d2, axis=1)
+            u[k : k + 256], z[k : k + 256] = us[i % len(us)], zs[np.arange(len(p)), i // len(us)]
+        for _ in range(iters):
+            su, sz = self.derivs(u, z)
+            f = self.point(u, z) - q
+            g = np.stack([np.sum(f * su, -1), np.sum(f * sz, -1)], -1)
+            j = np.stack([np.sum(su * su, -1), np.sum(su * sz, -1), np.sum(su * sz, -1), np.sum(sz * sz, -1)], -1)
+            j = j.reshape(-1, 2, 2)
+            step = np.linalg.solve(j, g[..., None])[..., 0]
+            u, z = u - step[:, 0], z - step[:, 1]
+            if np.max(np.abs(step)) < 1e-13:
+                break
+        return u, z
 
     def sample_blank(self, spacing, z_range=None, offset=0.3, rng=None, jitter=0.0, noise=0.0,
                      stagger=True):

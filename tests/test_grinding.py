@@ -304,3 +304,103 @@ def test_a_path_whose_simulated_pass_leaves_the_band_is_not_written(panel_paths,
     assert machscan.io.read_toolpath(tmp_path / "over.cl").points.shape == over.points.shape
     # The band is the caller's: a wide one takes the same path.
     assert machscan.simulate_removal(over, cloud.points, cloud.normals, cloud.allowance, band=5.0).within_band
+
+
+# Issue #32 §5: parts no generator in machscan makes — analytic blades with exact normals (tests/analytic_blades.py),
+# an elliptic section (edge radius 0.8 mm) and a crescent of two circular arcs (edges rounded 0.5 mm, one side
+# concave), 60 mm of span, 30° of twist and a lean; a smooth allowance of 0.2–0.4 mm.
+
+
+def _analytic(section, spacing, drop=None):
+    from analytic_blades import Blade, smooth_offset
+
+    blade = Blade(section, span=60.0, twist_deg=30.0, lean=(0.05, 0.02))
+    u, z = blade.model_grid(spacing, stagger=0.382)  # scan lines that do not line up
+    if drop is not None:
+        keep = ~drop(blade, u, z)
+        u, z = u[keep], z[keep]
+    return blade, blade.point(u, z), blade.normal(u, z), smooth_offset(blade, 0.2, 0.4)(u, z)
+
+
+def _ellipse():
+    from analytic_blades import EllipseSection
+
+    return EllipseSection(20.0, 4.0)
+
+
+def _crescent():
+    from analytic_blades import LenticularSection
+
+    return LenticularSection(20.0, 5.0, -1.5, 0.5)
+
+
+@pytest.mark.parametrize(("section", "spacing"), [(_crescent, 0.5), (_crescent, 0.4), (_ellipse, 0.5)])
+def test_a_row_past_a_ragged_end_of_the_cloud_is_cut_or_refused_never_driven_into_the_flank(section, spacing):
+    # The issue's whole blade: the last scan line lacks its points round the edges (no stock was measured there), so
+    # the last row runs past the cloud there. The edge fits extrapolated their normals 14–70° along the edge and the
+    # wheel sank into the flank below: -11.36 mm on the blade, -13.5 mm here on the crescent at 0.5 mm. Now no fit is
+    # taken where the cloud does not reach past the row's plane; the row is cut round the gap, or the cloud refused.
+    def ragged(blade, u, z):
+        return (z == z.max()) & (blade.section.edge_distance(u) < 3.0)
+
+    blade, p, n, a = _analytic(section(), spacing, drop=ragged)
+    try:
+        paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+    except ValueError as e:
+        assert str(e).startswith("points: the cloud is too sparse")
+        return
+    check = machscan.simulate_removal(paths, p, n, a)
+    # Measured: -13.1 … +13.9 µm (crescent, 0.4 mm), -12.0 … +19.7 µm (ellipse); the last row cut round the gap.
+    assert np.all(np.abs(check.deviation) <= 0.08)
+    assert check.deviation.min() > -0.02
+    assert np.abs(blade.height(paths.points[::5])).max() < 0.02
+    _, pieces = np.unique(paths.row_offsets, return_counts=True)
+    assert pieces[:-1].max() == 1 and pieces[-1] <= 2
+
+
+@pytest.mark.parametrize("spacing", [0.3, 0.5, 0.75, 1.0])
+def test_rows_neither_split_nor_duplicate_as_the_cloud_coarsens(spacing):
+    # Before: rows cut where two neighbouring fits disagreed — open sections at 0.75 mm, 83 pieces for 74 row
+    # offsets at 1 mm. A row is one closed section of the blade at every spacing; the pass stays within the band.
+    _, p, n, a = _analytic(_ellipse(), spacing)
+    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+    assert len(np.unique(paths.row_offsets)) == len(paths.row_offsets)
+    assert paths.row_closed.all() and np.all(np.diff(paths.row_offsets) > 0)
+    _, cp, cn, ca = _analytic(_ellipse(), 0.25)  # a denser cloud of the same blank sees cuts between the points
+    check = machscan.simulate_removal(paths, cp, cn, ca)
+    # Measured: -10.2 … +13.1 µm at 0.3 mm, -39.9 … +26.4 µm at 1 mm.
+    assert np.all(np.abs(check.deviation) <= 0.08)
+
+
+@pytest.mark.parametrize(("spacing", "needed"), [(0.75, 0.3), (1.5, 0.3)])
+def test_a_cloud_too_sparse_for_an_edge_is_refused_by_name_with_the_spacing_it_needs(spacing, needed):
+    # The crescent's 0.5 mm edges meet its arcs with a jump in curvature: at 0.75 mm its fits disagree by up to 1.3 mm
+    # round them (the path before: 560 pieces for 86 rows, -0.28 mm cut into the part), at 1.5 mm no fit holds there.
+    _, p, n, a = _analytic(_crescent(), spacing)
+    with pytest.raises(ValueError, match=r"^points: the cloud is too sparse") as error:
+        machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+    told = float(error.value.args[0].split("points every ")[1].split(" mm")[0])
+    assert told <= needed  # at 0.3 mm the crescent's path holds (benchmarks/grinding_parts.py)
+    _, p, n, a = _analytic(_crescent(), told)
+    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+    assert len(np.unique(paths.row_offsets)) == len(paths.row_offsets) and paths.row_closed.all()
+
+
+def test_the_issues_whole_blade_tip_with_its_trailing_edge_unmeasured_is_not_over_cut():
+    # Issue #32 §5 as reported: the synthetic blade over its whole span sampled every 0.5 mm, the tip's last scan
+    # line without stock round the trailing edge (the blank did not cover it; the points were dropped). The last row
+    # ran past the data there, an edge fit tilted its normals along the edge and the pass left -11.36 mm (-10.5 mm on
+    # the top 20 mm of the span, taken here to keep the test quick).
+    blade = Blade()
+    section, _ = blade.sample(2000, 2)
+    perimeter = float(np.linalg.norm(np.diff(section[:, 0], axis=0, append=section[:1, 0]), axis=1).sum())
+    nu = int(perimeter / 0.5)
+    u, v = np.meshgrid(np.arange(nu) / nu, np.linspace(0.0, 1.0, 301)[-41:], indexing="ij")
+    keep = ~((v == 1.0) & (np.abs(u - 0.5) < 0.03))
+    p, n = blade.surface(u[keep], v[keep])
+    a = 0.3 + 0.05 * np.sin(2 * np.pi * u[keep])
+    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+    check = machscan.simulate_removal(paths, p, n, a)
+    # Measured: -7.8 … +17.7 µm.
+    assert np.all(np.abs(check.deviation) <= 0.08)
+    assert check.deviation.min() > -0.02

@@ -21,10 +21,13 @@ type V3 = Vector3<f64>;
 
 const TERMS: usize = 11;
 /// Newton iterations for the point of a cut in the section plane.
-const ITERATIONS: usize = 20;
+const ITERATIONS: usize = 30;
 /// Step of the numerical derivatives of a point of the patch, in radians and in units of the
 /// patch's size.
 const STEP: f64 = 1e-6;
+/// Step of the numerical second derivatives (their error goes with its square, their rounding
+/// with the inverse of it squared).
+const STEP2: f64 = 1e-4;
 /// Largest normal angle from the patch's middle at which a point is taken, radians: the fit holds
 /// over the angles its points span.
 const MAX_ANGLE: f64 = 1.6;
@@ -148,14 +151,29 @@ impl EdgePatch {
             return None;
         }
         let (mut s, mut phi) = ((q - self.origin).dot(&self.axis) / self.scale, 0.0);
-        let mut converged = false;
+        let (mut converged, mut near) = (false, false);
         let (mut ds, mut dphi) = (V3::zeros(), V3::zeros());
         for _ in 0..ITERATIONS {
             let p = self.at(s, phi);
             ds = (self.at(s + STEP, phi) - self.at(s - STEP, phi)) / (2.0 * STEP);
             dphi = (self.at(s, phi + STEP) - self.at(s, phi - STEP)) / (2.0 * STEP);
             let f = [(p - q).dot(&n), (p - q).dot(&dphi)];
-            let j = nalgebra::Matrix2::new(ds.dot(&n), dphi.dot(&n), ds.dot(&dphi), dphi.dot(&dphi));
+            // Gauss–Newton (p_φ·p_φ for the second condition's derivative) finds the point from
+            // afar; once near it, full Newton adds (p − q)·p_φφ, as large as p_φ·p_φ where q lies
+            // a good part of the edge's radius off the surface (a chain point round a tip sampled
+            // every radian) — without it the iteration crawls or cycles there.
+            let (mut j21, mut j22) = (ds.dot(&dphi), dphi.dot(&dphi));
+            if near {
+                let dphi2 = (self.at(s, phi + STEP2) - 2.0 * p + self.at(s, phi - STEP2)) / (STEP2 * STEP2);
+                let dsphi = (self.at(s + STEP2, phi + STEP2)
+                    - self.at(s + STEP2, phi - STEP2)
+                    - self.at(s - STEP2, phi + STEP2)
+                    + self.at(s - STEP2, phi - STEP2))
+                    / (4.0 * STEP2 * STEP2);
+                j21 += (p - q).dot(&dsphi);
+                j22 += (p - q).dot(&dphi2);
+            }
+            let j = nalgebra::Matrix2::new(ds.dot(&n), dphi.dot(&n), j21, j22);
             let step = j.try_inverse()? * nalgebra::Vector2::new(f[0], f[1]);
             s -= step.x;
             phi -= step.y;
@@ -166,6 +184,7 @@ impl EdgePatch {
                 converged = true;
                 break;
             }
+            near = step.abs().max() < 1e-2;
         }
         // Outside the angles and the stretch of the edge the points span the patch extrapolates
         // (at the end of a scan, an edge's support function says nothing of where it goes on).

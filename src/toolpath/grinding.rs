@@ -12,8 +12,9 @@
 //!    spacing that keeps its cusp at the scallop height: `step_over(R, ρ, h)` times the sine of
 //!    the angle between the surface and the planes. From a row at offset d, the next lies at
 //!    d + Δ, Δ the smallest such spacing over the samples between d and d + Δ (a fixed point: the
-//!    band only narrows as Δ does). The first and last rows lie half a slab inside the cloud's
-//!    ends; where the rows would overshoot the last, every gap shrinks in proportion.
+//!    band only narrows as Δ does). The first and last rows lie half a step inside the cloud's
+//!    ends (at most half a slab), so the stock beyond them is left at the scallop height too;
+//!    where the rows would overshoot the last, every gap shrinks in proportion.
 //! 2. **Row points.** The cloud points within ±thickness/2 of the plane are projected onto it,
 //!    ordered by the bead chain (`bead_chain.rs`) and resampled every `spacing` along the chain.
 //!    Each sample is then put on the surface without leaving the plane: a height field of the
@@ -22,13 +23,24 @@
 //!    nearest points' normals turn by more than 30°, the support function of the edge's cuts
 //!    (`edge.rs`), which follows an edge of a few point spacings' radius between scan lines.
 //!    This is where a path point's position, normal and allowance come from; its curvature across
-//!    the rows comes from the wide fit of step 1.
-//! 3. **Joining.** Open rows alternate direction (a boustrophedon); closed rows all run the same
+//!    the rows comes from the wide fit of step 1. A fit's normal must agree with the given normals
+//!    nearest it (a wrong one sinks the wheel R·δ²/2 into a flank), and where the cloud does not
+//!    reach past the plane (a ragged end) no fit is taken: it would extrapolate.
+//! 3. **Straight moves.** Points are added where the tool centre would stray more than the
+//!    tolerance from the arc between two path points. Where the halving closes in on a point at
+//!    which the fits on either side disagree (their nearest points change there), the wheel rolls
+//!    over it — its normal turns from one fit's to the other's at one place — if they disagree by
+//!    at most twice the scallop height; by more, or where no fit holds inside the cloud, the cloud
+//!    is too sparse for the surface there and the call fails naming `points`, the place and the
+//!    spacing needed (an edge needs its radius × 0.6 rad, `RESOLVED_TURN`). A path is never made
+//!    of fits that disagree: they are where a coarse cloud misses an edge.
+//! 4. **Joining.** Open rows alternate direction (a boustrophedon); closed rows all run the same
 //!    way, each starting at the point nearest the end of the row before. A row is first cut where
-//!    the wheel could not move straight from one path point to the next without cutting into the
-//!    part (a section that runs off the cloud round a thin edge, where its points could not be
-//!    refined): its pieces are consecutive rows with the same plane offset.
-//! 4. **Feed** (eq 11–15): the removal model r = C·Vb^e₁·Vw^e₂·F^e₃ solved for the feed Vw that
+//!    the data stops — the section runs off the cloud (round a thin edge at the cloud's end), the
+//!    planes graze the surface, or no stock was measured — and the wheel could not move straight
+//!    across the gap without cutting into the part: its pieces are consecutive rows with the same
+//!    plane offset.
+//! 5. **Feed** (eq 11–15): the removal model r = C·Vb^e₁·Vw^e₂·F^e₃ solved for the feed Vw that
 //!    removes each point's allowance, clamped to the machine's limits, and held along the path
 //!    while it stays within the feed step of the feed in force (a post-processor then gets one
 //!    FEDRAT per real change, not one per point). The feed is in the model's unit (mm/s for the
@@ -36,7 +48,7 @@
 //!
 //! `simulate_removal` checks a path: a spherical tool of radius R at every path point, sunk by
 //! the depth the feed removes there, is swept over the blank (model + allowance), and the stock
-//! left over the model is reported at every cloud point.
+//! left over the model is reported at every cloud point — the full depth of a cut, however deep.
 use super::bead_chain::{bead_chain, Chain};
 use super::edge::EdgePatch;
 use super::scallop::step_over;
@@ -76,6 +88,10 @@ const MIN_CROSSING: f64 = 0.2;
 /// Height of the ridges the removal simulation leaves between its tool positions along a row, mm:
 /// the sweep is sampled finely enough that it is continuous to this.
 const SWEEP_TOLERANCE: f64 = 1e-4;
+/// Times the removal simulation lengthens the stretch of a point's normal line it looks for tools
+/// along (down to the cut's end each time) while a cut runs on below it: a cut carried down by
+/// a chain of tools is followed that many links deep, at least.
+const SIMULATION_REACHES: usize = 50;
 /// Smallest eigenvalue of the Jacobi-scaled normal matrix of a local cubic fit below which the
 /// local fields fall back to quadrics: over three scan lines it is 1.5e-6 (y³ is nearly a
 /// combination of 1, y, y²) and the cubic's height 45 µm off; over four, 0.04.
@@ -95,6 +111,21 @@ const DEFAULT_TOLERANCE: f64 = 0.25;
 const CUT_STRAY: f64 = 2.0;
 /// Cosine of the largest angle (15°) between a local fit's normal and its nearest points' normals.
 const FIT_AGREEMENT: f64 = 0.966;
+/// Cosine of the largest angle (30°) between an edge patch's normal and the nearest given normal
+/// (or the arc between two of them): round an edge sampled every point spacing or so, the given
+/// normals turn by up to a radian between points, and a fit between them is that far from both.
+const EDGE_AGREEMENT: f64 = 0.866;
+/// Sine of the largest angle (15°) between an edge patch's normal and the arc between two of the
+/// given normals nearest it.
+const ARC_AGREEMENT: f64 = 0.259;
+/// A row is refused where the fits on either side of a point disagree by more than this many
+/// scallop heights of tool-centre stray (`row_points`): the tool rolling over the point would
+/// leave or cut that much more than the rows' cusp.
+const DISAGREEMENT: f64 = 2.0;
+/// Largest turn of the normals between neighbouring points (0.6 rad, 34°) at which every edge
+/// measured was resolved for a 5–20 µm scallop height: the edge radius times this is the point
+/// spacing an edge needs (BENCHMARKS.md, `benchmarks/grinding_parts.py`).
+const RESOLVED_TURN: f64 = 0.6;
 /// Newton iterations putting a point on the local quadric within its plane.
 const PLACE_ITERATIONS: usize = 6;
 /// Default feed step: a new feed is programmed where the feed that removes the allowance departs
@@ -402,6 +433,11 @@ struct Cloud<'a> {
     fit_radius: f64,
     /// How far off the surface a chain point may stand in for a failed fit: the scallop height.
     fallback_reach: f64,
+    /// The cloud's point spacing (median distance to the nearest point).
+    spacing: f64,
+    /// How far from a row's point the cloud is looked at for whether it reaches past the row's
+    /// plane: the slab thickness.
+    reach: f64,
 }
 
 impl Cloud<'_> {
@@ -452,8 +488,21 @@ impl Cloud<'_> {
     fn local(&self, q: V3, n: V3) -> Option<(V3, V3, f64)> {
         // One neighbour query serves the edge test and the first height-field patch.
         let mut found = self.index.knn(&q.into(), 2 * LOCAL_POINTS);
+        // Where the cloud does not reach past the plane (a ragged end of the cloud, where a row
+        // runs beyond its last scan line), every fit extrapolates: at the blade's tip an edge
+        // patch there tilted its normals 14–70° along the edge, and the wheel sank 0.3–11 mm into
+        // the flank below. No point: the row is cut there.
+        if self.one_sided(q, n) {
+            return None;
+        }
         if let Some(fit) = self.edge(q, n, &found[..EDGE_POINTS.min(found.len())]) {
-            return Some(fit);
+            // An edge patch fitted to a wrong axis (at the cloud's end, where its points span one
+            // or two scan lines) can put a point on the surface with a normal turned 70° from every
+            // given one: a wheel there sinks 8 mm into the part. Its normal must lie within the
+            // turn of the given normals nearest it.
+            if self.normal_agrees(fit.0, fit.1, EDGE_AGREEMENT) {
+                return Some(fit);
+            }
         }
         let mut k = LOCAL_POINTS;
         let near = loop {
@@ -462,10 +511,17 @@ impl Cloud<'_> {
             }
             let mut near = self.within_turn(found.iter().map(|&(i, _)| i).collect(), LOCAL_TURN);
             near.truncate(k);
+            let more = k < 16 * LOCAL_POINTS && found.len() >= 2 * k;
+            // Round a tight edge few of the nearest points lie within the turn (fewer still at the
+            // cloud's end): the patch widens along the edge until enough do.
             if near.len() < LOCAL_POINTS / 2 {
+                if more {
+                    k *= 2;
+                    continue;
+                }
                 return None;
             }
-            if k >= 16 * LOCAL_POINTS || found.len() < 2 * k || self.quadric_condition(&near) >= QUADRIC_CONDITION {
+            if !more || self.quadric_condition(&near) >= QUADRIC_CONDITION {
                 break near;
             }
             k *= 2;
@@ -495,12 +551,19 @@ impl Cloud<'_> {
             (normal.norm() > 0.0).then(|| (on, normal.normalize(), if unknown { f64::NAN } else { allowance }))
         };
         // Where the surface turns within the patch (a trailing edge a few point spacings round)
-        // a fit says nothing reliable: it must agree with the nearest points' own normals, or q
-        // itself stands in — a point of the section's chain — with its nearest points' normal and
-        // allowance, if it lies within the scallop height of the nearest point's tangent plane (a
-        // slab point projected onto a plane the surface grazes lies off the surface: no point).
+        // a fit says nothing reliable: it must agree with the nearest points' own normals (with
+        // their mean, or — round a tip, where they fan out and their mean is none of them — lie
+        // among them, `normal_agrees`), or q itself stands in — a point of the section's chain —
+        // with its nearest points' normal and allowance, if it lies within the scallop height of
+        // the nearest point's tangent plane (a slab point projected onto a plane the surface
+        // grazes lies off the surface: no point).
         match fitted() {
-            Some(fit) if fit.1.dot(&self.nearby(fit.0).0) >= FIT_AGREEMENT => Some(fit),
+            Some(fit)
+                if fit.1.dot(&self.nearby(fit.0).0) >= FIT_AGREEMENT
+                    || self.normal_agrees(fit.0, fit.1, FIT_AGREEMENT) =>
+            {
+                Some(fit)
+            }
             _ => {
                 let (nearest, _) = self.index.nearest(&q.into());
                 if (q - self.p(nearest)).dot(&self.normals[nearest]).abs() > self.fallback_reach {
@@ -528,6 +591,110 @@ impl Cloud<'_> {
         let (on, normal, value) =
             EdgePatch::fit(q, reference, &points, &normals, &allowance, sigma)?.place_in_plane(q, n)?;
         Some((on, normal, if unknown { f64::NAN } else { value }))
+    }
+
+    /// Whether `normal` at `p` lies among the given normals nearest p: within acos(`one`) of one of
+    /// the 4 nearest, or within 15° of the arc between two of them (round an edge the normals turn
+    /// by up to a radian between points, and a fit between them lies that far from both).
+    fn normal_agrees(&self, p: V3, normal: V3, one: f64) -> bool {
+        let near: Vec<V3> = self.index.knn(&p.into(), 4).iter().map(|&(i, _)| self.normals[i]).collect();
+        near.iter().enumerate().any(|(k, &a)| {
+            a.dot(&normal) >= one
+                || near[k + 1..].iter().any(|&b| {
+                    let Some(axis) = a.cross(&b).try_normalize(1e-9) else { return false };
+                    let across = normal.dot(&axis);
+                    let Some(along) = (normal - across * axis).try_normalize(1e-9) else { return false };
+                    across.abs() <= ARC_AGREEMENT && a.angle(&along) + along.angle(&b) <= a.angle(&b) + 1e-9
+                })
+        })
+    }
+
+    /// Whether the row's plane (normal `n`) at `q` runs off the cloud — its nearest points all lie
+    /// on one side of the plane — or grazes the surface, or runs along an edge: a point without a
+    /// fit there is a gap in what the rows can grind, where the row is cut, not a cloud too sparse
+    /// for the surface.
+    fn open(&self, q: V3, n: V3) -> bool {
+        let found = self.index.knn(&q.into(), LOCAL_POINTS);
+        let Some(&(nearest, _)) = found.first() else { return true };
+        self.one_sided(q, n) || self.normals[nearest].cross(&n).norm() < MIN_CROSSING || self.along_edge(n, &found)
+    }
+
+    /// Whether the plane of normal n runs along an edge among `found` (their normals turn by more
+    /// than `LOCAL_TURN`): it holds the edge's axis — the direction the normals are all nearly
+    /// perpendicular to — within asin(`MIN_CROSSING`). A section there follows the edge instead of
+    /// crossing it (planes along a blade's span): no fit places a point on it.
+    fn along_edge(&self, n: V3, found: &[(usize, f64)]) -> bool {
+        let reference = self.normals[found[0].0];
+        if found.iter().all(|&(i, _)| self.normals[i].dot(&reference) >= LOCAL_TURN) {
+            return false;
+        }
+        let scatter: nalgebra::Matrix3<f64> =
+            found.iter().map(|&(i, _)| self.normals[i] * self.normals[i].transpose()).sum();
+        let eigen = scatter.symmetric_eigen();
+        let axis = eigen.eigenvectors.column(eigen.eigenvalues.imin()).into_owned();
+        n.dot(&axis).abs() < MIN_CROSSING
+    }
+
+    /// Whether the cloud ends before the plane through q of normal n: its points within a slab's
+    /// thickness of q (the reach of the rows' slabs, wide enough for line scans whose lines lie
+    /// far apart) all lie on one side of the plane, or within a quarter of a point spacing of it.
+    fn one_sided(&self, q: V3, n: V3) -> bool {
+        let side = 0.25 * self.spacing;
+        let (mut above, mut below) = (false, false);
+        self.index.for_each_within(&q.into(), self.reach, |i| {
+            let off = (self.p(i) - q).dot(&n);
+            above |= off > side;
+            below |= off < -side;
+        });
+        !(above && below)
+    }
+
+    /// The error for a row the cloud does not determine at `u.at`: where, by how much, and about
+    /// the point spacing that would. The fits fail where an edge turns too far between points;
+    /// measured on elliptic, circular-arc and Bézier edges (BENCHMARKS.md), they held wherever the
+    /// normals turned by up to `RESOLVED_TURN` between neighbouring points, so the spacing given
+    /// is that turn over the fastest one measured here (per mm), and less than the cloud's.
+    fn too_sparse(&self, u: Unresolved, h: f64, limit: f64) -> Error {
+        // The fastest turn between neighbouring points (at most 1.5 spacings apart) round the
+        // place: where the fits fail is often beside the tightest stretch, not on it.
+        let s = self.spacing;
+        let found = self.index.knn(&u.at.into(), LOCAL_POINTS);
+        let (mut turn, mut rate) = (0.0f64, 0.0f64);
+        for (k, &(i, _)) in found.iter().enumerate() {
+            for &(j, _) in &found[k + 1..] {
+                let apart = (self.p(i) - self.p(j)).norm();
+                if apart > 0.0 && apart <= 1.5 * s {
+                    let angle = self.normals[i].angle(&self.normals[j]);
+                    turn = turn.max(angle);
+                    rate = rate.max(angle / apart);
+                }
+            }
+        }
+        let needed = if rate > 0.0 { (RESOLVED_TURN / rate).min(0.9 * s) } else { 0.5 * s };
+        let what = if u.disagreement.is_finite() {
+            format!(
+                "the surface fits on either side of a point disagree by {:.3} mm of tool position (more than \
+                 {DISAGREEMENT} × the scallop height {h} mm = {limit:.3} mm)",
+                u.disagreement
+            )
+        } else {
+            "no surface fit holds though the cloud surrounds the row there".to_string()
+        };
+        Error::invalid(
+            "points",
+            format!(
+                "the cloud is too sparse for the surface near ({:.3}, {:.3}, {:.3}) mm: {what}. Its points lie \
+                 {s:.3} mm apart and their normals turn by up to {:.0}° between neighbours there (an edge of about \
+                 {:.2} mm radius); points every {needed:.2} mm or closer are needed there (normals turning at most \
+                 {:.0}° from point to point)",
+                u.at.x,
+                u.at.y,
+                u.at.z,
+                turn.to_degrees(),
+                if rate > 0.0 { 1.0 / rate } else { f64::INFINITY },
+                RESOLVED_TURN.to_degrees()
+            ),
+        )
     }
 
     /// The given normals and allowances of the 4 nearest points on one side, weighted by inverse
@@ -639,52 +806,94 @@ impl Polyline {
     }
 }
 
+/// Where the cloud does not determine a row: a chain point where no fit holds though the cloud
+/// surrounds it (`disagreement` infinite), or a point where the fits on either side disagree
+/// (`disagreement`: how far the tool centre would stray between them, mm).
+#[derive(Debug, Clone, Copy)]
+struct Unresolved {
+    at: V3,
+    disagreement: f64,
+}
+
 /// A row's path points: every `spacing` of arc length along the chain's polyline, then halved
 /// where the tool centre (`tool_radius` out along the normal) strays more than `tolerance` from
 /// the straight line between two neighbours — round a thin edge the normal turns half a turn in a
 /// millimetre, and a machine interpolating the centre between sparse points would cut through it.
+///
+/// Where a point has no fit (`eval` None) and `open` says the row runs off the cloud there (or
+/// grazes the surface), the link is left as it is, for `Row::pieces` to cut. Where the halving
+/// closes in on a point at which the fits on either side disagree (the patches of nearest points
+/// change there), the tool rolls over it: points at one place whose normals turn from one fit's
+/// to the other's, so that no straight move strays more than `tolerance` — a cut there would split
+/// the row wherever the cloud is a little coarse for an edge. A disagreement above `limit`, or a
+/// point without a fit inside the cloud, is no path: `Unresolved`.
+#[allow(clippy::too_many_arguments)]
 fn row_points(
     line: &Polyline,
     closed: bool,
     spacing: f64,
     tolerance: f64,
+    limit: f64,
     tool_radius: f64,
     eval: impl Fn(V3) -> Option<(V3, V3, f64)>,
-) -> Vec<(V3, V3, f64)> {
+    open: impl Fn(V3) -> bool,
+) -> std::result::Result<Vec<(V3, V3, f64)>, Unresolved> {
     let total = line.length();
     let count = (total / spacing).round().max(1.0) as usize;
     let last = if closed { count } else { count + 1 };
-    let mut at: Vec<(f64, (V3, V3, f64))> = (0..last)
-        .filter_map(|j| {
-            let s = total * j as f64 / count as f64;
-            eval(line.at(s)).map(|e| (s, e))
-        })
-        .collect();
+    let unresolved = |q: V3| Unresolved { at: q, disagreement: f64::INFINITY };
+    let mut at: Vec<(f64, (V3, V3, f64))> = Vec::with_capacity(last + 1);
+    for j in 0..last {
+        let s = total * j as f64 / count as f64;
+        let q = line.at(s);
+        match eval(q) {
+            Some(e) => at.push((s, e)),
+            None if open(q) => {}
+            None => return Err(unresolved(q)),
+        }
+    }
     if closed {
         if let Some(&(_, first)) = at.first() {
             at.push((total, first));
         }
     }
-    let strays = |a: &(V3, V3, f64), b: &(V3, V3, f64)| centre_stray(a.0, a.1, b.0, b.1, tool_radius) > tolerance;
+    let stray = |a: &(V3, V3, f64), b: &(V3, V3, f64)| centre_stray(a.0, a.1, b.0, b.1, tool_radius);
     let min_gap = 1e-4 * spacing;
     let mut out: Vec<(V3, V3, f64)> = Vec::with_capacity(at.len());
     for pair in at.windows(2) {
         let (mut stack, mut from) = (vec![pair[1]], pair[0]);
         out.push(from.1);
         while let Some(to) = stack.last().copied() {
-            let mid_s = 0.5 * (from.0 + to.0);
-            let mid = if to.0 - from.0 > min_gap && strays(&from.1, &to.1) { eval(line.at(mid_s)) } else { None };
-            match mid {
-                Some(m) => stack.push((mid_s, m)),
-                None => {
-                    stack.pop();
-                    if stack.is_empty() {
-                        break;
+            let e = stray(&from.1, &to.1);
+            if e > tolerance {
+                let mid_s = 0.5 * (from.0 + to.0);
+                if to.0 - from.0 > min_gap {
+                    let q = line.at(mid_s);
+                    match eval(q) {
+                        Some(m) => {
+                            stack.push((mid_s, m));
+                            continue;
+                        }
+                        // Off the cloud: the link stays, and is cut if it strays too far.
+                        None if open(q) => {}
+                        None => return Err(unresolved(q)),
                     }
-                    out.push(to.1);
-                    from = to;
+                } else if e > limit {
+                    // Where the row runs off the cloud (a ragged end) the fits on either side are
+                    // extrapolations: a gap in the data, cut like one.
+                    if !open(from.1 .0) {
+                        return Err(Unresolved { at: from.1 .0, disagreement: e });
+                    }
+                } else {
+                    out.extend(roll(from.1, to.1, e, tolerance));
                 }
             }
+            stack.pop();
+            if stack.is_empty() {
+                break;
+            }
+            out.push(to.1);
+            from = to;
         }
     }
     if !closed {
@@ -693,9 +902,23 @@ fn row_points(
         }
     }
     // Neighbouring samples can land on one point (where the fits give way to the chain, or on a
-    // thin edge): points closer than a thousandth of the spacing are one.
-    out.dedup_by(|b, a| (b.0 - a.0).norm() < 1e-3 * spacing);
-    out
+    // thin edge): points closer than a thousandth of the spacing with the same normal are one.
+    out.dedup_by(|b, a| (b.0 - a.0).norm() < 1e-3 * spacing && b.1.dot(&a.1) > 1.0 - 1e-12);
+    Ok(out)
+}
+
+/// The points strictly between `a` and `b` (a few µm apart at most) over which the tool rolls from
+/// one's normal to the other's, each straight move straying at most `tolerance` (the stray goes
+/// with the square of the turn: `stray` over m² for m moves).
+fn roll(a: (V3, V3, f64), b: (V3, V3, f64), stray: f64, tolerance: f64) -> Vec<(V3, V3, f64)> {
+    let m = (stray / tolerance).sqrt().ceil().clamp(1.0, 1e4) as usize;
+    (1..m)
+        .map(|k| {
+            let t = k as f64 / m as f64;
+            let normal = a.1.lerp(&b.1, t).try_normalize(0.0).unwrap_or(a.1);
+            (a.0.lerp(&b.0, t), normal, a.2 + t * (b.2 - a.2))
+        })
+        .collect()
 }
 
 /// How far the tool centre strays from the straight line between two path points (contact
@@ -830,7 +1053,18 @@ pub fn grinding_paths(
     let wide_points: Vec<[f64; 3]> = wide.iter().map(|&i| points[i]).collect();
     let wide_index = PointIndex::new(&wide_points)?;
     let normals: Vec<V3> = normals.iter().map(|&v| V3::from(v).normalize()).collect();
-    let cloud = Cloud { points, normals, allowance, index, wide, wide_index, fit_radius, fallback_reach: h };
+    let cloud = Cloud {
+        points,
+        normals,
+        allowance,
+        index,
+        wide,
+        wide_index,
+        fit_radius,
+        fallback_reach: h,
+        spacing: spacing_cloud,
+        reach: thickness,
+    };
 
     // 1. Row offsets from the samples' plane steps.
     let mut samples: Vec<(f64, f64)> = cloud
@@ -845,33 +1079,65 @@ pub fn grinding_paths(
     samples.sort_by(|a, b| a.0.total_cmp(&b.0));
     let offsets: Vec<f64> = points.iter().map(|&p| V3::from(p).dot(&n)).collect();
     let (lo, hi) = offsets.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &d| (a.min(d), b.max(d)));
-    let rows = row_offsets(&samples, lo + 0.5 * thickness, hi - 0.5 * thickness, flat, thickness);
+    // The end rows lie half a step inside the cloud's ends (at most half a slab), so the stock
+    // beyond them is left at the scallop height too: half a slab of a 1.5 mm cloud left 0.1 mm
+    // over its last 1.5 mm.
+    let end_step = |a: f64, b: f64| {
+        let (i, j) = (samples.partition_point(|s| s.0 < a), samples.partition_point(|s| s.0 <= b));
+        samples[i..j].iter().map(|s| s.1).fold(flat, f64::min)
+    };
+    let first = lo + (0.5 * thickness).min(0.5 * end_step(lo, lo + flat));
+    let last = hi - (0.5 * thickness).min(0.5 * end_step(hi - flat, hi));
+    let rows = row_offsets(&samples, first, last, flat, thickness);
 
     // 2. Row points.
+    let limit = DISAGREEMENT * h;
     let mut by_offset: Vec<usize> = (0..points.len()).collect();
     by_offset.sort_by(|&a, &b| offsets[a].total_cmp(&offsets[b]));
     let sorted: Vec<f64> = by_offset.iter().map(|&i| offsets[i]).collect();
-    let built: Vec<Vec<Row>> = rows
+    let built: Vec<std::result::Result<Vec<Row>, Unresolved>> = rows
         .par_iter()
-        .map(|&d| {
+        .map(|&d| -> Result<_> {
             let a = sorted.partition_point(|&x| x < d - 0.5 * thickness);
             let b = sorted.partition_point(|&x| x <= d + 0.5 * thickness);
             if b - a < 2 {
-                return Ok(Vec::new());
+                return Ok(Ok(Vec::new()));
             }
             let slab: Vec<[f64; 3]> =
                 by_offset[a..b].iter().map(|&i| (cloud.p(i) - (offsets[i] - d) * n).into()).collect();
             let chain = bead_chain(&slab, None, None, Chain::Tree)?;
             let line: Vec<V3> = chain.order.iter().map(|&k| V3::from(slab[k])).collect();
             let line = Polyline::new(&line, chain.closed);
-            let points = row_points(&line, chain.closed, spacing, tolerance, r, |q| cloud.local(q, n))
+            let found = row_points(
+                &line,
+                chain.closed,
+                spacing,
+                tolerance,
+                limit,
+                r,
+                |q| cloud.local(q, n),
+                |q| cloud.open(q, n),
+            );
+            let points = match found {
+                Ok(points) => points,
+                Err(u) => return Ok(Err(u)),
+            };
+            let points = points
                 .into_iter()
                 .map(|(on, normal, value)| (on, normal, cloud.across(on, n).map_or(0.0, |(k, _)| k), value))
                 .collect();
             let row = Row { points, closed: chain.closed };
-            Ok(if row.points.is_empty() { Vec::new() } else { row.pieces(r, CUT_STRAY * tolerance) })
+            Ok(Ok(if row.points.is_empty() { Vec::new() } else { row.pieces(r, CUT_STRAY * tolerance) }))
         })
         .collect::<Result<_>>()?;
+    // The worst place decides the spacing the cloud needs: a point without a fit, else the largest
+    // disagreement.
+    if let Some(worst) =
+        built.iter().filter_map(|b| b.as_ref().err()).max_by(|a, b| a.disagreement.total_cmp(&b.disagreement))
+    {
+        return Err(cloud.too_sparse(*worst, h, limit));
+    }
+    let built: Vec<Vec<Row>> = built.into_iter().map(|b| b.unwrap_or_default()).collect();
 
     // 3. Joining.
     let mut out =
@@ -1062,26 +1328,42 @@ pub fn simulate_removal(
             // The chords of q's normal line inside each tool position; the stock's top comes
             // down to a chord's lower end only if the chord reaches the top as it stands then
             // (a chord wholly below it is the line passing through the part to a tool on the
-            // other side), so they are taken from the highest upper end down.
-            let mut chords: Vec<(f64, f64)> = Vec::new();
-            let (low, high) = (bottom.min(allowance[i]), allowance[i]);
-            let middle = q + nq * (0.5 * (low + high));
-            index.for_each_within(&middle.into(), r + 0.5 * (high - low), |j| {
-                let w = V3::from(centres[j]) - q;
-                let b = w.dot(&nq);
-                let across2 = w.norm_squared() - b * b;
-                if across2 < r * r {
-                    let half = (r * r - across2).sqrt();
-                    chords.push((b - half, b + half));
+            // other side), so they are taken from the highest upper end down. The tools are
+            // looked up along the stretch of the line from the top down to the lowest any tool
+            // sinks to, and a tenth of a radius more (a cut a few µm below the model, common
+            // where a feed removes a little more than asked, then needs no second look); where
+            // the cut goes below that (a tool inside the part: a path point off the surface, or a
+            // wrong normal), the stretch is lengthened until the cut ends in it, so the depth
+            // reported is the cut's, not the end of the stretch looked at.
+            let high = allowance[i];
+            let mut low = bottom.min(high) - 0.1 * r;
+            let mut left = high;
+            for _ in 0..SIMULATION_REACHES {
+                let mut chords: Vec<(f64, f64)> = Vec::new();
+                let middle = q + nq * (0.5 * (low + high));
+                index.for_each_within(&middle.into(), r + 0.5 * (high - low), |j| {
+                    let w = V3::from(centres[j]) - q;
+                    let b = w.dot(&nq);
+                    let across2 = w.norm_squared() - b * b;
+                    if across2 < r * r {
+                        let half = (r * r - across2).sqrt();
+                        chords.push((b - half, b + half));
+                    }
+                });
+                chords.sort_by(|a, b| b.1.total_cmp(&a.1));
+                left = high;
+                for (under, over) in chords {
+                    if over < left {
+                        break;
+                    }
+                    left = left.min(under);
                 }
-            });
-            chords.sort_by(|a, b| b.1.total_cmp(&a.1));
-            let mut left = allowance[i];
-            for (low, high) in chords {
-                if high < left {
+                if left >= low {
                     break;
                 }
-                left = left.min(low);
+                // A tool that carries the cut on below `left` holds a point of the line there:
+                // its centre lies within R of the stretch down to `left`.
+                low = left;
             }
             (left, contacts.nearest(&points[i]).0)
         })
@@ -1157,6 +1439,58 @@ mod tests {
         let side = Row { points: points[..10].to_vec(), closed: true }.pieces(10.0, 0.005);
         assert_eq!(side.len(), 1);
         assert!(side[0].closed);
+    }
+
+    /// A straight row along x whose fits give the normal +z up to x = 0.5 and one tilted by
+    /// `jump` about x beyond: the halving closes in on x = 0.5.
+    fn row_with_a_jump(jump: f64, open: bool, gap: bool) -> std::result::Result<Vec<(V3, V3, f64)>, Unresolved> {
+        let line = Polyline::new(&[V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0)], false);
+        let eval = |q: V3| {
+            if gap && q.x > 0.4 && q.x < 0.6 {
+                return None;
+            }
+            let normal = if q.x < 0.5 { V3::z() } else { V3::new(0.0, -jump.sin(), jump.cos()) };
+            Some((q, normal, 0.3))
+        };
+        row_points(&line, false, 0.25, 0.0025, 0.02, 10.0, eval, |_| open)
+    }
+
+    #[test]
+    fn the_wheel_rolls_over_fits_that_disagree_a_little_and_a_row_is_refused_where_they_disagree_more() {
+        // 3° between the two fits: a straight move would stray 6.9 µm (R θ²/8), within twice the scallop height
+        // (20 µm), so the wheel turns over the point in moves of at most the tolerance, and the row is whole.
+        let points = row_with_a_jump(3f64.to_radians(), false, false).unwrap();
+        assert!(points.windows(2).all(|w| centre_stray(w[0].0, w[0].1, w[1].0, w[1].1, 10.0) <= 0.0025 + 1e-12));
+        let row = Row { points: points.iter().map(|&(p, m, a)| (p, m, 0.0, a)).collect(), closed: false };
+        assert_eq!(row.pieces(10.0, 0.005).len(), 1);
+        // 8°: 49 µm. Before, the row was cut there (342 pieces for 157 rows on a 1.5 mm blade cloud); now the
+        // cloud is too sparse for the surface at the point, and how far the fits disagree is told.
+        let refused = row_with_a_jump(8f64.to_radians(), false, false).unwrap_err();
+        assert!((refused.at.x - 0.5).abs() < 1e-3);
+        assert!((refused.disagreement - 10.0 * 8f64.to_radians().powi(2) / 8.0).abs() < 1e-3);
+        // Where the row runs off the cloud the same disagreement is a gap in the data: the link is left for
+        // `Row::pieces` to cut.
+        let points = row_with_a_jump(8f64.to_radians(), true, false).unwrap();
+        let row = Row { points: points.iter().map(|&(p, m, a)| (p, m, 0.0, a)).collect(), closed: false };
+        assert_eq!(row.pieces(10.0, 0.005).len(), 2);
+        // No fit at all in the middle: cut where the cloud ends, refused where it surrounds the row.
+        assert_eq!(row_with_a_jump(8f64.to_radians(), true, true).map(|p| p.len()).ok(), Some(4));
+        assert!(row_with_a_jump(8f64.to_radians(), false, true).unwrap_err().disagreement.is_infinite());
+    }
+
+    #[test]
+    fn the_simulation_reports_a_cut_at_its_full_depth() {
+        // One blank point on the plane z = 0 with 0.3 mm of stock, and a row of wheels (R 10 mm) whose centres
+        // step down its normal line from z = 9 to z = -31: each cuts from the top down into the next, so the
+        // stock left is -41 mm. The stretch of the line looked at first ends at the lowest sinking (z = 0); before,
+        // the cut was followed only as far as wheels within reach of that stretch (-20 mm).
+        let blank = Stock { points: &[[0.0, 0.0, 0.0]], normals: &[[0.0, 0.0, 1.0]], allowance: &[0.3] };
+        let path: Vec<[f64; 3]> = (0..11).map(|k| [0.0, 0.0, -1.0 - 4.0 * k as f64]).collect();
+        let normals = vec![[0.0, 0.0, 1.0]; 11];
+        let allowance = vec![0.3; 11];
+        let path = Stock { points: &path, normals: &normals, allowance: &allowance };
+        let (left, _) = simulate_removal(blank, path, &[0; 11], &[0.3; 11], 10.0).unwrap();
+        assert!((left[0] + 41.0).abs() < 1e-9, "{}", left[0]);
     }
 
     #[test]
