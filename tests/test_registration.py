@@ -352,11 +352,12 @@ def test_bad_blank_options_are_refused_by_name():
 @pytest.mark.parametrize(("angle", "shift", "seed"), [(0.0, 0.3, 0), (1.0, 1.0, 1), (5.0, 5.0, 2)])
 def test_align_blank_recovers_a_misplaced_blank_to_the_even_allowance(angle, shift, seed):
     # A whole blade, edges and ends included, blank 0.3 mm over it everywhere, clamped up to 5 mm / 5° off: the
-    # chain ends at the even allowance; the envelope fit alone stays where it started from 1 mm / 1° on.
+    # chain ends at the even allowance; the envelope fit alone does not from 5 mm / 5°.
     blade = parts.Blade(parts.EllipseSection(20, 4), 60, **TWISTED)
     u, z = blade.model_grid(1.0, (0, 60), span_spacing=1.0)
     p, v = blade.point(u, z), blade.normal(u, z)
-    blank = blade.sample_blank(0.5, (0, 60), 0.3, np.random.default_rng(3), jitter=0.3)["points"]
+    # The blank is longer than the part (3 mm at both ends), as a forging is.
+    blank = blade.sample_blank(0.5, (-3, 63), 0.3, np.random.default_rng(3), jitter=0.3)["points"]
     rng = np.random.default_rng(seed)
     axis = rng.normal(size=3)
     axis /= np.linalg.norm(axis)
@@ -368,12 +369,12 @@ def test_align_blank_recovers_a_misplaced_blank_to_the_even_allowance(angle, shi
     moved = (blank - c) @ r.T + c + t
     found = machscan.align_blank(p, v, moved, min_allowance=0.1)
     a = found.allowance
-    assert np.isfinite(a).mean() > 0.99
+    assert np.isfinite(a).all()
     assert np.nanstd(a) < 0.002 and abs(np.nanmean(a) - 0.3) < 0.002 and found.feasible
     assert [s.name for s in found.stages][:2] == ["start", "coarse"] and found.stages[-1].name == "envelope"
     np.testing.assert_array_equal(found.stages[-1].allowance, a)
     text = found.summary()
     assert "moved" in text and "mm" in text and "°" in text
-    if angle >= 1.0:
+    if angle >= 5.0:  # the local fit alone stays far off (measured: 2.2–2.7 mm std)
         alone = machscan.envelope_fit(p, v, moved, min_allowance=0.1)
         assert np.nanstd(alone.allowance) > 0.05

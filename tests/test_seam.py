@@ -193,6 +193,11 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
             10 * unit, unit, 10.5 * unit, min_allowance=0.0, surface="quadric", k=None, spacing=None, init=None
         ),
     }
+    aligned = _core.align_blank(
+        10 * unit, unit, 10.5 * unit, min_allowance=0.0, surface="quadric", k=None, spacing=None, init=None
+    )
+    results["_BlankAlignmentArrays"] = aligned
+    results["_AlignmentStageArrays"] = aligned["stages"][0]
     assert set(results) == set(declared), "every TypedDict of the stub is checked here"
     for name, value in results.items():
         assert list(value) == declared[name], name

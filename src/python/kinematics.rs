@@ -561,7 +561,10 @@ impl PyKinematicChain {
 /// ``valid_range``: the one rule of every function that takes frames; ``Profiler.valid_mask``
 /// documents it and reshapes the flat ``readings`` it hands over.
 #[pyfunction]
-#[pyo3(signature = (readings, *, valid_range=None, sentinel=Some(VENDOR_SENTINEL)))]
+#[pyo3(
+    signature = (readings, *, valid_range=None, sentinel=Some(VENDOR_SENTINEL)),
+    text_signature = "(readings, *, valid_range=None, sentinel=-99999.0)"
+)]
 fn valid_readings<'py>(
     py: Python<'py>,
     readings: &Bound<'py, PyAny>,

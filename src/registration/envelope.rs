@@ -181,14 +181,9 @@ pub fn envelope_fit(
         // to spare beyond the step's reach may: where the blank ends at the model's end, its last
         // row is covered or not by a hair, and holding it would freeze the fit there.
         let reach = size * problem.reach;
-        let escapes = (0..measured.len()).any(|i| {
-            measured[i] && trial.allowance[i].is_nan() && !(here.allowance[i] - min_allowance > reach)
-        });
-        let actual = if escapes {
-            f64::NEG_INFINITY
-        } else {
-            here.merit(min_allowance) - trial.merit(min_allowance)
-        };
+        let escapes = (0..measured.len())
+            .any(|i| measured[i] && trial.allowance[i].is_nan() && !(here.allowance[i] - min_allowance > reach));
+        let actual = if escapes { f64::NEG_INFINITY } else { here.merit(min_allowance) - trial.merit(min_allowance) };
         let ratio = actual / predicted;
         if ratio > 1e-4 {
             (pose, here) = (trial_pose, trial);
