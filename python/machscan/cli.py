@@ -19,6 +19,10 @@ machscan compensate THEORETICAL SCAN TOOLPATH --locating loc.csv --matching matc
                                                 not converge or ended above --max-error, or tool
                                                 points lie outside the hull or beyond the scan
 machscan compensate --simulate [--out DIR]      the same on the built-in bent skin, with its truth
+machscan grind ALLOWANCE [--removal ...] [--out DIR]
+                                                belt-grinding paths (CL, feeds in mm/min) from an
+                                                allowance file, or MODEL --blank BLANK; a path whose
+                                                simulated pass leaves --band is not written (exit 3)
 machscan batch grooves SCAN... --cad CAD... [--workers N | --scheduler ADDR] [--out DIR]
                                                 the groove inspection over many scans on a Dask
                                                 cluster; exit status 3 when a scan failed

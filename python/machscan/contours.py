@@ -25,6 +25,7 @@ __all__ = [
     "euclidean_clusters",
     "join_centers",
     "match_contours",
+    "resample_cad",
     "resample_polyline",
 ]
 
@@ -125,20 +126,34 @@ def contour_error(
 
     Examples
     --------
-    >>> centers = report.center_wcs[report.contour == 0]
-    >>> r = machscan.contour_error(report.contours[0].theoretical, centers)   # == report.contours[0].error
+    >>> c = report.contours[0]
+    >>> r = machscan.contour_error(c.theoretical, report.center_wcs[report.contour == c.cad_index])  # == c.error
     >>> r.mean, r.max
     """
     p = _points(theoretical, "theoretical")
     q = _points(actual, "actual")
     if cad_spacing is not None:
-        _check_spacing(cad_spacing, "cad_spacing")
-        if len(p) >= 3 and _longest_step(p, closed=True) > cad_spacing * (1 + 1e-9):
-            p = resample_polyline(p, cad_spacing, closed=True)
+        p = resample_cad(p, cad_spacing)
     if actual_spacing is not None:
         _check_spacing(actual_spacing, "actual_spacing")
         q = join_centers(q, actual_spacing)
     return ContourErrorResult(**_core.contour_error(p, q, delta1=delta1, delta2=delta2), theoretical=p, actual=q)
+
+
+def resample_cad(polyline: ArrayLike, spacing: float = CAD_SPACING) -> NDArray[np.float64]:
+    """A closed CAD contour as the contour error measures it: resampled every ``spacing`` mm at equal arc-length
+    steps where any of its segments is longer, as it is where it is already that dense (so resampling twice
+    changes nothing). :func:`machscan.inspect_grooves` and :func:`contour_error` both use it.
+
+    Examples
+    --------
+    >>> p = machscan.contours.resample_cad(cad_polyline)
+    """
+    p = _points(polyline, "polyline")
+    _check_spacing(spacing, "spacing")
+    if len(p) >= 3 and _longest_step(p, closed=True) > spacing * (1 + 1e-9):
+        return resample_polyline(p, spacing, closed=True)
+    return p
 
 
 def join_centers(centers: ArrayLike, spacing: float = ACTUAL_SPACING) -> NDArray[np.float64]:

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from machscan._core import euclidean_clusters, match_contours, nearest_neighbors, resample_polyline
-from machscan.contours import ACTUAL_SPACING, CAD_SPACING, ContourErrorResult, contour_error
+from machscan._core import euclidean_clusters, match_contours, nearest_neighbors
+from machscan.contours import ACTUAL_SPACING, CAD_SPACING, ContourErrorResult, contour_error, resample_cad
 from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
 from machscan.grooves import GrooveFits, Template, fit_grooves
 from machscan.scan import Scan
@@ -531,7 +531,7 @@ def inspect_grooves(
         renum[kept_labels] = np.arange(len(kept_labels))
         cluster[idx_ok] = renum[labels]
     n_clusters = int(cluster.max()) + 1
-    theoretical = polylines if cad_cloud else [resample_polyline(p, cad_spacing, closed=True) for p in polylines]
+    theoretical = polylines if cad_cloud else [resample_cad(p, cad_spacing) for p in polylines]
     cad_centroids = np.array([p.mean(0) for p in theoretical])
     cl_centroids = np.array([center[cluster == c].mean(0) for c in range(n_clusters)]).reshape(-1, 3)
     match = match_contours(cl_centroids, cad_centroids, max_distance=max_match_distance)

@@ -9,9 +9,9 @@ The formulas and their papers: ``docs/registration.md``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -719,8 +719,9 @@ class EnvelopeFit:
     transformation : ndarray, shape (4, 4)
         Applied to the blank (blank → model frame).
     allowance : ndarray, shape (N,)
-        Allowance of each model point at ``transformation``, mm (NaN where the blank's local
-        surface is inclined more than 60°; a point with an allowance at ``init`` keeps one).
+        Allowance of each model point at ``transformation``, mm (NaN where the blank does not
+        cover the point: such points are left out of the fit; a step may not take the allowance
+        from a point whose stock could bind).
     feasible : bool
         Every allowance is ≥ ``min_allowance`` (to 1e-9 mm). When False, ``transformation``
         is the pose of the largest smallest allowance: the blank cannot hold the minimum.
@@ -737,6 +738,18 @@ class EnvelopeFit:
     min_allowance: float
     iterations: int
     converged: bool
+
+    @classmethod
+    def _of(cls, arrays: Mapping[str, Any], min_allowance: float) -> EnvelopeFit:
+        """From the core's ``_EnvelopeFitArrays`` and the minimum asked for."""
+        return cls(
+            transformation=arrays["transformation"],
+            allowance=arrays["allowance"],
+            feasible=bool(arrays["feasible"]),
+            min_allowance=float(min_allowance),
+            iterations=int(arrays["iterations"]),
+            converged=bool(arrays["converged"]),
+        )
 
     def summary(self) -> str:
         """Allowance statistics: smallest, mean, largest, spread and points short of the minimum."""
@@ -769,9 +782,9 @@ def envelope_fit(
     best fit leaves negative stock somewhere, this finds the pose that does not, if there is
     one; where there is none, the pose of the largest smallest allowance (``feasible`` False).
 
-    The allowance is :func:`allowance`'s (along each model normal to the plane of the ``k``
-    nearest blank points). The fit is local: start it near the answer with ``init``, e.g. from
-    :func:`icp` of the blank to the model.
+    The allowance is :func:`allowance`'s (``surface``, ``k``, ``spacing`` as there). The fit is
+    local: start it near the answer with ``init``, or use :func:`align_blank`, which finds the
+    start from where the blank was clamped (coarse alignment, ICP) and then runs this fit.
 
     Parameters
     ----------
@@ -807,14 +820,7 @@ def envelope_fit(
         spacing=spacing,
         init=init,
     )
-    return EnvelopeFit(
-        transformation=out["transformation"],
-        allowance=out["allowance"],
-        feasible=out["feasible"],
-        min_allowance=float(min_allowance),
-        iterations=out["iterations"],
-        converged=out["converged"],
-    )
+    return EnvelopeFit._of(out, min_allowance)
 
 
 @dataclass(frozen=True, eq=False)
@@ -954,13 +960,5 @@ def align_blank(
         spacing=spacing,
         init=init,
     )
-    f = out["fit"]
-    fit = EnvelopeFit(
-        transformation=f["transformation"],
-        allowance=f["allowance"],
-        feasible=f["feasible"],
-        min_allowance=float(min_allowance),
-        iterations=f["iterations"],
-        converged=f["converged"],
-    )
+    fit = EnvelopeFit._of(out["fit"], min_allowance)
     return BlankAlignment(stages=tuple(AlignmentStage(**s) for s in out["stages"]), fit=fit)

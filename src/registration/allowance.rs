@@ -47,7 +47,8 @@ const GRAZING: f64 = 0.5;
 pub const PLANE_POINTS: usize = 8;
 
 /// The quadric's kernel width h, in blank spacings: wide enough that the Gaussian weights hold
-/// the ten points a quadric needs through noise, narrow enough to follow an edge of 1.5 s radius.
+/// well over the nine points its nine terms need through noise, narrow enough to follow an edge
+/// of 1.5 s radius.
 const WIDTH: f64 = 1.5;
 /// Neighbours of a quadric fit, and of an edge's long, narrow fit.
 const FIT_POINTS: usize = 48;
@@ -137,13 +138,23 @@ impl<'a> Blank<'a> {
                 "k",
                 "applies to surface='plane'; the quadric's neighbourhood follows the blank's spacing (give spacing=)",
             )),
-            (BlankSurface::Quadric, None) => 10,
+            (BlankSurface::Quadric, None) => 0,
         };
-        if k < 3 {
-            return Err(Error::invalid("k", format!("a plane needs at least 3 blank points, got k = {k}")));
-        }
-        if k > points.len() {
-            return Err(Error::invalid("k", format!("{k} neighbors asked, but the blank has {} points", points.len())));
+        if options.surface == BlankSurface::Plane {
+            if k < 3 {
+                return Err(Error::invalid("k", format!("a plane needs at least 3 blank points, got k = {k}")));
+            }
+            if k > points.len() {
+                return Err(Error::invalid(
+                    "k",
+                    format!("{k} neighbors asked, but the blank has {} points", points.len()),
+                ));
+            }
+        } else if points.len() < FIT_POINTS {
+            return Err(Error::invalid(
+                "blank_points",
+                format!("{} points are too few for the quadric's fits ({FIT_POINTS} at least)", points.len()),
+            ));
         }
         if let Some(s) = options.spacing {
             check_positive("spacing", s, "mm")?;

@@ -38,7 +38,7 @@ const FIRST_REGION: f64 = 1.0;
 const LARGEST_REGION: f64 = 16.0;
 
 /// The fit has converged when a step moves the blank by less than this, mm: below what the
-/// allowance resolves, as its planes jump by tens of nm where their k nearest blank points
+/// allowance resolves, as its local surfaces jump by tens of nm where their neighbourhoods
 /// change, so that smaller steps only chase those jumps.
 const STEP: f64 = 1e-6;
 
@@ -47,8 +47,8 @@ const STEP: f64 = 1e-6;
 pub struct EnvelopeFit {
     /// Applied to the blank: blank → model frame.
     pub transformation: Matrix4<f64>,
-    /// Allowance of each model point at `transformation`, mm (NaN where the blank's plane
-    /// grazes the normal).
+    /// Allowance of each model point at `transformation`, mm (NaN where the blank does not cover
+    /// the point).
     pub allowance: Vec<f64>,
     /// Every allowance is ≥ `min_allowance` (within [`FEASIBILITY`]).
     pub feasible: bool,
@@ -160,9 +160,6 @@ pub fn envelope_fit(
     };
     let mut pose = *init;
     let mut here = problem.evaluate(&pose)?;
-    // A move may not escape the constraint by turning a blank plane away until the allowance
-    // there is NaN: a point with an allowance at the start keeps one.
-    let measured: Vec<bool> = here.allowance.iter().map(|a| a.is_finite()).collect();
     let mut region = FIRST_REGION;
     let (mut iterations, mut converged) = (0, false);
     while iterations < MAX_ITERATIONS {
@@ -181,8 +178,10 @@ pub fn envelope_fit(
         // to spare beyond the step's reach may: where the blank ends at the model's end, its last
         // row is covered or not by a hair, and holding it would freeze the fit there.
         let reach = size * problem.reach;
-        let escapes = (0..measured.len())
-            .any(|i| measured[i] && trial.allowance[i].is_nan() && !(here.allowance[i] - min_allowance > reach));
+        let escapes = (0..here.allowance.len()).any(|i| {
+            let now = here.allowance[i];
+            now.is_finite() && now - min_allowance <= reach && trial.allowance[i].is_nan()
+        });
         let actual = if escapes { f64::NEG_INFINITY } else { here.merit(min_allowance) - trial.merit(min_allowance) };
         let ratio = actual / predicted;
         if ratio > 1e-4 {
