@@ -190,3 +190,25 @@ def test_compensate_route_from_the_files_its_simulation_writes(tmp_path):
     np.testing.assert_array_equal(after.feeds, before.feeds)
     report = np.genfromtxt(tmp_path / "comp" / "report.csv", delimiter=",", names=True)
     np.testing.assert_allclose(report["moved_mm"], np.linalg.norm(after.points - before.points, axis=1), atol=1e-6)
+
+
+def test_points_without_stock_pass_from_allowance_to_grind_and_are_counted(tmp_path, capsys):
+    # Issue #32 §2: `machscan allowance` leaves NaN where the blank does not cover the model; `machscan grind` reads
+    # it (PLY and CSV alike), leaves those points out, says how many, and counts them per row in report.csv.
+    cloud = synth.WavyPanel(width=20.0, length=30.0).sample(0.5, seed=5)
+    a = cloud.allowance.copy()
+    hole = np.linalg.norm(cloud.points[:, :2] - [10.0, 15.0], axis=1) < 2.0
+    a[hole] = np.nan
+    for name in ("allowance.ply", "allowance.csv"):
+        src = tmp_path / name
+        if name.endswith(".ply"):
+            machscan.write_points(src, cloud.points, cloud.normals, scalars={"allowance": a}, dtype="float64")
+        else:
+            np.savetxt(src, np.column_stack([cloud.points, cloud.normals, a]), delimiter=",",
+                       header="x_mm,y_mm,z_mm,nx,ny,nz,allowance_mm", comments="")
+        out = tmp_path / name.replace(".", "_")
+        code = main(["grind", str(src), "--section-normal", "0,1,0", "--tool-radius", "8", "--out", str(out)])
+        assert code in (0, 3)
+        assert f"{int(hole.sum())} model points have no allowance" in capsys.readouterr().out
+        report = np.genfromtxt(out / "report.csv", delimiter=",", names=True)
+        assert int(report["no_stock_points"].sum()) == int(hole.sum())

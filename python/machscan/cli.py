@@ -539,11 +539,13 @@ def _grind(args: argparse.Namespace) -> int:
     )
     pieces = len(paths.row_offsets)
     count = np.bincount(paths.row, minlength=pieces)
+    # Cloud points without stock measured (NaN allowance) nearest each row: left out, counted.
+    no_stock = np.bincount(check.section[np.isnan(check.deviation)], minlength=pieces)
     _write_table(
         out / "report.csv",
-        "row,offset_mm,points,closed,deviation_min_mm,deviation_mean_mm,deviation_max_mm",
+        "row,offset_mm,points,closed,deviation_min_mm,deviation_mean_mm,deviation_max_mm,no_stock_points",
         np.column_stack(
-            [np.arange(pieces), paths.row_offsets, count, paths.row_closed, check.minimum, check.mean, check.maximum]
+            [np.arange(pieces), paths.row_offsets, count, paths.row_closed, check.minimum, check.mean, check.maximum, no_stock]
         ),
     )
     sections = np.unique(paths.row_offsets)
