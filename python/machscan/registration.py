@@ -720,10 +720,11 @@ class EnvelopeFit:
         Applied to the blank (blank → model frame).
     allowance : ndarray, shape (N,)
         Allowance of each model point at ``transformation``, mm (NaN where the blank does not
-        cover the point: such points are left out of the fit; a step may not take the allowance
-        from a point whose stock could bind).
+        cover the point). A point the blank covered at some pose of the fit and no longer does
+        keeps counting, by the allowance its last measurement extrapolates to: the fit cannot
+        escape the minimum by moving the blank off a point.
     feasible : bool
-        Every allowance is ≥ ``min_allowance`` (to 1e-9 mm). When False, ``transformation``
+        Every allowance is ≥ ``min_allowance`` (to 1e-9 mm), those extrapolated included. When False, ``transformation``
         is the pose of the largest smallest allowance: the blank cannot hold the minimum.
     min_allowance : float
         The minimum asked for.

@@ -140,6 +140,9 @@ impl<'a> Blank<'a> {
             )),
             (BlankSurface::Quadric, None) => 0,
         };
+        if let Some(s) = options.spacing {
+            check_positive("spacing", s, "mm")?;
+        }
         if options.surface == BlankSurface::Plane {
             if k < 3 {
                 return Err(Error::invalid("k", format!("a plane needs at least 3 blank points, got k = {k}")));
@@ -155,9 +158,6 @@ impl<'a> Blank<'a> {
                 "blank_points",
                 format!("{} points are too few for the quadric's fits ({FIT_POINTS} at least)", points.len()),
             ));
-        }
-        if let Some(s) = options.spacing {
-            check_positive("spacing", s, "mm")?;
         }
         let index = PointIndex::new(points)?;
         let spacing = match options.spacing {
@@ -556,6 +556,7 @@ pub(crate) mod tests {
         assert!(err(&normals, plane(11)).contains("k"));
         assert!(err(&normals, BlankOptions { k: Some(8), ..BlankOptions::default() }).contains("k"));
         assert!(err(&normals, BlankOptions { spacing: Some(-1.0), ..BlankOptions::default() }).contains("spacing"));
+        assert!(err(&normals, BlankOptions::default()).contains("blank_points"));
         assert!(err(&normals[..5], plane(8)).contains("model_normals"));
         let mut zero = normals.clone();
         zero[3] = [0.0; 3];

@@ -29,6 +29,12 @@ pub const FEASIBILITY: f64 = 1e-9;
 /// exact — the fit never trades missing stock for evenness.
 const PENALTY: f64 = 1e3;
 
+/// How far (mm) the blank may move relative to a model point from where it last covered it
+/// while the point's allowance is extrapolated from there: a few spacings of a blank's points,
+/// over which the allowance is close to linear in the motion; beyond it the blank would be
+/// moved off the point, not past its edge by a hair.
+const UNCOVERED_REACH: f64 = 2.0;
+
 /// Outer (linearise, solve, check) iterations at most.
 const MAX_ITERATIONS: usize = 200;
 
@@ -50,7 +56,8 @@ pub struct EnvelopeFit {
     /// Allowance of each model point at `transformation`, mm (NaN where the blank does not cover
     /// the point).
     pub allowance: Vec<f64>,
-    /// Every allowance is ≥ `min_allowance` (within [`FEASIBILITY`]).
+    /// Every allowance is ≥ `min_allowance` (within [`FEASIBILITY`]), counting a point the blank
+    /// no longer covers by the allowance its last measurement extrapolates to.
     pub feasible: bool,
     pub iterations: usize,
     /// The last step was below [`STEP`]: the pose is a local optimum.
@@ -67,23 +74,18 @@ struct Evaluation {
 }
 
 impl Evaluation {
+    /// The evaluation of `rows` (and the allowance of every point, NaN where uncovered).
+    fn of(allowance: Vec<f64>, rows: Vec<(usize, f64, SVector<f64, 6>)>) -> Evaluation {
+        let m = rows.len().max(1) as f64;
+        let mean = rows.iter().map(|r| r.1).sum::<f64>() / m;
+        let variance = rows.iter().map(|r| (r.1 - mean).powi(2)).sum::<f64>() / m;
+        let smallest = rows.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+        Evaluation { allowance, rows, variance, smallest }
+    }
+
     /// The L∞ merit: the variance, plus the penalty on the deepest shortfall.
     fn merit(&self, min_allowance: f64) -> f64 {
         self.variance + PENALTY * (min_allowance - self.smallest).max(0.0)
-    }
-
-    /// The merit with `lost` allowances counted too: those of points this pose left uncovered,
-    /// as the step's linear model predicted them.
-    fn merit_with(&self, min_allowance: f64, lost: &[f64]) -> f64 {
-        if lost.is_empty() {
-            return self.merit(min_allowance);
-        }
-        let values: Vec<f64> = self.rows.iter().map(|r| r.1).chain(lost.iter().copied()).collect();
-        let m = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / m;
-        let variance = values.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / m;
-        let smallest = values.iter().copied().fold(f64::INFINITY, f64::min);
-        variance + PENALTY * (min_allowance - smallest).max(0.0)
     }
 }
 
@@ -130,11 +132,49 @@ impl Problem<'_> {
                 "no model normal meets the blank's surface: is the blank in the model's frame?",
             ));
         }
-        let m = rows.len() as f64;
-        let mean = rows.iter().map(|r| r.1).sum::<f64>() / m;
-        let variance = rows.iter().map(|r| (r.1 - mean).powi(2)).sum::<f64>() / m;
-        let smallest = rows.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
-        Ok(Evaluation { allowance: local.into_iter().map(|l| l.0).collect(), rows, variance, smallest })
+        Ok(Evaluation::of(local.into_iter().map(|l| l.0).collect(), rows))
+    }
+
+    /// The small motion ξ = (ω·scale, τ) that takes the blank from pose `from` to pose `to`.
+    fn motion(&self, from: &Matrix4<f64>, to: &Matrix4<f64>) -> SVector<f64, 6> {
+        let relative = to * from.try_inverse().unwrap_or_else(Matrix4::identity);
+        let r = nalgebra::Rotation3::from_matrix(&relative.fixed_view::<3, 3>(0, 0).into_owned());
+        let omega = r.scaled_axis() * self.scale;
+        let tau = Vector3::from(transform_point(&relative, self.centre.into())) - self.centre;
+        SVector::<f64, 6>::new(omega[0], omega[1], omega[2], tau[0], tau[1], tau[2])
+    }
+}
+
+/// Where each model point was last measured: its allowance, derivative and the blank's pose.
+type Measured = Vec<Option<(f64, SVector<f64, 6>, Matrix4<f64>)>>;
+
+/// `ev` with every point measured before but uncovered at `pose` counted by the allowance its
+/// last measurement extrapolates to: a fit cannot escape the constraint by uncovering a point
+/// (moving the blank off it, or turning its surface away), and a point at the blank's end,
+/// covered or not by a hair, neither freezes the fit nor drops out of it. The extrapolation is
+/// linear, so it holds only near where the point was measured: a pose that moves an uncovered
+/// point more than [`UNCOVERED_REACH`] from there is out of bounds (the second value).
+fn with_measured(problem: &Problem, ev: Evaluation, pose: &Matrix4<f64>, measured: &Measured) -> (Evaluation, bool) {
+    let mut rows = ev.rows;
+    let mut beyond = false;
+    for (i, m) in measured.iter().enumerate() {
+        if let (true, Some((a, j, at))) = (ev.allowance[i].is_nan(), m) {
+            rows.push((i, a + j.dot(&problem.motion(at, pose)), *j));
+            let p = problem.model[i];
+            let relative = at * pose.try_inverse().unwrap_or_else(Matrix4::identity);
+            let shift = Vector3::from(transform_point(&relative, p)) - Vector3::from(p);
+            beyond |= shift.norm() > UNCOVERED_REACH;
+        }
+    }
+    (Evaluation::of(ev.allowance, rows), beyond)
+}
+
+/// Records where the points measured at `pose` stand.
+fn remember(measured: &mut Measured, ev: &Evaluation, pose: &Matrix4<f64>) {
+    for &(i, a, j) in &ev.rows {
+        if ev.allowance[i].is_finite() {
+            measured[i] = Some((a, j, *pose));
+        }
     }
 }
 
@@ -169,6 +209,8 @@ pub fn envelope_fit(
     };
     let mut pose = *init;
     let mut here = problem.evaluate(&pose)?;
+    let mut measured: Measured = vec![None; model.len()];
+    remember(&mut measured, &here, &pose);
     let mut region = FIRST_REGION;
     let (mut iterations, mut converged) = (0, false);
     while iterations < MAX_ITERATIONS {
@@ -181,16 +223,11 @@ pub fn envelope_fit(
         }
         let trial_pose =
             twist(&(Vector3::new(xi[0], xi[1], xi[2]) / scale), &Vector3::new(xi[3], xi[4], xi[5]), &centre) * pose;
-        let trial = problem.evaluate(&trial_pose)?;
-        // A point the step leaves uncovered (the blank moved off it, or its surface turned away)
-        // is judged by the allowance the step's linear model gave it: a step cannot escape the
-        // constraint by uncovering a point it would not have brought up to the minimum, and a
-        // point at the blank's end, covered or not by a hair, does not freeze the fit.
-        let lost: Vec<f64> =
-            here.rows.iter().filter(|r| trial.allowance[r.0].is_nan()).map(|r| r.1 + r.2.dot(&xi)).collect();
-        let actual = here.merit(min_allowance) - trial.merit_with(min_allowance, &lost);
+        let (trial, beyond) = with_measured(&problem, problem.evaluate(&trial_pose)?, &trial_pose, &measured);
+        let actual = if beyond { f64::NEG_INFINITY } else { here.merit(min_allowance) - trial.merit(min_allowance) };
         let ratio = actual / predicted;
         if ratio > 1e-4 {
+            remember(&mut measured, &trial, &trial_pose);
             (pose, here) = (trial_pose, trial);
         }
         if ratio < 0.25 {
