@@ -298,8 +298,12 @@ class Blade:
         for z in zs:
             q = self.offset_point(ud, np.full_like(ud, z), offset)
             s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
-            ph = rng.uniform(0, spacing) if stagger else 0.0
-            st = np.arange(ph, s[-1] - 0.5 * spacing, spacing)
+            # The section is closed: n equal steps round it, so no gap opens where u wraps (a
+            # fillet join on the lenticular sections).
+            n = max(3, int(round(s[-1] / spacing)))
+            step = s[-1] / n
+            ph = rng.uniform(0, step) if stagger else 0.0
+            st = ph + step * np.arange(n)
             U.append(np.interp(st, s, ud))
             Z.append(np.full(st.shape, z))
         U, Z = np.concatenate(U), np.concatenate(Z)
