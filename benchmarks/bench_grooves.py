@@ -121,7 +121,7 @@ def _tanh_start(lf):
 
 
 def section_value(p, u):
-    """Height of the general section p = [xL, xR, tL, tR, D, s] at u (src/groove/section.rs)."""
+    """Height of the general section p = [xL, xR, tL, tR, D, s] at u (crates/core/src/groove/section.rs)."""
     xl, xr, tl, tr, d, s = p
     t = tl + tr
     al, ar = np.sqrt(1 + tl * tl), np.sqrt(1 + tr * tr)

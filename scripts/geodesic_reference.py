@@ -1,5 +1,5 @@
 """Reference distances from pygeodesic (Kirsanov's exact MMP) for the Rust tests of the exact
-geodesic kernel (`src/mesh/geodesic_exact.rs`), which read them when present:
+geodesic kernel (`crates/core/src/mesh/geodesic_exact.rs`), which read them when present:
 
     python scripts/geodesic_reference.py [out_dir]      # default target/georef
 

@@ -1,6 +1,6 @@
 """Copy the docstrings of the compiled `machscan._core` into `python/machscan/_core.pyi`, so that
 editors show the same text as `help()` (DESIGN: the .pyi carries the same text). The Rust doc
-comments in `src/python/` are the source; run this after changing one:
+comments in `crates/python/src/` are the source; run this after changing one:
 
     python scripts/sync_stub_docs.py          # rewrite the stub
     python scripts/sync_stub_docs.py --check  # exit 1 if the stub is out of step

@@ -17,7 +17,7 @@ if [ ${#need[@]} -gt 0 ]; then
 fi
 
 echo "== cargo fmt --check"
-cargo fmt --check
+cargo fmt --all --check
 
 echo "== building and installing machscan (release) with its test dependencies"
 python -m pip install --quiet --disable-pip-version-check ".[test]"
@@ -26,10 +26,10 @@ echo "== ruff"
 python -m ruff check python tests benchmarks scripts
 
 echo "== cargo clippy"
-cargo clippy --quiet --all-targets -- -D warnings
+cargo clippy --quiet --workspace --all-targets -- -D warnings
 
-echo "== cargo test"
-cargo test --quiet
+echo "== cargo test (the core, without Python)"
+cargo test --quiet -p machscan-core
 
 echo "== stub check of machscan._core"
 # Run from outside the source tree so the installed package is the one checked.

@@ -1,4 +1,4 @@
-"""Type stubs of the compiled core ``machscan._core`` (kept in step with ``src/python/``;
+"""Type stubs of the compiled core ``machscan._core`` (kept in step with ``crates/python/src/``;
 checked by ``python -m mypy.stubtest machscan._core`` in the test command, and the docstrings by
 ``scripts/sync_stub_docs.py``).
 

@@ -1,7 +1,8 @@
-//! Bindings of `crate::kinematics`: profiler frames, machine chains, pose timing, calibration.
+//! Bindings of `machscan_core::kinematics`: profiler frames, machine chains, pose timing, calibration.
 use super::convert::{count, enter, f64_vector, f64_vector_opt, points_to_numpy, to_numpy, Dim, F64Array};
-use crate::geom::Axis;
-use crate::kinematics::{self as kin, AngleSource, KinematicChain, Profiler, Step, VENDOR_SENTINEL};
+use super::error::IntoPy;
+use machscan_core::geom::Axis;
+use machscan_core::kinematics::{self as kin, AngleSource, KinematicChain, Profiler, Step, VENDOR_SENTINEL};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -18,7 +19,7 @@ fn frames_and_profiler<'py>(
 ) -> PyResult<(F64Array<'py>, Profiler)> {
     let arr = F64Array::extract(frames, "frames", &[Dim::Any("F"), Dim::Any("N")], "")?;
     let valid_range = f64_vector_opt::<2>(valid_range, "valid_range", "(lo, hi) in mm")?.map(|[lo, hi]| (lo, hi));
-    let profiler = Profiler::new(pitch, arr.shape()[1], center, valid_range, sentinel)?;
+    let profiler = Profiler::new(pitch, arr.shape()[1], center, valid_range, sentinel).py()?;
     Ok((arr, profiler))
 }
 
@@ -160,7 +161,7 @@ fn poses_array<'py>(chain: &KinematicChain, axes: &Bound<'py, PyAny>, rows: Opti
 fn ac_head_chain(c2_offset: &Bound<'_, PyAny>, mount: &Bound<'_, PyAny>) -> PyResult<KinematicChain> {
     let c2 = f64_vector::<3>(c2_offset, "c2_offset", "(Lx, Ly, Lz) in mm")?;
     let m = f64_vector::<6>(mount, "mount", "(theta, psi, phi, dx, dy, dz) in rad and mm")?;
-    Ok(KinematicChain::ac_head(c2, m)?)
+    KinematicChain::ac_head(c2, m).py()
 }
 
 fn transforms_array<'py>(
@@ -240,7 +241,7 @@ fn ab_mirror_support_points<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let lat = f64_vector::<3>(lat, "lat", "(x, y, z) in mm")?;
     let lba = f64_vector::<3>(lba, "lba", "(x, y, z) in mm")?;
-    let chain = KinematicChain::ab_mirror_support(lat, lba)?;
+    let chain = KinematicChain::ab_mirror_support(lat, lba).py()?;
     apply_chain(py, &chain, tool_points, "tool_points", axes, false)
 }
 
@@ -471,7 +472,7 @@ impl PyKinematicChain {
     fn new(steps: &Bound<'_, PyList>, axis_names: Vec<String>) -> PyResult<Self> {
         let parsed =
             steps.iter().enumerate().map(|(k, s)| parse_step(&s, k, &axis_names)).collect::<PyResult<Vec<_>>>()?;
-        Ok(PyKinematicChain { inner: KinematicChain::new(parsed, axis_names)? })
+        Ok(PyKinematicChain { inner: KinematicChain::new(parsed, axis_names).py()? })
     }
 
     /// AC double-swing head with C2 and sensor mount (SPEC K2, K3); poses X, Y, Z, A, C, C2.
@@ -485,14 +486,14 @@ impl PyKinematicChain {
     fn ab_mirror_support(lat: &Bound<'_, PyAny>, lba: &Bound<'_, PyAny>) -> PyResult<Self> {
         let lat = f64_vector::<3>(lat, "lat", "(x, y, z) in mm")?;
         let lba = f64_vector::<3>(lba, "lba", "(x, y, z) in mm")?;
-        Ok(PyKinematicChain { inner: KinematicChain::ab_mirror_support(lat, lba)? })
+        Ok(PyKinematicChain { inner: KinematicChain::ab_mirror_support(lat, lba).py()? })
     }
 
     /// AC cradle table about ``center`` (SPEC K6); poses A, C.
     #[staticmethod]
     fn ac_table(center: &Bound<'_, PyAny>) -> PyResult<Self> {
         let center = f64_vector::<3>(center, "center", "(x, y, z) in mm")?;
-        Ok(PyKinematicChain { inner: KinematicChain::ac_table(center)? })
+        Ok(PyKinematicChain { inner: KinematicChain::ac_table(center).py()? })
     }
 
     /// Number of pose columns.
@@ -573,7 +574,7 @@ fn valid_readings<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let arr = F64Array::extract(readings, "readings", &[Dim::Any("N")], "(readings, mm)")?;
     let valid_range = f64_vector_opt::<2>(valid_range, "valid_range", "(lo, hi) in mm")?.map(|[lo, hi]| (lo, hi));
-    let rule = kin::ValidReadings::new(valid_range, sentinel)?;
+    let rule = kin::ValidReadings::new(valid_range, sentinel).py()?;
     let values = arr.values()?;
     let n = values.len();
     to_numpy(py, values.iter().map(|&d| rule.is_valid(d)).collect::<Vec<bool>>(), &[n])

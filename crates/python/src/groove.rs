@@ -1,12 +1,13 @@
-//! Bindings of `crate::groove`: the batch groove fit and the view of one frame. The options
+//! Bindings of `machscan_core::groove`: the batch groove fit and the view of one frame. The options
 //! travel as one dict with exactly the keys of `groove_defaults()` (the `_GrooveOptions`
 //! TypedDict of the stub), so they are spelled and defaulted in one place each: here from
 //! `GrooveOptions::default()`, and by the Python signatures that read `groove_defaults()`.
 use super::convert::{count, enter, f64_vector_opt, to_numpy, Dim, F64Array};
-use crate::groove::{
+use super::error::IntoPy;
+use machscan_core::groove::{
     fit_frames, view_frame, FitCriteria, GrooveFit, GrooveOptions, TemplateKind, SECTION_CRITERIA, TANH_CRITERIA,
 };
-use crate::kinematics::ValidReadings;
+use machscan_core::kinematics::ValidReadings;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -50,7 +51,7 @@ fn options(d: &Bound<'_, PyDict>) -> PyResult<GrooveOptions> {
     };
     let template: String = get("template")?.extract().map_err(|_| typed("template", "a str"))?;
     Ok(GrooveOptions {
-        template: TemplateKind::parse(&template)?,
+        template: TemplateKind::parse(&template).py()?,
         alpha: float("alpha")?,
         fit_alpha: get("fit_alpha")?.extract().map_err(|_| typed("fit_alpha", "a bool"))?,
         nominal_width: float("nominal_width")?,
@@ -68,7 +69,8 @@ fn options(d: &Bound<'_, PyDict>) -> PyResult<GrooveOptions> {
         valid: ValidReadings::new(
             f64_vector_opt::<2>(Some(&get("valid_range")?), "valid_range", "(lo, hi) in mm")?.map(|[lo, hi]| (lo, hi)),
             opt_float("sentinel")?,
-        )?,
+        )
+        .py()?,
     })
 }
 

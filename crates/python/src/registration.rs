@@ -1,10 +1,11 @@
-//! Bindings of `crate::registration`. Every option is a required keyword here: the Python
+//! Bindings of `machscan_core::registration`. Every option is a required keyword here: the Python
 //! signatures give the defaults (ICP's read from `icp_defaults()`, which reads `IcpOptions::new`
 //! in the core), so each default is written once.
 use super::convert::{count, enter, indices_to_numpy, to_numpy, Dim, F64Array};
-use crate::cloud::{estimate_normals, Neighborhood};
-use crate::error::Error;
-use crate::registration::{
+use super::error::IntoPy;
+use machscan_core::cloud::{estimate_normals, Neighborhood};
+use machscan_core::error::Error;
+use machscan_core::registration::{
     align_blank as run_align_blank, allowance as run_allowance, allowance::PLANE_POINTS,
     coarse_align as run_coarse_align, envelope_fit as run_envelope_fit, icp as run_icp, line_curvature,
     locating_points, positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, probe_pattern,
@@ -93,12 +94,12 @@ fn icp<'py>(
     let init = transform_opt(init, "init")?;
     let options = IcpOptions {
         max_distance,
-        method: IcpMethod::parse(method)?,
+        method: IcpMethod::parse(method).py()?,
         max_iterations: count("max_iterations", max_iterations)?,
         relative_fitness,
         relative_rmse,
         mse_threshold,
-        robust: robust.map(RobustKernel::parse).transpose()?.map(|kernel| Robust { kernel, scale: robust_scale }),
+        robust: robust.map(RobustKernel::parse).transpose().py()?.map(|kernel| Robust { kernel, scale: robust_scale }),
         trim,
     };
     let (s, t) = (src.rows::<3>()?, tgt.rows::<3>()?);
@@ -172,7 +173,10 @@ impl Pattern {
         match name {
             "random" => Ok(Pattern::Random),
             "optimal" => Ok(Pattern::Optimal),
-            _ => Err(Error::invalid("pattern", format!("expected 'random' or 'optimal', got {name:?}")).into()),
+            _ => Err(super::error::to_py(Error::invalid(
+                "pattern",
+                format!("expected 'random' or 'optimal', got {name:?}"),
+            ))),
         }
     }
 }
@@ -186,7 +190,7 @@ fn choose(
     keep: f64,
     seed: u64,
     pattern: &Pattern,
-) -> crate::error::Result<Vec<usize>> {
+) -> machscan_core::error::Result<Vec<usize>> {
     match (pattern, normals) {
         (Pattern::Random, _) => locating_points(curvature, m, keep, seed),
         (Pattern::Optimal, Some(n)) => probe_pattern(pts, n, curvature, m, keep),
@@ -255,7 +259,7 @@ fn locating_points_grid<'py>(
 
 /// The blank's surface options as ``machscan.allowance`` and ``machscan.envelope_fit`` take them.
 fn blank_options(surface: &str, k: Option<i64>, spacing: Option<f64>) -> PyResult<BlankOptions> {
-    Ok(BlankOptions { surface: BlankSurface::parse(surface)?, k: k.map(|k| count("k", k)).transpose()?, spacing })
+    Ok(BlankOptions { surface: BlankSurface::parse(surface).py()?, k: k.map(|k| count("k", k)).transpose()?, spacing })
 }
 
 /// Machining allowance (SPEC R7); ``machscan.allowance`` documents it (with the plane's default
@@ -355,7 +359,7 @@ fn envelope_fit<'py>(
 }
 
 /// The envelope fit's arrays (the ``_EnvelopeFitArrays`` keys).
-fn envelope_dict<'py>(py: Python<'py>, fit: crate::registration::EnvelopeFit) -> PyResult<Bound<'py, PyDict>> {
+fn envelope_dict<'py>(py: Python<'py>, fit: machscan_core::registration::EnvelopeFit) -> PyResult<Bound<'py, PyDict>> {
     let n = fit.allowance.len();
     let d = PyDict::new(py);
     d.set_item("transformation", transform_to_numpy(py, &fit.transformation)?)?;

@@ -1,6 +1,7 @@
-//! The Python face of the core: the only module that uses pyo3 and numpy. One file per core
-//! module; `convert` holds the seam every binding goes through (extract, enter the core with the
-//! GIL released, return arrays) and `error` the one mapping of core errors to exceptions.
+//! machscan._core, the Python face of `machscan-core`: the only crate that uses pyo3 and numpy.
+//! One file per core module; `convert` holds the seam every binding goes through (extract, enter
+//! the core with the GIL released, return arrays) and `error` the one mapping of core errors to
+//! exceptions. Compositions (a kernel estimating what it needs first) live in the core, not here.
 mod cloud;
 mod contour;
 mod convert;

@@ -1,6 +1,7 @@
 //! machscan: on-machine measurement kernels for five-axis machining.
 //!
-//! The core modules are free of pyo3; `python` is the only place that talks to Python.
+//! The kernels, free of pyo3 and numpy: the compiler keeps them so (the extension is the crate
+//! `machscan` in `crates/python`). Every failure is an `Error` naming the argument or file at fault.
 
 // `!(a <= b)` is how the core rejects NaN together with out-of-range values: a NaN fails
 // every comparison, so the negated form is true for it. `partial_cmp` would hide that.
@@ -15,7 +16,6 @@ pub mod kinematics;
 pub mod matching;
 pub mod mesh;
 pub mod optim;
-pub mod python;
 pub mod registration;
 pub mod spatial;
 pub mod toolpath;

@@ -1,4 +1,4 @@
-//! Bindings of `crate::contour`.
+//! Bindings of `machscan_core::contour`.
 use super::convert::{enter, indices_to_numpy, points_to_numpy, to_numpy, F64Array};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -17,7 +17,7 @@ fn contour_error<'py>(
     let p = F64Array::points(theoretical, "theoretical")?;
     let q = F64Array::points(actual, "actual")?;
     let (a, pp, qq) = (p.shape()[0], p.rows::<3>()?, q.rows::<3>()?);
-    let r = enter(py, || crate::contour::contour_error(pp, qq, delta1, delta2))?;
+    let r = enter(py, || machscan_core::contour::contour_error(pp, qq, delta1, delta2))?;
     let d = PyDict::new(py);
     d.set_item("offset", to_numpy(py, r.offset.to_vec(), &[3])?)?;
     d.set_item("errors", to_numpy(py, r.errors, &[a])?)?;
@@ -55,7 +55,7 @@ fn resample_polyline<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let v = F64Array::points(vertices, "vertices")?;
     let vv = v.rows::<3>()?;
-    let out = enter(py, || crate::contour::resample_polyline(vv, spacing, closed))?;
+    let out = enter(py, || machscan_core::contour::resample_polyline(vv, spacing, closed))?;
     points_to_numpy(py, out)
 }
 
@@ -77,7 +77,7 @@ fn match_contours<'py>(
     let a = F64Array::points(actual_centroids, "actual_centroids")?;
     let t = F64Array::points(theoretical_centroids, "theoretical_centroids")?;
     let (aa, tt) = (a.rows::<3>()?, t.rows::<3>()?);
-    let out = enter(py, || crate::contour::match_contours(aa, tt, max_distance))?;
+    let out = enter(py, || machscan_core::contour::match_contours(aa, tt, max_distance))?;
     let n = out.len();
     to_numpy(py, out.into_iter().map(|o| o.map_or(-1, |v| v as i64)).collect::<Vec<_>>(), &[n])
 }

@@ -1,4 +1,4 @@
-//! Bindings of `crate::spatial`.
+//! Bindings of `machscan_core::spatial`.
 use super::convert::{count, count_opt, enter, indices_to_numpy, to_numpy, F64Array};
 use pyo3::prelude::*;
 
@@ -38,7 +38,7 @@ fn euclidean_clusters<'py>(
     let k = count_opt("k", k)?;
     let arr = F64Array::points(points, "points")?;
     let pts = arr.rows::<3>()?;
-    let labels = enter(py, || crate::spatial::euclidean_clusters(pts, radius, k))?;
+    let labels = enter(py, || machscan_core::spatial::euclidean_clusters(pts, radius, k))?;
     indices_to_numpy(py, labels)
 }
 
@@ -69,7 +69,7 @@ fn nearest_neighbors<'py>(
     let p = F64Array::points(points, "points")?;
     let q = F64Array::points(queries, "queries")?;
     let (pp, qq) = (p.rows::<3>()?, q.rows::<3>()?);
-    let (idx, dist) = enter(py, || crate::spatial::nearest_neighbors(pp, qq))?;
+    let (idx, dist) = enter(py, || machscan_core::spatial::nearest_neighbors(pp, qq))?;
     let m = dist.len();
     Ok((indices_to_numpy(py, idx)?, to_numpy(py, dist, &[m])?))
 }
@@ -109,7 +109,7 @@ fn knn_graph<'py>(
     let k = count("k", k)?;
     let p = F64Array::points(points, "points")?;
     let (n, pts) = (p.shape()[0], p.rows::<3>()?);
-    let (idx, dist) = enter(py, || crate::spatial::knn_graph(pts, k, radius))?;
+    let (idx, dist) = enter(py, || machscan_core::spatial::knn_graph(pts, k, radius))?;
     let idx: Vec<i64> = idx.into_iter().map(|j| j.map_or(-1, |j| j as i64)).collect();
     Ok((to_numpy(py, idx, &[n, k])?, to_numpy(py, dist, &[n, k])?))
 }

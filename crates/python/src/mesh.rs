@@ -1,6 +1,7 @@
-//! Bindings of `crate::mesh`.
+//! Bindings of `machscan_core::mesh`.
 use super::convert::{count, enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
-use crate::mesh::{
+use super::error::IntoPy;
+use machscan_core::mesh::{
     closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, geodesic_distances as run_geodesic_distances,
     insert_points as run_insert_points, GeodesicMethod, GeodesicSolver, Landing,
 };
@@ -140,7 +141,7 @@ fn geodesic_distances<'py>(
     let (v, tri) = mesh(vertices, faces)?;
     let n = v.shape()[0];
     let src: Vec<usize> = sources.iter().map(|&s| count("sources", s)).collect::<PyResult<_>>()?;
-    let method = GeodesicMethod::parse(method)?;
+    let method = GeodesicMethod::parse(method).py()?;
     let vr = v.rows::<3>()?;
     let d = enter(py, || run_geodesic_distances(vr, &tri, &src, method))?;
     let k = d.len();
@@ -160,7 +161,7 @@ impl PyGeodesicSolver {
     #[pyo3(signature = (vertices, faces, *, method))]
     fn new(py: Python<'_>, vertices: &Bound<'_, PyAny>, faces: &Bound<'_, PyAny>, method: &str) -> PyResult<Self> {
         let (v, tri) = mesh(vertices, faces)?;
-        let method = GeodesicMethod::parse(method)?;
+        let method = GeodesicMethod::parse(method).py()?;
         let vr = v.rows::<3>()?;
         Ok(PyGeodesicSolver { inner: enter(py, || GeodesicSolver::new(vr, &tri, method))? })
     }

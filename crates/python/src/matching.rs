@@ -1,9 +1,10 @@
-//! Bindings of `crate::matching`.
+//! Bindings of `machscan_core::matching`.
 use super::convert::{count, enter, points_to_numpy, to_numpy, F64Array};
+use super::error::IntoPy;
 use super::mesh::surface;
-use crate::error::Error;
-use crate::matching::{isometric_match as run_isometric_match, Jacobian, MatchOptions, Surface};
-use crate::mesh::{surface_mesh, GeodesicMethod, Spacing};
+use machscan_core::error::Error;
+use machscan_core::matching::{isometric_match as run_isometric_match, Jacobian, MatchOptions, Surface};
+use machscan_core::mesh::{surface_mesh, GeodesicMethod, Spacing};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -42,16 +43,17 @@ fn isometric_match<'py>(
     let spacing = if spacing.is_none() {
         Spacing::Full
     } else if let Ok(word) = spacing.extract::<String>() {
-        Spacing::parse(&word)?
+        Spacing::parse(&word).py()?
     } else {
         let mm = spacing
             .extract::<f64>()
-            .map_err(|_| Error::invalid("spacing", "expected 'auto', a spacing in mm or None"))?;
+            .map_err(|_| Error::invalid("spacing", "expected 'auto', a spacing in mm or None"))
+            .py()?;
         Spacing::Fixed(mm)
     };
     let options = MatchOptions {
-        jacobian: Jacobian::parse(jacobian)?,
-        method: GeodesicMethod::parse(method)?,
+        jacobian: Jacobian::parse(jacobian).py()?,
+        method: GeodesicMethod::parse(method).py()?,
         max_iterations: count("max_iterations", max_iterations)?,
         tolerance,
     };

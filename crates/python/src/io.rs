@@ -1,8 +1,9 @@
-//! Bindings of `crate::io`: one reader and one writer for point and mesh files, and APT/CL
+//! Bindings of `machscan_core::io`: one reader and one writer for point and mesh files, and APT/CL
 //! toolpaths. The Python layer (`machscan.io`) turns the arrays into `CloudFile`,
 //! `TriangleMesh` and `Toolpath` objects.
 use super::convert::{count, enter, to_numpy, triangle_indices, Dim, F64Array};
-use crate::io::{CloudRef, Dtype, FileFormat, TextColumns, WriteOptions};
+use super::error::IntoPy;
+use machscan_core::io::{CloudRef, Dtype, FileFormat, TextColumns, WriteOptions};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -22,7 +23,7 @@ fn read_cloud<'py>(
     columns: (i64, i64, i64),
 ) -> PyResult<Bound<'py, PyDict>> {
     let columns = [count("columns", columns.0)?, count("columns", columns.1)?, count("columns", columns.2)?];
-    let file = enter(py, || crate::io::read_file(&path, TextColumns { delimiter, columns }))?;
+    let file = enter(py, || machscan_core::io::read_file(&path, TextColumns { delimiter, columns }))?;
     let n = file.points.len() / 3;
     let d = PyDict::new(py);
     d.set_item("points", to_numpy(py, file.points, &[n, 3])?)?;
@@ -62,8 +63,8 @@ fn write_cloud(
     dtype: Option<&str>,
 ) -> PyResult<()> {
     // The extension first: a wrong one is the first thing to say.
-    FileFormat::of(&path, true)?;
-    let dtype = dtype.map(Dtype::parse).transpose()?;
+    FileFormat::of(&path, true).py()?;
+    let dtype = dtype.map(Dtype::parse).transpose().py()?;
     let pts = F64Array::points(points, "points")?;
     let n = pts.shape()[0];
     let nrm = F64Array::extract_opt(normals, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
@@ -87,7 +88,7 @@ fn write_cloud(
         triangles: tri.as_deref(),
     };
     let options = WriteOptions { binary, compressed, dtype };
-    enter(py, || crate::io::write_file(&path, &data, options))
+    enter(py, || machscan_core::io::write_file(&path, &data, options))
 }
 
 /// The extensions ``machscan.io.read`` reads, e.g. ``("ply", "pcd", ...)``.
@@ -106,7 +107,7 @@ fn writable_formats() -> Vec<&'static str> {
 /// RAPID); ``machscan.io.read_toolpath`` wraps the ``ToolpathArrays`` this returns.
 #[pyfunction]
 fn read_toolpath<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
-    let tp = enter(py, || crate::io::read_apt(&path))?;
+    let tp = enter(py, || machscan_core::io::read_apt(&path))?;
     let n = tp.segments.len();
     let d = PyDict::new(py);
     d.set_item("points", to_numpy(py, tp.points, &[n, 3])?)?;
@@ -139,7 +140,7 @@ fn write_toolpath(
         f.as_ref().map(|x| x.values()).transpose()?,
         s.as_ref().map(|x| x.values()).transpose()?,
     );
-    enter(py, || crate::io::write_apt(&path, ps, av, fv, sv))
+    enter(py, || machscan_core::io::write_apt(&path, ps, av, fv, sv))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -1,10 +1,11 @@
-//! Bindings of `crate::cloud`: filters, normals, curvature, simplification. Every filter takes
+//! Bindings of `machscan_core::cloud`: filters, normals, curvature, simplification. Every filter takes
 //! the cloud first and returns the kept indices, so attributes (normals, scalars, frame
 //! numbers) are carried along with `array[indices]`.
 use super::convert::{
     count, count_opt, enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array,
 };
-use crate::cloud::{NeighborSpace, Neighborhood, OctreeOptions, Orientation};
+use super::error::IntoPy;
+use machscan_core::cloud::{NeighborSpace, Neighborhood, OctreeOptions, Orientation};
 use pyo3::prelude::*;
 
 fn neighborhood(k: usize, radius: Option<f64>) -> Neighborhood {
@@ -52,7 +53,7 @@ fn voxel_downsample<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let arr = F64Array::points(points, "points")?;
     let pts = arr.rows::<3>()?;
-    let g = enter(py, || crate::cloud::voxel_downsample(pts, voxel_size))?;
+    let g = enter(py, || machscan_core::cloud::voxel_downsample(pts, voxel_size))?;
     let c = points_to_numpy(py, g.centroids)?;
     if !return_index {
         return Ok(c);
@@ -84,7 +85,7 @@ fn remove_statistical_outliers<'py>(
     let k = count("k", k)?;
     let arr = F64Array::points(points, "points")?;
     let pts = arr.rows::<3>()?;
-    indices_to_numpy(py, enter(py, || crate::cloud::remove_statistical_outliers(pts, k, std_ratio))?)
+    indices_to_numpy(py, enter(py, || machscan_core::cloud::remove_statistical_outliers(pts, k, std_ratio))?)
 }
 
 /// Radius outlier removal (Open3D's ``remove_radius_outlier(nb_points=min_neighbors,
@@ -108,7 +109,7 @@ fn remove_radius_outliers<'py>(
     let min_neighbors = count("min_neighbors", min_neighbors)?;
     let arr = F64Array::points(points, "points")?;
     let pts = arr.rows::<3>()?;
-    indices_to_numpy(py, enter(py, || crate::cloud::remove_radius_outliers(pts, radius, min_neighbors))?)
+    indices_to_numpy(py, enter(py, || machscan_core::cloud::remove_radius_outliers(pts, radius, min_neighbors))?)
 }
 
 /// Duplicate-point removal (paper 004): in point order, each point not yet removed removes every
@@ -118,7 +119,7 @@ fn remove_radius_outliers<'py>(
 fn remove_duplicates<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, tolerance: f64) -> PyResult<Bound<'py, PyAny>> {
     let arr = F64Array::points(points, "points")?;
     let pts = arr.rows::<3>()?;
-    indices_to_numpy(py, enter(py, || crate::cloud::remove_duplicates(pts, tolerance))?)
+    indices_to_numpy(py, enter(py, || machscan_core::cloud::remove_duplicates(pts, tolerance))?)
 }
 
 /// Indices of the points inside the box ``[min_bound, max_bound]`` (bounds included): crop box /
@@ -134,7 +135,7 @@ fn crop_box<'py>(
     let lo = f64_vector::<3>(min_bound, "min_bound", "(x, y, z) in mm")?;
     let hi = f64_vector::<3>(max_bound, "max_bound", "(x, y, z) in mm")?;
     let pts = arr.rows::<3>()?;
-    indices_to_numpy(py, enter(py, || crate::cloud::crop_box(pts, lo, hi))?)
+    indices_to_numpy(py, enter(py, || machscan_core::cloud::crop_box(pts, lo, hi))?)
 }
 
 /// ``count`` points of ``points`` drawn at random without replacement, reproducibly from
@@ -153,7 +154,7 @@ fn random_downsample<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let (how_many, seed) = (self::count("count", count)?, self::count("seed", seed)?);
     let n = F64Array::points(points, "points")?.shape()[0];
-    indices_to_numpy(py, enter(py, || Ok(crate::cloud::random_downsample(n, how_many, seed as u64)))?)
+    indices_to_numpy(py, enter(py, || Ok(machscan_core::cloud::random_downsample(n, how_many, seed as u64)))?)
 }
 
 /// Every ``every_k``-th point of ``points`` from the first (Open3D's ``uniform_down_sample``);
@@ -166,7 +167,7 @@ fn random_downsample<'py>(
 fn uniform_downsample<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, every_k: i64) -> PyResult<Bound<'py, PyAny>> {
     let every_k = count("every_k", every_k)?;
     let n = F64Array::points(points, "points")?.shape()[0];
-    indices_to_numpy(py, enter(py, || crate::cloud::uniform_downsample(n, every_k))?)
+    indices_to_numpy(py, enter(py, || machscan_core::cloud::uniform_downsample(n, every_k))?)
 }
 
 /// PCA normals (SPEC F): the eigenvector of the smallest eigenvalue of each point's
@@ -196,10 +197,11 @@ fn estimate_normals<'py>(
     let k = count("k", k)?;
     let towards = f64_vector_opt::<3>(towards, "towards", "(x, y, z) in mm")?;
     let along = f64_vector_opt::<3>(along, "along", "(x, y, z)")?;
-    let orientation = Orientation::from_options(towards, along, consistent)?;
+    let orientation = Orientation::from_options(towards, along, consistent).py()?;
     let arr = F64Array::points(points, "points")?;
     let pts = arr.rows::<3>()?;
-    let normals = enter(py, || crate::cloud::estimate_oriented_normals(pts, neighborhood(k, radius), orientation))?;
+    let normals =
+        enter(py, || machscan_core::cloud::estimate_oriented_normals(pts, neighborhood(k, radius), orientation))?;
     points_to_numpy(py, normals)
 }
 
@@ -216,7 +218,7 @@ fn surface_variation<'py>(
     let k = count("k", k)?;
     let arr = F64Array::points(points, "points")?;
     let pts = arr.rows::<3>()?;
-    let (_, var, _) = enter(py, || crate::cloud::estimate_normals(pts, neighborhood(k, radius)))?;
+    let (_, var, _) = enter(py, || machscan_core::cloud::estimate_normals(pts, neighborhood(k, radius)))?;
     let n = var.len();
     to_numpy(py, var, &[n])
 }
@@ -260,11 +262,11 @@ fn principal_curvatures<'py>(
         let nrm = match given {
             Some(g) => g,
             None => {
-                estimated = crate::cloud::estimate_normals(pts, nbh)?.0;
+                estimated = machscan_core::cloud::estimate_normals(pts, nbh)?.0;
                 &estimated[..]
             }
         };
-        crate::cloud::principal_curvatures(pts, nrm, nbh)
+        machscan_core::cloud::principal_curvatures(pts, nrm, nbh)
     })?;
     let curv: Vec<f64> = res.iter().flat_map(|r| r.0).collect();
     let dirs: Vec<f64> = res.iter().flat_map(|r| r.1.into_iter().flatten()).collect();
@@ -331,12 +333,12 @@ fn octree_simplify<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let (k, eps1, eps2, refine) =
         (count("k", k)?, count_opt("eps1", eps1)?, count_opt("eps2", eps2)?, count("refine", refine)?);
-    let neighbors = NeighborSpace::parse(neighbors)?;
+    let neighbors = NeighborSpace::parse(neighbors).py()?;
     let arr = F64Array::points(points, "points")?;
     let given = normals_arg(normals, arr.shape()[0])?;
     let (pts, given) = (arr.rows::<3>()?, given.as_ref().map(|a| a.rows::<3>()).transpose()?);
     let opts = OctreeOptions { d_min, k, eps1, eps2, neighbors, refine, feature_threshold };
-    indices_to_numpy(py, enter(py, || crate::cloud::octree_simplify(pts, given, &opts))?)
+    indices_to_numpy(py, enter(py, || machscan_core::cloud::octree_simplify(pts, given, &opts))?)
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

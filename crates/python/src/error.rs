@@ -1,11 +1,12 @@
-//! The one mapping from core errors to Python exceptions.
+//! The one mapping from core errors to Python exceptions (`to_py`; `.py()` on a core result).
+//! A function, not `From<Error> for PyErr`: the orphan rule forbids that impl outside both crates.
 //!
 //! - `Shape`, `Invalid` → `ValueError` naming the argument;
 //! - `Io` → the `OSError` subclass for its kind (`FileNotFoundError`, `PermissionError`,
 //!   `IsADirectoryError`, ...), built as Python builds its own: `(errno, strerror, filename)`,
 //!   so `.errno` and `.filename` are set;
 //! - `Format` → `machscan.io.FileFormatError`, a `ValueError` subclass naming the file.
-use crate::error::Error;
+use machscan_core::Error;
 use pyo3::exceptions::{
     PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyNotADirectoryError, PyOSError, PyPermissionError,
     PyValueError,
@@ -21,8 +22,20 @@ pyo3::create_exception!(
 there is, a number that is not one, ...). A ``ValueError``; ``filename`` names the file."
 );
 
-impl From<Error> for PyErr {
-    fn from(e: Error) -> PyErr {
+/// A core result as a Python one: `kernel(...).py()?`.
+pub trait IntoPy<T> {
+    fn py(self) -> PyResult<T>;
+}
+
+impl<T> IntoPy<T> for machscan_core::Result<T> {
+    fn py(self) -> PyResult<T> {
+        self.map_err(to_py)
+    }
+}
+
+/// The Python exception for a core error.
+pub fn to_py(e: Error) -> PyErr {
+    {
         match e {
             Error::Shape { .. } | Error::Invalid { .. } => PyValueError::new_err(e.to_string()),
             Error::Io { ref path, kind, errno, ref message, .. } => {

@@ -1,6 +1,6 @@
 //! The one error type of the core. Every variant carries the name of the argument (or file)
 //! at fault, so the Python layer can raise a message a plant engineer understands. The mapping
-//! to Python exceptions is in one place: `python::error`.
+//! to Python exceptions is in one place: the extension crate's `error.rs`.
 use std::path::Path;
 use thiserror::Error;
 

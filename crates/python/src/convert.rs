@@ -5,7 +5,7 @@
 //!    Dask workers), copies it only when it is not already aligned, C-contiguous float64, and
 //!    checks its shape, naming the argument, the expected and the actual shape;
 //! 2. **enter** — `enter` runs the kernel with the GIL released, maps its error to the Python
-//!    exception once (`python::error`) and lets a Ctrl-C pressed meanwhile through;
+//!    exception once (`error.rs`) and lets a Ctrl-C pressed meanwhile through;
 //! 3. **return** — `to_numpy` hands the kernel's `Vec` to NumPy without a copy.
 //!
 //! Value checks (finite, positive, in range) are the core's, so they hold for Rust callers too.
@@ -14,6 +14,8 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::PyDict;
+
+use super::error::IntoPy;
 use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 
@@ -22,7 +24,7 @@ use std::sync::{Arc, Mutex};
 /// `KeyboardInterrupt` when Ctrl-C was pressed while it ran.
 pub fn enter<T, F>(py: Python<'_>, kernel: F) -> PyResult<T>
 where
-    F: FnOnce() -> crate::Result<T> + Send,
+    F: FnOnce() -> machscan_core::Result<T> + Send,
     T: Send,
 {
     let out = match limited_pool()? {
@@ -30,7 +32,7 @@ where
         None => py.detach(kernel),
     };
     py.check_signals()?;
-    Ok(out?)
+    out.py()
 }
 
 /// The largest thread limit taken: far beyond any machine's cores, short of a typo's millions.

@@ -1,16 +1,17 @@
-//! Bindings of `crate::toolpath`.
+//! Bindings of `machscan_core::toolpath`.
 use super::convert::{
     count, enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array,
 };
+use super::error::IntoPy;
 use super::mesh::surface;
-use crate::mesh::{surface_mesh, Spacing};
-use crate::toolpath::bead_chain::{bead_chain as run_bead_chain, Chain};
-use crate::toolpath::grinding::{
+use machscan_core::mesh::{surface_mesh, Spacing};
+use machscan_core::toolpath::bead_chain::{bead_chain as run_bead_chain, Chain};
+use machscan_core::toolpath::grinding::{
     grinding_paths as run_grinding_paths, simulate_removal as run_simulate_removal, GrindingOptions, RemovalModel,
     Stock,
 };
-use crate::toolpath::scallop::{scallop_height, step_over};
-use crate::toolpath::{compensate_toolpath as run_compensate, CompensateOptions, Interpolation, Normals};
+use machscan_core::toolpath::scallop::{scallop_height, step_over};
+use machscan_core::toolpath::{compensate_toolpath as run_compensate, CompensateOptions, Interpolation, Normals};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -51,8 +52,8 @@ fn compensate_toolpath<'py>(
     let am = F64Array::points(actual_matching, "actual_matching")?;
     let (ap, af) = surface(actual_points, actual_faces, "actual_surface")?;
     let options = CompensateOptions {
-        interpolation: Interpolation::parse(interpolation)?,
-        normals: Normals::parse(normals)?,
+        interpolation: Interpolation::parse(interpolation).py()?,
+        normals: Normals::parse(normals).py()?,
         radius,
     };
     let (tmr, amr, apr) = (tm.rows::<3>()?, am.rows::<3>()?, ap.rows::<3>()?);
@@ -80,7 +81,7 @@ fn elementwise<'py>(
     b: &Bound<'py, PyAny>,
     c: &Bound<'py, PyAny>,
     names: [&str; 3],
-    f: fn(f64, f64, f64) -> crate::Result<f64>,
+    f: fn(f64, f64, f64) -> machscan_core::Result<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let [a, b, c] = [(a, names[0]), (b, names[1]), (c, names[2])]
         .map(|(x, name)| F64Array::extract(x, name, &[Dim::Any("N")], "(broadcast by machscan)"));
@@ -91,13 +92,13 @@ fn elementwise<'py>(
         (0..n)
             .map(|i| {
                 f(a[i], b[i], c[i]).map_err(|e| match e {
-                    crate::Error::Invalid { name, reason } if n > 1 => {
-                        crate::Error::invalid(&name, format!("element {i}: {reason}"))
+                    machscan_core::Error::Invalid { name, reason } if n > 1 => {
+                        machscan_core::Error::invalid(&name, format!("element {i}: {reason}"))
                     }
                     other => other,
                 })
             })
-            .collect::<crate::Result<Vec<f64>>>()
+            .collect::<machscan_core::Result<Vec<f64>>>()
     })?;
     to_numpy(py, out, &[n])
 }
@@ -145,7 +146,7 @@ fn bead_chain<'py>(
     let p = F64Array::points(points, "points")?;
     let start = f64_vector_opt::<3>(start, "start", "(a point x, y, z)")?;
     let direction = f64_vector_opt::<3>(direction, "direction", "(a vector)")?;
-    let method = Chain::parse(method)?;
+    let method = Chain::parse(method).py()?;
     let pr = p.rows::<3>()?;
     let r = enter(py, || run_bead_chain(pr, start, direction, method))?;
     let d = PyDict::new(py);
@@ -157,7 +158,7 @@ fn bead_chain<'py>(
 /// The removal model's parameters as ``machscan.RemovalModel`` hands them over.
 type RemovalArgs = (f64, [f64; 3], f64, f64, [f64; 2]);
 
-fn removal_model(args: RemovalArgs) -> crate::Result<RemovalModel> {
+fn removal_model(args: RemovalArgs) -> machscan_core::Result<RemovalModel> {
     let (c, exponents, belt_speed, force, feed_limits) = args;
     RemovalModel::new(c, exponents, belt_speed, force, feed_limits)
 }
@@ -229,13 +230,13 @@ fn under_model<'py>(
     values: &Bound<'py, PyAny>,
     name: &str,
     removal: RemovalArgs,
-    f: fn(&RemovalModel, f64) -> crate::Result<f64>,
+    f: fn(&RemovalModel, f64) -> machscan_core::Result<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let v = column(values, name)?;
     let vv = v.values()?;
     let out = enter(py, || {
         let model = removal_model(removal)?;
-        vv.iter().map(|&x| f(&model, x)).collect::<crate::Result<Vec<f64>>>()
+        vv.iter().map(|&x| f(&model, x)).collect::<machscan_core::Result<Vec<f64>>>()
     })?;
     to_numpy(py, out, &[vv.len()])
 }
@@ -261,7 +262,7 @@ fn removal_depths<'py>(
         if feed.is_finite() && feed > 0.0 {
             Ok(model.removal(feed))
         } else {
-            Err(crate::Error::invalid("feed", format!("must be positive and finite, got {feed}")))
+            Err(machscan_core::Error::invalid("feed", format!("must be positive and finite, got {feed}")))
         }
     })
 }
@@ -303,7 +304,7 @@ fn simulate_removal<'py>(
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add("GRINDING_FEED_STEP", crate::toolpath::grinding::DEFAULT_FEED_STEP)?;
+    m.add("GRINDING_FEED_STEP", machscan_core::toolpath::grinding::DEFAULT_FEED_STEP)?;
     m.add_function(wrap_pyfunction!(grinding_paths, m)?)?;
     m.add_function(wrap_pyfunction!(removal_feeds, m)?)?;
     m.add_function(wrap_pyfunction!(removal_depths, m)?)?;
