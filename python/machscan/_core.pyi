@@ -276,6 +276,14 @@ class _ContourErrorArrays(TypedDict):
     std: float
     max: float
 
+class _BendingSurfaceArrays(TypedDict):
+    degree: int
+    exponents: _I64
+    coefficients: _F64
+    center: _F64
+    scale: float
+    rms_residual: float
+
 # ---- kinematics -------------------------------------------------------------------------------
 
 def valid_readings(
@@ -984,7 +992,25 @@ def match_contours(
     >>> idx = machscan.match_contours(actual_centroids, cad_centroids, max_distance=10.0)
     """
 
+def fit_bending_surface(x: ArrayLike, y: ArrayLike, dz: ArrayLike, *, degree: int) -> _BendingSurfaceArrays:
+    """The bending surface of the error decomposition (SPEC C6), fitted in the core; the
+    ``_BendingSurfaceArrays`` keys (private: ``inspect_grooves`` wraps it in ``Decomposition``).
+    """
+def bending_surface_at(
+    exponents: ArrayLike, coefficients: ArrayLike, center: ArrayLike, scale: float, x: ArrayLike, y: ArrayLike
+) -> _F64:
+    """B(x, y) of a bending surface from ``fit_bending_surface``'s arrays, mm (private)."""
+
 # ---- cloud ------------------------------------------------------------------------------------
+
+def voxel_origin(lo: ArrayLike, hi: ArrayLike, *, voxel_size: float) -> _F64:
+    """The voxel grid's origin over the bounds ``lo``, ``hi`` (mm), checked to fit the keys:
+    machscan.dask places its chunks' voxels with the in-memory grid (private).
+    """
+def voxel_keys(points: ArrayLike, origin: ArrayLike, *, voxel_size: float) -> tuple[_I64, _I64]:
+    """The voxel keys and (i, j, k) indices of points within the grid of ``origin`` (from
+    ``voxel_origin``), as ``voxel_downsample`` keys them (private).
+    """
 
 @overload
 def voxel_downsample(points: ArrayLike, voxel_size: float, *, return_index: Literal[False] = False) -> _F64:

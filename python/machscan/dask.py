@@ -47,6 +47,7 @@ try:
 except ImportError as exc:  # pragma: no cover - exercised only without the extra
     raise ImportError("machscan.dask needs Dask: pip install 'machscan[dask]'") from exc
 
+from machscan import _core
 from machscan import grooves as _grooves
 from machscan import kinematics as _kinematics
 from machscan import progress as _progress
@@ -280,18 +281,13 @@ def scan_to_wcs(
 
 # ---- voxel grid ------------------------------------------------------------------------------
 
-#: Voxel indices per axis the in-memory grid packs into its keys (machscan.voxel_downsample).
-_MAX_VOXELS = 1 << 21
-
-
 def _voxel_split(points: np.ndarray, first: int, origin: np.ndarray, voxel: float, partitions: int) -> list[tuple]:
     """One chunk's points as `partitions` groups by voxel key: (keys, global indices, points)."""
     bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
     if bad.size:
         raise ValueError(f"points: point {first + int(bad[0])} is not finite ({points[bad[0]].tolist()})")
-    # The in-memory grid's arithmetic, element for element: floor((p − origin) / voxel).
-    ijk = np.floor((points - origin) / voxel).astype(np.int64)
-    keys = (ijk[:, 0] << 42) | (ijk[:, 1] << 21) | ijk[:, 2]
+    # The in-memory grid's keys, from the core that makes them.
+    keys, ijk = _core.voxel_keys(points, origin, voxel_size=voxel)
     # A spatial hash of the three indices spreads a flat part's voxels (one z index) over the groups.
     group = ((ijk[:, 0] * 73856093) ^ (ijk[:, 1] * 19349663) ^ (ijk[:, 2] * 83492791)) % partitions
     index = np.arange(first, first + len(points), dtype=np.int64)
@@ -326,13 +322,7 @@ def _bounds(points: da.Array) -> tuple[da.Array, da.Array]:
 
 
 def _origin(lo: np.ndarray, hi: np.ndarray, voxel: float) -> np.ndarray:
-    origin = lo - 0.5 * voxel
-    extent = np.floor((hi - origin) / voxel) + 1
-    if extent.max() >= _MAX_VOXELS:
-        raise ValueError(
-            f"voxel_size: {voxel} mm over a cloud {float((hi - lo).max()):.6f} mm across makes more than 2^21 voxels per axis"
-        )
-    return origin
+    return _core.voxel_origin(lo, hi, voxel_size=voxel)
 
 
 def voxel_downsample(points: Any, voxel_size: float, *, partitions: int | None = None) -> da.Array:

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from machscan import _core
 from machscan._core import euclidean_clusters, match_contours, nearest_neighbors
 from machscan.contours import ACTUAL_SPACING, CAD_SPACING, ContourErrorResult, contour_error, resample_cad
 from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
@@ -351,28 +352,10 @@ def _cell(v: object) -> str | int:
 # ---- the bending surface ------------------------------------------------------------------
 
 
-def _exponents(degree: int) -> NDArray[np.int64]:
-    return np.array([(i, j) for i in range(degree + 1) for j in range(degree + 1 - i)], dtype=np.int64)
-
-
 def _poly_eval(exponents, coefficients, x, y, center, scale):
-    u, v = (x - center[0]) / scale, (y - center[1]) / scale
-    out = np.zeros(np.broadcast(u, v).shape)
-    for (i, j), c in zip(exponents, coefficients):
-        out += c * u**i * v**j
-    return out
-
-
-def _fit_bending(x, y, dz, degree):
-    """Least-squares polynomial B(x, y) of total degree ``degree`` to height deviations ``dz``."""
-    center = np.array([x.mean(), y.mean()])
-    scale = float(max(np.ptp(x), np.ptp(y), 1e-9) / 2)
-    ex = _exponents(degree)
-    u, v = (x - center[0]) / scale, (y - center[1]) / scale
-    a = np.column_stack([u**i * v**j for i, j in ex])
-    coef, *_ = np.linalg.lstsq(a, dz, rcond=None)
-    resid = dz - a @ coef
-    return ex, coef, center, scale, float(np.sqrt(np.mean(resid**2)))
+    """B(x, y) of the bending surface, from the core (any matching shapes of x and y)."""
+    x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
+    return _core.bending_surface_at(exponents, coefficients, center, scale, x.ravel(), y.ravel()).reshape(x.shape)
 
 
 # ---- the workflow -------------------------------------------------------------------------
@@ -558,10 +541,9 @@ def inspect_grooves(
             xs.append(q[:, 0])
             ys.append(q[:, 1])
         xs_a, ys_a, dz = np.concatenate(xs), np.concatenate(ys), np.concatenate(dz_parts)
-        degree = int(bending_degree)
-        while degree > 0 and len(dz) < 3 * len(_exponents(degree)):
-            degree -= 1
-        ex, coef, bend_center, scale, resid = _fit_bending(xs_a, ys_a, dz, degree)
+        surface = _core.fit_bending_surface(xs_a, ys_a, dz, degree=int(bending_degree))
+        ex, coef, bend_center = surface["exponents"], surface["coefficients"], surface["center"]
+        degree, scale, resid = surface["degree"], surface["scale"], surface["rms_residual"]
         totals = np.zeros(3)
         count = 0
         for m, c in sorted(pairs):

@@ -79,7 +79,7 @@ fn normals_orientation_and_curvature(#[case] threads: usize) {
             Orientation::Unoriented,
         )
         .unwrap();
-        let curv = cloud::principal_curvatures(&pts, &consistent, Neighborhood::Knn(20)).unwrap();
+        let curv = cloud::principal_curvatures(&pts, Some(&consistent), Neighborhood::Knn(20)).unwrap();
         (bits(&consistent), bits(&hybrid), curv.iter().map(|c| c.0.map(f64::to_bits)).collect::<Vec<_>>())
     });
     assert_eq!(a, b);

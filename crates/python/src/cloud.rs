@@ -5,8 +5,9 @@ use super::convert::{
     count, count_opt, enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array,
 };
 use super::error::IntoPy;
-use machscan_core::cloud::{NeighborSpace, Neighborhood, OctreeOptions, Orientation};
+use machscan_core::cloud::{NeighborSpace, Neighborhood, OctreeOptions, Orientation, VoxelFrame};
 use pyo3::prelude::*;
+use rayon::prelude::*;
 
 fn neighborhood(k: usize, radius: Option<f64>) -> Neighborhood {
     match radius {
@@ -18,6 +19,42 @@ fn neighborhood(k: usize, radius: Option<f64>) -> Neighborhood {
 /// Optional normals `(N, 3)` matching `n` points.
 fn normals_arg<'py>(obj: Option<&Bound<'py, PyAny>>, n: usize) -> PyResult<Option<F64Array<'py>>> {
     F64Array::extract_opt(obj, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")
+}
+
+/// The voxel grid's origin over the bounds ``lo``, ``hi`` (mm), checked to fit the keys:
+/// machscan.dask places its chunks' voxels with the in-memory grid (private).
+#[pyfunction]
+#[pyo3(signature = (lo, hi, *, voxel_size))]
+fn voxel_origin<'py>(
+    py: Python<'py>,
+    lo: &Bound<'py, PyAny>,
+    hi: &Bound<'py, PyAny>,
+    voxel_size: f64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let lo = f64_vector::<3>(lo, "lo", "(x, y, z) in mm")?;
+    let hi = f64_vector::<3>(hi, "hi", "(x, y, z) in mm")?;
+    let grid = VoxelFrame::new(lo, hi, voxel_size).py()?;
+    to_numpy(py, grid.origin.to_vec(), &[3])
+}
+
+/// The voxel keys and (i, j, k) indices of points within the grid of ``origin`` (from
+/// ``voxel_origin``), as ``voxel_downsample`` keys them (private).
+#[pyfunction]
+#[pyo3(signature = (points, origin, *, voxel_size))]
+fn voxel_keys<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    origin: &Bound<'py, PyAny>,
+    voxel_size: f64,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let origin = f64_vector::<3>(origin, "origin", "(x, y, z) in mm")?;
+    let arr = F64Array::points(points, "points")?;
+    let pts = arr.rows::<3>()?;
+    let grid = VoxelFrame { origin, voxel: voxel_size };
+    let (keys, ijk): (Vec<i64>, Vec<[i64; 3]>) =
+        enter(py, || Ok(pts.par_iter().map(|p| (grid.key(p) as i64, grid.index(p).map(|i| i as i64))).unzip()))?;
+    let n = keys.len();
+    Ok((to_numpy(py, keys, &[n])?, to_numpy(py, ijk.into_flattened(), &[n, 3])?))
 }
 
 /// Voxel grid: every occupied voxel replaced by the centroid of its points (Open3D's
@@ -257,17 +294,7 @@ fn principal_curvatures<'py>(
     let given = normals_arg(normals, n)?;
     let (pts, given) = (arr.rows::<3>()?, given.as_ref().map(|a| a.rows::<3>()).transpose()?);
     let nbh = neighborhood(k, radius);
-    let res = enter(py, || {
-        let estimated;
-        let nrm = match given {
-            Some(g) => g,
-            None => {
-                estimated = machscan_core::cloud::estimate_normals(pts, nbh)?.0;
-                &estimated[..]
-            }
-        };
-        machscan_core::cloud::principal_curvatures(pts, nrm, nbh)
-    })?;
+    let res = enter(py, || machscan_core::cloud::principal_curvatures(pts, given, nbh))?;
     let curv: Vec<f64> = res.iter().flat_map(|r| r.0).collect();
     let dirs: Vec<f64> = res.iter().flat_map(|r| r.1.into_iter().flatten()).collect();
     Ok((to_numpy(py, curv, &[n, 2])?, to_numpy(py, dirs, &[n, 2, 3])?))
@@ -347,6 +374,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(surface_variation, m)?)?;
     m.add_function(wrap_pyfunction!(principal_curvatures, m)?)?;
     m.add_function(wrap_pyfunction!(voxel_downsample, m)?)?;
+    m.add_function(wrap_pyfunction!(voxel_origin, m)?)?;
+    m.add_function(wrap_pyfunction!(voxel_keys, m)?)?;
     m.add_function(wrap_pyfunction!(remove_statistical_outliers, m)?)?;
     m.add_function(wrap_pyfunction!(remove_radius_outliers, m)?)?;
     m.add_function(wrap_pyfunction!(remove_duplicates, m)?)?;

@@ -1,5 +1,6 @@
 //! Bindings of `machscan_core::contour`.
-use super::convert::{enter, indices_to_numpy, points_to_numpy, to_numpy, F64Array};
+use super::convert::{count, enter, f64_vector, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array};
+use machscan_core::contour::BendingSurface;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -82,9 +83,79 @@ fn match_contours<'py>(
     to_numpy(py, out.into_iter().map(|o| o.map_or(-1, |v| v as i64)).collect::<Vec<_>>(), &[n])
 }
 
+/// A flat float64 argument of `n` values (any array-like).
+fn values<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<F64Array<'py>> {
+    F64Array::extract(obj, name, &[Dim::Any("N")], "")
+}
+
+/// The bending surface of the error decomposition (SPEC C6), fitted in the core; the
+/// ``_BendingSurfaceArrays`` keys (private: ``inspect_grooves`` wraps it in ``Decomposition``).
+#[pyfunction]
+#[pyo3(signature = (x, y, dz, *, degree))]
+fn fit_bending_surface<'py>(
+    py: Python<'py>,
+    x: &Bound<'py, PyAny>,
+    y: &Bound<'py, PyAny>,
+    dz: &Bound<'py, PyAny>,
+    degree: i64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let degree = count("degree", degree)?;
+    let (xa, ya, za) = (values(x, "x")?, values(y, "y")?, values(dz, "dz")?);
+    let (xv, yv, zv) = (xa.values()?, ya.values()?, za.values()?);
+    let b = enter(py, || BendingSurface::fit(xv, yv, zv, degree))?;
+    let terms = b.exponents.len();
+    let d = PyDict::new(py);
+    d.set_item("degree", b.degree)?;
+    d.set_item("exponents", to_numpy(py, b.exponents.iter().flatten().map(|&e| e as i64).collect(), &[terms, 2])?)?;
+    d.set_item("coefficients", to_numpy(py, b.coefficients, &[terms])?)?;
+    d.set_item("center", to_numpy(py, b.center.to_vec(), &[2])?)?;
+    d.set_item("scale", b.scale)?;
+    d.set_item("rms_residual", b.rms_residual)?;
+    Ok(d)
+}
+
+/// B(x, y) of a bending surface from ``fit_bending_surface``'s arrays, mm (private).
+#[pyfunction]
+#[pyo3(signature = (exponents, coefficients, center, scale, x, y))]
+fn bending_surface_at<'py>(
+    py: Python<'py>,
+    exponents: &Bound<'py, PyAny>,
+    coefficients: &Bound<'py, PyAny>,
+    center: &Bound<'py, PyAny>,
+    scale: f64,
+    x: &Bound<'py, PyAny>,
+    y: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let c = values(coefficients, "coefficients")?;
+    let e = F64Array::extract(exponents, "exponents", &[Dim::Is(c.shape()[0]), Dim::Is(2)], "(i, j) per coefficient")?;
+    let exponents = e.rows::<2>()?.iter().map(|&[i, j]| [i as u32, j as u32]).collect();
+    let center = f64_vector::<2>(center, "center", "(x, y) in mm")?;
+    let b = BendingSurface {
+        degree: 0,
+        exponents,
+        coefficients: c.values()?.to_vec(),
+        center,
+        scale,
+        rms_residual: f64::NAN,
+    };
+    let (xa, ya) = (values(x, "x")?, values(y, "y")?);
+    let (xv, yv) = (xa.values()?, ya.values()?);
+    if xv.len() != yv.len() {
+        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "y: expected shape ({},) as x, got ({},)",
+            xv.len(),
+            yv.len()
+        )));
+    }
+    let out: Vec<f64> = xv.iter().zip(yv).map(|(&x, &y)| b.at(x, y)).collect();
+    to_numpy(py, out, &[xv.len()])
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(contour_error, m)?)?;
     m.add_function(wrap_pyfunction!(resample_polyline, m)?)?;
     m.add_function(wrap_pyfunction!(match_contours, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_bending_surface, m)?)?;
+    m.add_function(wrap_pyfunction!(bending_surface_at, m)?)?;
     Ok(())
 }

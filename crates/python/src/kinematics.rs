@@ -1,11 +1,10 @@
 //! Bindings of `machscan_core::kinematics`: profiler frames, machine chains, pose timing, calibration.
 use super::convert::{count, enter, f64_vector, f64_vector_opt, points_to_numpy, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
-use machscan_core::geom::Axis;
-use machscan_core::kinematics::{self as kin, AngleSource, KinematicChain, Profiler, Step, VENDOR_SENTINEL};
+use machscan_core::kinematics::{self as kin, KinematicChain, Profiler, Step, StepArg, VENDOR_SENTINEL};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyTuple};
+use pyo3::types::{PyBool, PyDict, PyList, PySequence, PyTuple};
 
 const AC_HEAD_AXES: &str = "with columns X, Y, Z, A, C, C2 (mm, rad)";
 
@@ -408,62 +407,47 @@ pub struct PyKinematicChain {
     inner: KinematicChain,
 }
 
-fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<Step> {
-    let bad = |why: String| PyValueError::new_err(format!("steps: step {k}: {why}"));
-    let tup = item.cast::<PyTuple>().map_err(|_| bad("must be a tuple like (\"rotate\", \"z\", 0.5)".into()))?;
-    if tup.is_empty() {
-        return Err(bad("empty tuple".into()));
+/// A step's argument as the core's `StepArg`: numbers (and arrays of them) as numbers, text as
+/// text, None as None, other sequences item by item; what they mean is `Step::parse`'s.
+fn step_arg(o: &Bound<'_, PyAny>) -> PyResult<StepArg> {
+    if o.is_none() {
+        return Ok(StepArg::None);
     }
-    let kind: String =
-        tup.get_item(0)?.extract().map_err(|_| bad("the first item must be the step kind (str)".into()))?;
-    let arg = |i: usize| tup.get_item(i).map_err(|_| bad(format!("\"{kind}\" needs {} arguments", i)));
-    let axis = |o: Bound<'_, PyAny>| -> PyResult<Axis> {
-        let s: String = o.extract().map_err(|_| bad("axis must be \"x\", \"y\" or \"z\"".into()))?;
-        Axis::parse(&s).ok_or_else(|| bad(format!("axis must be \"x\", \"y\" or \"z\", got {s:?}")))
-    };
-    let column = |o: Bound<'_, PyAny>| -> PyResult<usize> {
-        if let Ok(s) = o.extract::<String>() {
-            return names
-                .iter()
-                .position(|n| *n == s)
-                .ok_or_else(|| bad(format!("unknown axis name {s:?}; axes are {names:?}")));
+    if let Ok(text) = o.extract::<String>() {
+        return Ok(StepArg::Text(text));
+    }
+    // A bool is not a number here: True as an angle or a column is a mistake, not 1.
+    if o.is_instance_of::<PyBool>() {
+        return Ok(StepArg::Text(o.str()?.to_string()));
+    }
+    if let Ok(x) = o.extract::<f64>() {
+        return Ok(StepArg::Number(x));
+    }
+    let array = o.py().import("numpy")?.call_method1("asarray", (o,));
+    if let Ok(array) = array {
+        let kind: String = array.getattr("dtype")?.getattr("kind")?.extract()?;
+        if matches!(kind.as_str(), "f" | "i" | "u") {
+            let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+            let values: Vec<f64> = array.call_method0("ravel")?.call_method0("tolist")?.extract()?;
+            return Ok(StepArg::Array(values, shape));
         }
-        o.extract::<usize>().map_err(|_| bad("a pose column is an index or an axis name".into()))
-    };
-    Ok(match kind.as_str() {
-        "translate" => Step::Translate(f64_vector::<3>(&arg(1)?, "steps", "translation (x, y, z)")?),
-        "translate_axes" => {
-            let cols: Vec<Option<Bound<'_, PyAny>>> =
-                arg(1)?.extract().map_err(|_| bad("needs three columns (None for 0)".into()))?;
-            if cols.len() != 3 {
-                return Err(bad(format!("needs three columns, got {}", cols.len())));
-            }
-            let mut c = [None; 3];
-            for (i, o) in cols.into_iter().enumerate() {
-                c[i] = match o {
-                    Some(o) if !o.is_none() => Some(column(o)?),
-                    _ => None,
-                };
-            }
-            Step::TranslateAxes(c)
-        }
-        "rotate" => Step::Rotate(
-            axis(arg(1)?)?,
-            AngleSource::Constant(arg(2)?.extract().map_err(|_| bad("angle must be a number (rad)".into()))?),
-        ),
-        "rotate_axis" => Step::Rotate(axis(arg(1)?)?, AngleSource::AxisColumn(column(arg(2)?)?)),
-        "rotation" => {
-            let r = F64Array::extract(&arg(1)?, "steps", &[Dim::Is(3), Dim::Is(3)], "rotation matrix")?;
-            let s = r.values()?;
-            Step::Rotation(nalgebra::Matrix3::from_row_slice(s))
-        }
-        "mirror" => Step::Mirror(f64_vector::<3>(&arg(1)?, "steps", "mirror diagonal (±1, ±1, ±1)")?),
-        other => {
-            return Err(bad(format!(
-                "unknown step kind {other:?}; use translate, translate_axes, rotate, rotate_axis, rotation or mirror"
-            )))
-        }
-    })
+    }
+    match o.cast::<PySequence>() {
+        Ok(seq) => Ok(StepArg::List(seq.try_iter()?.map(|i| step_arg(&i?)).collect::<PyResult<_>>()?)),
+        Err(_) => Ok(StepArg::Text(o.str()?.to_string())),
+    }
+}
+
+/// Step `k` of a chain, a tuple `(kind, *arguments)`; the core parses it.
+fn parse_step(item: &Bound<'_, PyAny>, k: usize, names: &[String]) -> PyResult<Step> {
+    let bad = |why: &str| PyValueError::new_err(format!("steps: step {k}: {why}"));
+    let tup = item.cast::<PyTuple>().map_err(|_| bad("must be a tuple like (\"rotate\", \"z\", 0.5)"))?;
+    if tup.is_empty() {
+        return Err(bad("empty tuple"));
+    }
+    let kind: String = tup.get_item(0)?.extract().map_err(|_| bad("the first item must be the step kind (str)"))?;
+    let args = tup.iter().skip(1).map(|a| step_arg(&a)).collect::<PyResult<Vec<_>>>()?;
+    Step::parse(k, &kind, &args, names).py()
 }
 
 #[pymethods]

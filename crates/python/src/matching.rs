@@ -3,8 +3,8 @@ use super::convert::{count, enter, points_to_numpy, to_numpy, F64Array};
 use super::error::IntoPy;
 use super::mesh::surface;
 use machscan_core::error::Error;
-use machscan_core::matching::{isometric_match as run_isometric_match, Jacobian, MatchOptions, Surface};
-use machscan_core::mesh::{surface_mesh, GeodesicMethod, Spacing};
+use machscan_core::matching::{isometric_match_points as run_isometric_match, Jacobian, MatchOptions, Meshing};
+use machscan_core::mesh::{GeodesicMethod, ScanSurface, Spacing};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -60,19 +60,10 @@ fn isometric_match<'py>(
     let (tpr, apr, tlr, alr, tmr) =
         (tp.rows::<3>()?, ap.rows::<3>()?, tl.rows::<3>()?, al.rows::<3>()?, tm.rows::<3>()?);
     let air = ai.as_ref().map(|a| a.rows::<3>()).transpose()?;
-    let r = enter(py, || {
-        let (tv, tf, t_edge) = surface_mesh("theoretical_points", tpr, tf, max_edge, spacing)?;
-        let (av, af, a_edge) = surface_mesh("actual_points", apr, af, max_edge, spacing)?;
-        run_isometric_match(
-            Surface { vertices: &tv, faces: &tf, given_edge: t_edge },
-            Surface { vertices: &av, faces: &af, given_edge: a_edge },
-            tlr,
-            alr,
-            tmr,
-            air,
-            options,
-        )
-    })?;
+    let (theoretical, actual) =
+        (ScanSurface { points: tpr, faces: tf.as_deref() }, ScanSurface { points: apr, faces: af.as_deref() });
+    let meshing = Meshing { max_edge, spacing };
+    let r = enter(py, || run_isometric_match(theoretical, actual, meshing, tlr, alr, tmr, air, options))?;
     let d = PyDict::new(py);
     let k = r.objective.len();
     d.set_item("points", points_to_numpy(py, r.points)?)?;

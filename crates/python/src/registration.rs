@@ -3,20 +3,15 @@
 //! in the core), so each default is written once.
 use super::convert::{count, enter, indices_to_numpy, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
-use machscan_core::cloud::{estimate_normals, Neighborhood};
-use machscan_core::error::Error;
 use machscan_core::registration::{
-    align_blank as run_align_blank, allowance as run_allowance, allowance::PLANE_POINTS,
-    coarse_align as run_coarse_align, envelope_fit as run_envelope_fit, icp as run_icp, line_curvature,
-    locating_points, positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, probe_pattern,
-    BlankOptions, BlankSurface, IcpMethod, IcpOptions, Robust, RobustKernel,
+    align_blank as run_align_blank, allowance as run_allowance, allowance::PLANE_POINTS, cloud_locating_points,
+    coarse_align as run_coarse_align, envelope_fit as run_envelope_fit, grid_locating_points, icp as run_icp,
+    icp::NORMAL_NEIGHBORS, positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, BlankOptions,
+    BlankSurface, IcpMethod, IcpOptions, ProbePattern, Robust, RobustKernel,
 };
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-
-/// Neighbors of the normals estimated for point-to-plane when none are given (Open3D's usual).
-const NORMAL_NEIGHBORS: usize = 20;
 
 /// The defaults of the ICP options (``IcpOptions::new`` in the core), by name.
 #[pyfunction]
@@ -104,17 +99,7 @@ fn icp<'py>(
     };
     let (s, t) = (src.rows::<3>()?, tgt.rows::<3>()?);
     let n = normals.as_ref().map(|a| a.rows::<3>()).transpose()?;
-    let r = enter(py, || {
-        let estimated;
-        let n = match (options.method, n) {
-            (IcpMethod::PointToPlane, None) if !t.is_empty() => {
-                estimated = estimate_normals(t, Neighborhood::Knn(NORMAL_NEIGHBORS.min(t.len())))?.0;
-                Some(&estimated[..])
-            }
-            (_, n) => n,
-        };
-        run_icp(s, t, n, &init, &options)
-    })?;
+    let r = enter(py, || run_icp(s, t, n, &init, &options))?;
     let d = PyDict::new(py);
     d.set_item("transformation", transform_to_numpy(py, &r.transformation)?)?;
     d.set_item("fitness", r.fitness)?;
@@ -160,47 +145,6 @@ fn coarse_align<'py>(
     transform_to_numpy(py, &m)
 }
 
-/// How the probe points are chosen from the flattest share.
-enum Pattern {
-    /// At random (the paper).
-    Random,
-    /// Those that fix the pose best along the model's normals (`probe_pattern`).
-    Optimal,
-}
-
-impl Pattern {
-    fn parse(name: &str) -> PyResult<Self> {
-        match name {
-            "random" => Ok(Pattern::Random),
-            "optimal" => Ok(Pattern::Optimal),
-            _ => Err(super::error::to_py(Error::invalid(
-                "pattern",
-                format!("expected 'random' or 'optimal', got {name:?}"),
-            ))),
-        }
-    }
-}
-
-/// Draw or design the probe points from a curvature per point.
-fn choose(
-    pts: &[[f64; 3]],
-    normals: Option<&[[f64; 3]]>,
-    curvature: &[f64],
-    m: usize,
-    keep: f64,
-    seed: u64,
-    pattern: &Pattern,
-) -> machscan_core::error::Result<Vec<usize>> {
-    match (pattern, normals) {
-        (Pattern::Random, _) => locating_points(curvature, m, keep, seed),
-        (Pattern::Optimal, Some(n)) => probe_pattern(pts, n, curvature, m, keep),
-        (Pattern::Optimal, None) => Err(Error::invalid(
-            "normals",
-            "pattern 'optimal' weighs the points by their normals: give the model normals",
-        )),
-    }
-}
-
 /// Probe points on the flattest share of a cloud (SPEC R4): surface variation over the k
 /// nearest points; ``machscan.locating_points`` documents it.
 #[pyfunction]
@@ -216,16 +160,13 @@ fn locating_points_cloud<'py>(
     normals: Option<&Bound<'py, PyAny>>,
     pattern: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let (m, k, pattern) = (count("m", m)?, count("k", k)?, Pattern::parse(pattern)?);
+    let (m, k, pattern) = (count("m", m)?, count("k", k)?, ProbePattern::parse(pattern).py()?);
     let arr = F64Array::points(points, "points")?;
     let n = arr.shape()[0];
     let normals = F64Array::extract_opt(normals, "normals", &[Dim::Is(n), Dim::Is(3)], "(one normal per point)")?;
     let pts = arr.rows::<3>()?;
     let nv = normals.as_ref().map(|a| a.rows::<3>()).transpose()?;
-    let chosen = enter(py, || {
-        let (_, variation, _) = estimate_normals(pts, Neighborhood::Knn(k))?;
-        choose(pts, nv, &variation, m, keep, seed, &pattern)
-    })?;
+    let chosen = enter(py, || cloud_locating_points(pts, nv, m, keep, k, seed, pattern))?;
     indices_to_numpy(py, chosen)
 }
 
@@ -242,7 +183,7 @@ fn locating_points_grid<'py>(
     normals: Option<&Bound<'py, PyAny>>,
     pattern: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let (m, pattern) = (count("m", m)?, Pattern::parse(pattern)?);
+    let (m, pattern) = (count("m", m)?, ProbePattern::parse(pattern).py()?);
     let arr = F64Array::extract(points, "points", &[Dim::Any("nu"), Dim::Any("nv"), Dim::Is(3)], "(a gridded scan)")?;
     let (nu, nv) = (arr.shape()[0], arr.shape()[1]);
     let normals = F64Array::extract_opt(
@@ -253,7 +194,7 @@ fn locating_points_grid<'py>(
     )?;
     let pts = arr.rows::<3>()?;
     let normal_rows = normals.as_ref().map(|a| a.rows::<3>()).transpose()?;
-    let chosen = enter(py, || choose(pts, normal_rows, &line_curvature(pts, nu, nv)?, m, keep, seed, &pattern))?;
+    let chosen = enter(py, || grid_locating_points(pts, nu, nv, normal_rows, m, keep, seed, pattern))?;
     indices_to_numpy(py, chosen)
 }
 

@@ -4,7 +4,7 @@ use super::convert::{
 };
 use super::error::IntoPy;
 use super::mesh::surface;
-use machscan_core::mesh::{surface_mesh, Spacing};
+use machscan_core::mesh::ScanSurface;
 use machscan_core::toolpath::bead_chain::{bead_chain as run_bead_chain, Chain};
 use machscan_core::toolpath::grinding::{
     grinding_paths as run_grinding_paths, simulate_removal as run_simulate_removal, GrindingOptions, RemovalModel,
@@ -55,14 +55,11 @@ fn compensate_toolpath<'py>(
         interpolation: Interpolation::parse(interpolation).py()?,
         normals: Normals::parse(normals).py()?,
         radius,
+        max_edge,
     };
     let (tmr, amr, apr) = (tm.rows::<3>()?, am.rows::<3>()?, ap.rows::<3>()?);
-    let r = enter(py, || {
-        // Meshed as isometric_match meshes it (the long triangles Delaunay adds across a concave
-        // outline peeled off, not thinned): `on_scan` then tells where the scan has no points.
-        let (av, af, _) = surface_mesh("actual_surface", apr, af, max_edge, Spacing::Full)?;
-        run_compensate(&points, axes.as_deref(), tmr, amr, &av, &af, options)
-    })?;
+    let actual = ScanSurface { points: apr, faces: af.as_deref() };
+    let r = enter(py, || run_compensate(&points, axes.as_deref(), tmr, amr, actual, options))?;
     let m = r.points.len();
     let d = PyDict::new(py);
     d.set_item("points", points_to_numpy(py, r.points)?)?;

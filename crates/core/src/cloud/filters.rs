@@ -67,6 +67,50 @@ impl Hasher for KeyHasher {
     }
 }
 
+/// Voxel indices per axis a key holds: three 21-bit indices packed into 64 bits.
+const KEY_BITS: u32 = 21;
+
+/// The grid of a voxel downsample: its origin (the minimum bound less half a voxel, as Open3D
+/// places it) and voxel edge. A chunked run (machscan.dask) builds it from the whole cloud's
+/// bounds and keys each chunk's points with it, so its voxels are the in-memory call's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VoxelFrame {
+    pub origin: [f64; 3],
+    pub voxel: f64,
+}
+
+impl VoxelFrame {
+    /// The grid over the bounds `lo`, `hi`; refused, naming `voxel_size`, when it would need
+    /// more voxels per axis than a key holds.
+    pub fn new(lo: [f64; 3], hi: [f64; 3], voxel: f64) -> Result<Self> {
+        crate::error::check_positive("voxel_size", voxel, "mm")?;
+        let origin = lo.map(|l| l - 0.5 * voxel);
+        let extent = (0..3).map(|k| ((hi[k] - origin[k]) / voxel).floor() + 1.0).fold(1.0, f64::max);
+        if !(extent < (1u64 << KEY_BITS) as f64) {
+            return Err(Error::invalid(
+                "voxel_size",
+                format!(
+                    "{voxel} mm over a cloud {:.6} mm across makes more than 2^21 voxels per axis",
+                    (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)
+                ),
+            ));
+        }
+        Ok(VoxelFrame { origin, voxel })
+    }
+
+    /// The voxel (i, j, k) of a point within the bounds: ⌊(p − origin) / voxel⌋, Open3D's
+    /// arithmetic.
+    pub fn index(&self, p: &[f64; 3]) -> [u64; 3] {
+        [0, 1, 2].map(|a| ((p[a] - self.origin[a]) / self.voxel).floor() as u64)
+    }
+
+    /// The voxel's key: its three indices packed, i in the high bits.
+    pub fn key(&self, p: &[f64; 3]) -> u64 {
+        let [i, j, k] = self.index(p);
+        (i << (2 * KEY_BITS)) | (j << KEY_BITS) | k
+    }
+}
+
 pub fn voxel_downsample(points: &[[f64; 3]], voxel: f64) -> Result<VoxelGrid> {
     crate::error::check_positive("voxel_size", voxel, "mm")?;
     check_points(points)?;
@@ -77,29 +121,8 @@ pub fn voxel_downsample(points: &[[f64; 3]], voxel: f64) -> Result<VoxelGrid> {
         return Err(Error::invalid("points", "more than 2^32 − 1 points"));
     }
     let (lo, hi) = crate::geom::bounds(points);
-    let origin = [lo[0] - 0.5 * voxel, lo[1] - 0.5 * voxel, lo[2] - 0.5 * voxel];
-    // Voxel counts per axis: keys pack three 21-bit indices into 64 bits when they fit.
-    let extent: Vec<u64> = (0..3).map(|k| ((hi[k] - origin[k]) / voxel).floor() as u64 + 1).collect();
-    let max_extent = *extent.iter().max().unwrap_or(&1);
-    if max_extent >= 1 << 21 {
-        return Err(Error::invalid(
-            "voxel_size",
-            format!(
-                "{voxel} mm over a cloud {:.6} mm across makes more than 2^21 voxels per axis",
-                (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)
-            ),
-        ));
-    }
-    let keys: Vec<u64> = points
-        .par_iter()
-        .map(|p| {
-            // Same arithmetic as Open3D: (p − origin) / voxel, floored.
-            let i = ((p[0] - origin[0]) / voxel).floor() as u64;
-            let j = ((p[1] - origin[1]) / voxel).floor() as u64;
-            let k = ((p[2] - origin[2]) / voxel).floor() as u64;
-            (i << 42) | (j << 21) | k
-        })
-        .collect();
+    let grid = VoxelFrame::new(lo, hi, voxel)?;
+    let keys: Vec<u64> = points.par_iter().map(|p| grid.key(p)).collect();
     let mut map: HashMap<u64, u32, BuildHasherDefault<KeyHasher>> = HashMap::default();
     let mut voxel_of_point = Vec::with_capacity(points.len());
     let mut sums: Vec<([f64; 3], u32)> = Vec::new();

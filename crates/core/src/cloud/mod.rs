@@ -7,7 +7,7 @@ mod octree;
 
 pub use filters::{
     crop_box, random_downsample, remove_duplicates, remove_radius_outliers, remove_statistical_outliers,
-    uniform_downsample, voxel_downsample, VoxelGrid,
+    uniform_downsample, voxel_downsample, VoxelFrame, VoxelGrid,
 };
 pub use normals::{
     estimate_normals, estimate_oriented_normals, orient_along, orient_consistent, orient_towards, principal_curvatures,

@@ -251,23 +251,32 @@ pub fn orient_consistent(points: &[[f64; 3]], normals: &mut [[f64; 3]], k: usize
     Ok(())
 }
 
+/// Principal curvatures `k1 >= k2` (1/mm) and their unit directions at one point.
+pub type PrincipalCurvature = ([f64; 2], [[f64; 3]; 2]);
+
 /// Principal curvatures (k1 ≥ k2, 1/mm) and principal directions from a quadric
 /// `h = a u² + b uv + c v² + d u + e v + f` fitted to the neighbors in the local frame
 /// (u, v tangent, h along the normal). The shape operator of the graph at the point is taken
 /// at its foot (u, v) = (0, 0), corrected for the fitted slope (d, e). Signs follow the normal:
 /// positive where the surface bends towards it (a sphere with inward normals has k1 = k2 = 1/R,
-/// with outward normals −1/R); a point with fewer than 6 neighbors gets NaN.
-/// Principal curvatures `k1 >= k2` (1/mm) and their unit directions at one point.
-pub type PrincipalCurvature = ([f64; 2], [[f64; 3]; 2]);
-
+/// with outward normals −1/R); a point with fewer than 6 neighbors gets NaN. Without `normals`,
+/// they are estimated over the same neighbourhood ([`estimate_normals`]).
 pub fn principal_curvatures(
     points: &[[f64; 3]],
-    normals: &[[f64; 3]],
+    normals: Option<&[[f64; 3]]>,
     nbh: Neighborhood,
 ) -> Result<Vec<PrincipalCurvature>> {
     crate::error::check_finite_points("points", points)?;
-    crate::error::check_finite_points("normals", normals)?;
     nbh.check(points.len())?;
+    let estimated;
+    let normals = match normals {
+        Some(n) => n,
+        None => {
+            estimated = estimate_normals(points, nbh)?.0;
+            &estimated[..]
+        }
+    };
+    crate::error::check_finite_points("normals", normals)?;
     if normals.len() != points.len() {
         return Err(Error::shape(
             "normals",

@@ -32,7 +32,100 @@ pub enum Step {
     Mirror([f64; 3]),
 }
 
+/// One argument of a step as a caller spells it (the Python tuples `("rotate", "z", 0.5)`),
+/// before [`Step::parse`] gives it a meaning: the rules and their messages live here, so a
+/// binding only converts values.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StepArg {
+    None,
+    Text(String),
+    Number(f64),
+    /// Numbers, row-major, of this shape (a vector, a 3×3 rotation).
+    Array(Vec<f64>, Vec<usize>),
+    /// A list that is not all numbers (axis names, None).
+    List(Vec<StepArg>),
+}
+
+/// The step kinds `Step::parse` takes, as the messages list them.
+const STEP_KINDS: &str = "translate, translate_axes, rotate, rotate_axis, rotation or mirror";
+
 impl Step {
+    /// Step `k` of a chain from its kind and arguments; `axis_names` resolves pose columns given
+    /// by name. Errors name `steps` and the step:
+    ///
+    /// - `("translate", (x, y, z))` constant, mm; `("translate_axes", (cx, cy, cz))` by pose
+    ///   columns (an index or an axis name; None for 0);
+    /// - `("rotate", "x"|"y"|"z", angle)` constant, rad; `("rotate_axis", "x"|"y"|"z", column)`;
+    /// - `("rotation", R)` a constant 3×3 rotation; `("mirror", (sx, sy, sz))` with ±1.
+    pub fn parse(k: usize, kind: &str, args: &[StepArg], axis_names: &[String]) -> Result<Step> {
+        let bad = |why: String| Error::invalid("steps", format!("step {k}: {why}"));
+        let wanted = match kind {
+            "translate" | "translate_axes" | "rotation" | "mirror" => 1,
+            "rotate" | "rotate_axis" => 2,
+            other => return Err(bad(format!("unknown step kind {other:?}; use {STEP_KINDS}"))),
+        };
+        if args.len() != wanted {
+            return Err(bad(format!("{kind:?} needs {wanted} argument(s) after the kind, got {}", args.len())));
+        }
+        let numbers = |a: &StepArg, shape: &[usize], what: &str| -> Result<Vec<f64>> {
+            match a {
+                StepArg::Array(v, s) if s == shape => Ok(v.clone()),
+                _ => Err(bad(format!("expected {what}"))),
+            }
+        };
+        let vector = |a: &StepArg, what: &str| -> Result<[f64; 3]> {
+            let v = numbers(a, &[3], what)?;
+            Ok([v[0], v[1], v[2]])
+        };
+        let axis = |a: &StepArg| -> Result<Axis> {
+            match a {
+                StepArg::Text(s) => {
+                    Axis::parse(s).ok_or_else(|| bad(format!("axis must be \"x\", \"y\" or \"z\", got {s:?}")))
+                }
+                _ => Err(bad("axis must be \"x\", \"y\" or \"z\"".into())),
+            }
+        };
+        let column = |a: &StepArg| -> Result<usize> {
+            match a {
+                StepArg::Text(s) => axis_names
+                    .iter()
+                    .position(|n| n == s)
+                    .ok_or_else(|| bad(format!("unknown axis name {s:?}; axes are {axis_names:?}"))),
+                StepArg::Number(c) if *c >= 0.0 && c.fract() == 0.0 && *c < usize::MAX as f64 => Ok(*c as usize),
+                _ => Err(bad("a pose column is an index or an axis name".into())),
+            }
+        };
+        Ok(match kind {
+            "translate" => Step::Translate(vector(&args[0], "a translation (x, y, z) in mm")?),
+            "translate_axes" => {
+                let items: Vec<StepArg> = match &args[0] {
+                    StepArg::List(items) => items.clone(),
+                    StepArg::Array(v, s) if s.len() == 1 => v.iter().map(|&c| StepArg::Number(c)).collect(),
+                    _ => return Err(bad("needs three columns (None for 0)".into())),
+                };
+                if items.len() != 3 {
+                    return Err(bad(format!("needs three columns, got {}", items.len())));
+                }
+                let mut c = [None; 3];
+                for (slot, item) in c.iter_mut().zip(&items) {
+                    *slot = match item {
+                        StepArg::None => None,
+                        other => Some(column(other)?),
+                    };
+                }
+                Step::TranslateAxes(c)
+            }
+            "rotate" => match &args[1] {
+                StepArg::Number(angle) => Step::Rotate(axis(&args[0])?, AngleSource::Constant(*angle)),
+                _ => return Err(bad("angle must be a number (rad)".into())),
+            },
+            "rotate_axis" => Step::Rotate(axis(&args[0])?, AngleSource::AxisColumn(column(&args[1])?)),
+            "rotation" => {
+                Step::Rotation(Matrix3::from_row_slice(&numbers(&args[0], &[3, 3], "a 3×3 rotation matrix")?))
+            }
+            _ => Step::Mirror(vector(&args[0], "a mirror diagonal (±1, ±1, ±1)")?),
+        })
+    }
     fn max_column(&self) -> Option<usize> {
         match self {
             Step::TranslateAxes(cols) => cols.iter().flatten().copied().max(),
@@ -321,6 +414,46 @@ pub fn ac_table_rotate(
 mod tests {
     use super::*;
     use crate::geom::{rot_x, rot_y, rot_z, transform_point};
+
+    #[test]
+    fn steps_parse_from_what_a_caller_spells_and_errors_name_the_step() {
+        let names: Vec<String> = ["X", "Y", "Z", "A"].map(String::from).to_vec();
+        let text = |s: &str| StepArg::Text(s.into());
+        let vec3 = |v: [f64; 3]| StepArg::Array(v.to_vec(), vec![3]);
+        let parse = |kind: &str, args: &[StepArg]| Step::parse(2, kind, args, &names);
+        assert_eq!(parse("translate", &[vec3([1.0, 2.0, 3.0])]), Ok(Step::Translate([1.0, 2.0, 3.0])));
+        let cols = StepArg::List(vec![text("X"), StepArg::None, StepArg::Number(2.0)]);
+        assert_eq!(parse("translate_axes", &[cols]), Ok(Step::TranslateAxes([Some(0), None, Some(2)])));
+        assert_eq!(
+            parse("translate_axes", &[vec3([0.0, 1.0, 2.0])]),
+            Ok(Step::TranslateAxes([Some(0), Some(1), Some(2)]))
+        );
+        assert_eq!(
+            parse("rotate", &[text("z"), StepArg::Number(0.5)]),
+            Ok(Step::Rotate(Axis::Z, AngleSource::Constant(0.5)))
+        );
+        assert_eq!(
+            parse("rotate_axis", &[text("x"), text("A")]),
+            Ok(Step::Rotate(Axis::X, AngleSource::AxisColumn(3)))
+        );
+        let eye = StepArg::Array(Matrix3::<f64>::identity().as_slice().to_vec(), vec![3, 3]);
+        assert_eq!(parse("rotation", &[eye]), Ok(Step::Rotation(Matrix3::identity())));
+        assert_eq!(parse("mirror", &[vec3([-1.0, 1.0, -1.0])]), Ok(Step::Mirror([-1.0, 1.0, -1.0])));
+        for (kind, args, why) in [
+            ("spin", vec![text("x")], "unknown step kind"),
+            ("rotate", vec![text("x")], "needs 2 argument(s)"),
+            ("rotate", vec![text("w"), StepArg::Number(1.0)], "axis must be"),
+            ("rotate", vec![text("x"), text("fast")], "angle must be a number"),
+            ("rotate_axis", vec![text("x"), text("B")], "unknown axis name \"B\""),
+            ("rotate_axis", vec![text("x"), StepArg::Number(1.5)], "a pose column is an index"),
+            ("translate", vec![StepArg::Array(vec![1.0, 2.0], vec![2])], "a translation (x, y, z)"),
+            ("translate_axes", vec![StepArg::List(vec![text("X")])], "needs three columns, got 1"),
+            ("rotation", vec![vec3([1.0, 0.0, 0.0])], "a 3×3 rotation"),
+        ] {
+            let e = parse(kind, &args).unwrap_err().to_string();
+            assert!(e.starts_with("steps: step 2: ") && e.contains(why), "{kind}: {e}");
+        }
+    }
 
     /// Tiny deterministic generator so tests need no extra crate.
     fn lcg(seed: &mut u64) -> f64 {

@@ -7,7 +7,7 @@ mod scan;
 mod timing;
 
 pub use calibration::{calibrate_mount, calibrate_mount_ac_head, MountCalibration};
-pub use chain::{ac_table_rotate, AngleSource, KinematicChain, Step};
+pub use chain::{ac_table_rotate, AngleSource, KinematicChain, Step, StepArg};
 pub use profiler::{profile_to_points, ProfilePoints, Profiler, ValidReadings, VENDOR_SENTINEL};
 pub use scan::{frames_to_points, ScanPoints};
 pub use timing::interpolate_poses;

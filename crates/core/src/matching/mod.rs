@@ -16,7 +16,8 @@
 //! The formulas: docs/matching.md.
 use crate::error::{check_finite_points, Error, Result};
 use crate::mesh::{
-    closest_points, geodesic_distances, insert_points, off_surface, off_surface_limit, GeodesicMethod, XyLocator,
+    closest_points, geodesic_distances, insert_points, off_surface, off_surface_limit, GeodesicMethod, ScanSurface,
+    Spacing, XyLocator,
 };
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix6, Vector2, Vector6};
 
@@ -420,6 +421,41 @@ fn onto(surface: Surface<'_>, name: &str, points: &[[f64; 3]]) -> Result<Vec<[f6
         return Err(off_surface(name, i, points[i], c.distance, limit));
     }
     Ok(closest.into_iter().map(|c| c.point).collect())
+}
+
+/// How scan points are meshed for the match: triangles with an edge beyond `max_edge` left out
+/// (by default those beyond `EDGE_TRIM` × the median edge, peeled from the outline) and the
+/// points thinned as `spacing` says ([`crate::mesh::surface_mesh`]). A surface given as a mesh is taken as is.
+#[derive(Debug, Clone, Copy)]
+pub struct Meshing {
+    pub max_edge: Option<f64>,
+    pub spacing: Spacing,
+}
+
+/// [`isometric_match`] on surfaces as a caller gives them: scan points are meshed first
+/// ([`Meshing`]), a mesh is taken as given. Errors name `theoretical_points`, `actual_points`.
+#[allow(clippy::too_many_arguments)]
+pub fn isometric_match_points(
+    theoretical: ScanSurface<'_>,
+    actual: ScanSurface<'_>,
+    meshing: Meshing,
+    theoretical_locating: &[[f64; 3]],
+    actual_locating: &[[f64; 3]],
+    theoretical_matching: &[[f64; 3]],
+    actual_initial: Option<&[[f64; 3]]>,
+    options: MatchOptions,
+) -> Result<IsometricMatch> {
+    let (tv, tf, t_edge) = theoretical.mesh("theoretical_points", meshing.max_edge, meshing.spacing)?;
+    let (av, af, a_edge) = actual.mesh("actual_points", meshing.max_edge, meshing.spacing)?;
+    isometric_match(
+        Surface { vertices: &tv, faces: &tf, given_edge: t_edge },
+        Surface { vertices: &av, faces: &af, given_edge: a_edge },
+        theoretical_locating,
+        actual_locating,
+        theoretical_matching,
+        actual_initial,
+        options,
+    )
 }
 
 /// Matches the theoretical matching points onto the actual surface (module docs).

@@ -150,6 +150,21 @@ pub fn median_edge(points: &[[f64; 3]], faces: &[[u32; 3]]) -> f64 {
     *lengths.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
+/// A surface as a caller gives it: scan points, meshed where a kernel needs a mesh
+/// ([`surface_mesh`]), or the vertices of a mesh with its triangles.
+#[derive(Debug, Clone, Copy)]
+pub struct ScanSurface<'a> {
+    pub points: &'a [[f64; 3]],
+    pub faces: Option<&'a [[u32; 3]]>,
+}
+
+impl<'a> ScanSurface<'a> {
+    /// The surface as a mesh ([`surface_mesh`]); errors name the argument `name`.
+    pub fn mesh(&self, name: &str, max_edge: Option<f64>, spacing: Spacing) -> Result<SurfaceMesh<'a>> {
+        surface_mesh(name, self.points, self.faces.map(<[_]>::to_vec), max_edge, spacing)
+    }
+}
+
 /// Vertices (the given points when none were dropped), triangles, and the median edge of the
 /// surface as given (before any thinning: the points' own spacing).
 pub type SurfaceMesh<'a> = (Cow<'a, [[f64; 3]]>, Vec<[u32; 3]>, f64);

@@ -13,6 +13,7 @@
 //! Unlike the peers: no correspondence in reach is reported as fitness 0 and not converged (no
 //! NaN); a start that is already perfect converges in one iteration; results do not depend on
 //! the thread count (correspondences are searched in parallel, every sum runs in source order).
+use crate::cloud::{estimate_normals, Neighborhood};
 use crate::error::{check_finite_points, Error, Result};
 use crate::geom::{rot_x, rot_y, rot_z, transform_point};
 use crate::spatial::PointIndex;
@@ -21,6 +22,10 @@ use rayon::prelude::*;
 
 /// Changes of the rmse below this share of `max_distance` are rounding.
 const ROUNDING: f64 = 1e-9;
+
+/// Neighbours of the target normals point-to-plane estimates when none are given (Open3D's
+/// usual `KDTreeSearchParamKNN`): enough for a stable plane through scanner noise.
+pub const NORMAL_NEIGHBORS: usize = 20;
 
 /// What each iteration minimises.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -271,7 +276,10 @@ fn metrics(pairs: &[Pair], n: usize) -> (f64, f64) {
     (pairs.len() as f64 / n as f64, (sum / pairs.len() as f64).sqrt())
 }
 
-/// Iterative closest point from `source` onto `target`, starting at `init`.
+/// Iterative closest point from `source` onto `target`, starting at `init`. Point-to-plane
+/// without `target_normals` estimates them over the [`NORMAL_NEIGHBORS`] nearest target points
+/// (unoriented: the residual's sign does not matter); a target of that many points or fewer is
+/// refused, naming `target_normals`.
 pub fn icp(
     source: &[[f64; 3]],
     target: &[[f64; 3]],
@@ -292,6 +300,7 @@ pub fn icp(
     if init.iter().any(|v| !v.is_finite()) || last_row != [0.0, 0.0, 0.0, 1.0] {
         return Err(Error::invalid("init", "must be a finite 4×4 rigid transform with last row (0, 0, 0, 1)"));
     }
+    let estimated;
     let normals = match (o.method, target_normals) {
         (_, Some(n)) if n.len() != target.len() => {
             return Err(Error::shape(
@@ -305,7 +314,20 @@ pub fn icp(
             Some(n)
         }
         (IcpMethod::PointToPlane, None) => {
-            return Err(Error::invalid("target_normals", "point_to_plane needs one normal per target point"))
+            // A target too small for the estimate is refused rather than estimated over fewer
+            // neighbours: planes through a handful of points would steer the fit silently.
+            if target.len() <= NORMAL_NEIGHBORS {
+                return Err(Error::invalid(
+                    "target_normals",
+                    format!(
+                        "point_to_plane estimates them over {NORMAL_NEIGHBORS} neighbours, but the target has {} \
+                         points: give the target normals",
+                        target.len()
+                    ),
+                ));
+            }
+            estimated = estimate_normals(target, Neighborhood::Knn(NORMAL_NEIGHBORS))?.0;
+            Some(&estimated[..])
         }
         (IcpMethod::PointToPoint, None) => None,
     };
@@ -628,6 +650,27 @@ mod tests {
         let robust = icp(&source, &target, Some(&normals), &Matrix4::identity(), &tukey).unwrap();
         let (ep, er) = (pose_error(&plain.transformation, &truth), pose_error(&robust.transformation, &truth));
         assert!(er < 0.005 && ep > 0.05, "plain {ep}, tukey {er}");
+    }
+
+    #[test]
+    fn point_to_plane_estimates_the_normals_it_is_not_given() {
+        let mut seed = 3;
+        let (target, normals) = surface(60, &mut seed);
+        let truth = pose(0.02, -0.015, 0.03, [0.4, -0.3, 0.2]);
+        let inv = truth.try_inverse().unwrap();
+        let source: Vec<[f64; 3]> = target.iter().map(|&p| transform_point(&inv, p)).collect();
+        let o = IcpOptions { method: IcpMethod::PointToPlane, max_iterations: 200, ..IcpOptions::new(2.0) };
+        let given = icp(&source, &target, Some(&normals), &Matrix4::identity(), &o).unwrap();
+        let estimated = estimate_normals(&target, Neighborhood::Knn(NORMAL_NEIGHBORS)).unwrap().0;
+        let same = icp(&source, &target, Some(&estimated), &Matrix4::identity(), &o).unwrap();
+        let none = icp(&source, &target, None, &Matrix4::identity(), &o).unwrap();
+        // Without normals the call is the call with the estimated ones, and still finds the pose.
+        assert_eq!(none.transformation, same.transformation);
+        assert!(pose_error(&none.transformation, &truth) < 1e-6, "{}", pose_error(&none.transformation, &truth));
+        assert!(pose_error(&given.transformation, &truth) < 1e-9);
+        let few = &target[..NORMAL_NEIGHBORS];
+        let err = icp(few, few, None, &Matrix4::identity(), &o).unwrap_err().to_string();
+        assert!(err.contains("target_normals") && err.contains("20"), "{err}");
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! its flat regions, so the probe points are drawn from the flattest share of the surface —
 //! by the U-direction line curvature of a gridded scan, or the surface variation of a cloud —
 //! at random, reproducibly from a seed (the paper: 160 of 20 000 points).
+use crate::cloud::{estimate_normals, Neighborhood};
 use crate::error::{check_finite_points, Error, Result};
 use nalgebra::{Matrix6, Vector3, Vector6};
 use rayon::prelude::*;
@@ -216,6 +217,77 @@ fn near_open_edge(points: &[[f64; 3]], candidates: &[[f64; 3]], margin: f64) -> 
 
 fn dist2(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     (0..3).map(|k| (a[k] - b[k]).powi(2)).sum()
+}
+
+/// How probe points are chosen from the flattest share.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProbePattern {
+    /// At random, from a seed (the paper): [`locating_points`].
+    Random,
+    /// Those that fix the pose best along the model's normals: [`probe_pattern`].
+    Optimal,
+}
+
+impl ProbePattern {
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "random" => Ok(ProbePattern::Random),
+            "optimal" => Ok(ProbePattern::Optimal),
+            _ => Err(Error::invalid("pattern", format!("expected 'random' or 'optimal', got {name:?}"))),
+        }
+    }
+
+    /// Chooses `m` of `points` by `curvature` (one value per point, lower is flatter).
+    fn choose(
+        self,
+        points: &[[f64; 3]],
+        normals: Option<&[[f64; 3]]>,
+        curvature: &[f64],
+        m: usize,
+        keep: f64,
+        seed: u64,
+    ) -> Result<Vec<usize>> {
+        match (self, normals) {
+            (ProbePattern::Random, _) => locating_points(curvature, m, keep, seed),
+            (ProbePattern::Optimal, Some(n)) => probe_pattern(points, n, curvature, m, keep),
+            (ProbePattern::Optimal, None) => Err(Error::invalid(
+                "normals",
+                "pattern 'optimal' weighs the points by their normals: give the model normals",
+            )),
+        }
+    }
+}
+
+/// Probe points on the flattest `keep` share of a cloud: the surface variation over each
+/// point's `k` nearest points is its flatness; `normals` (one per point) are needed by
+/// [`ProbePattern::Optimal`] only.
+pub fn cloud_locating_points(
+    points: &[[f64; 3]],
+    normals: Option<&[[f64; 3]]>,
+    m: usize,
+    keep: f64,
+    k: usize,
+    seed: u64,
+    pattern: ProbePattern,
+) -> Result<Vec<usize>> {
+    let (_, variation, _) = estimate_normals(points, Neighborhood::Knn(k))?;
+    pattern.choose(points, normals, &variation, m, keep, seed)
+}
+
+/// Probe points on the flattest `keep` share of a gridded scan `(nu, nv)` (as
+/// [`line_curvature`] takes it): the U-direction line curvature is its flatness.
+#[allow(clippy::too_many_arguments)]
+pub fn grid_locating_points(
+    points: &[[f64; 3]],
+    nu: usize,
+    nv: usize,
+    normals: Option<&[[f64; 3]]>,
+    m: usize,
+    keep: f64,
+    seed: u64,
+    pattern: ProbePattern,
+) -> Result<Vec<usize>> {
+    pattern.choose(points, normals, &line_curvature(points, nu, nv)?, m, keep, seed)
 }
 
 #[cfg(test)]

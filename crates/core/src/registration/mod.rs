@@ -14,7 +14,9 @@ pub use blank_alignment::{align_blank, AlignmentStage, BlankAlignment};
 pub use coarse::coarse_align;
 pub use envelope::{envelope_fit, EnvelopeFit};
 pub use icp::{icp, IcpMethod, IcpOptions, IcpResult, IcpStep, Robust, RobustKernel};
-pub use locating::{line_curvature, locating_points, probe_pattern};
+pub use locating::{
+    cloud_locating_points, grid_locating_points, line_curvature, locating_points, probe_pattern, ProbePattern,
+};
 pub use positioning::{positioning_errors, probe_fit, ProbeFit};
 
 use crate::error::{check_finite_points, Error, Result};

@@ -31,7 +31,9 @@ pub mod scallop;
 pub mod spline;
 
 use crate::error::{check_finite_points, check_positive, Error, Result};
-use crate::mesh::{delaunay_xy, median_edge, off_surface, off_surface_limit, TriangleBvh, XyLocator};
+use crate::mesh::{
+    delaunay_xy, median_edge, off_surface, off_surface_limit, ScanSurface, Spacing, TriangleBvh, XyLocator,
+};
 use crate::spatial::PointIndex;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
@@ -76,6 +78,9 @@ pub struct CompensateOptions {
     /// Radius (mm) of the scan patch the smooth surface is fitted to; `None`: 5 median edge
     /// lengths of the scan mesh.
     pub radius: Option<f64>,
+    /// Triangles of the scan's mesh with an edge beyond this (mm) are left out; `None`: those
+    /// beyond `EDGE_TRIM` × the median edge, peeled from the outline (as the match meshes it).
+    pub max_edge: Option<f64>,
 }
 
 /// Fewest scan points a local quadric is fitted to: 6 coefficients, with room for noise.
@@ -212,16 +217,18 @@ impl ActualSurface<'_> {
 }
 
 /// Compensates the tool points (module docs). `tool_axes` is one unit axis per tool point, or
-/// `None`; `actual_vertices`, `actual_faces` the scan mesh.
+/// `None`; `actual` the scan, as points (meshed as the match meshes them, not thinned, so that
+/// `on_scan` tells where the scan has no points) or as a mesh. Errors name `actual_surface`.
 pub fn compensate_toolpath(
     tool_points: &[[f64; 3]],
     tool_axes: Option<&[[f64; 3]]>,
     theoretical_matching: &[[f64; 3]],
     actual_matching: &[[f64; 3]],
-    actual_vertices: &[[f64; 3]],
-    actual_faces: &[[u32; 3]],
+    actual: ScanSurface<'_>,
     options: CompensateOptions,
 ) -> Result<Compensated> {
+    let (actual_vertices, actual_faces, _) = actual.mesh("actual_surface", options.max_edge, Spacing::Full)?;
+    let (actual_vertices, actual_faces) = (&actual_vertices[..], &actual_faces[..]);
     check_finite_points("tool_points", tool_points)?;
     if let Some(a) = tool_axes {
         for (i, x) in a.iter().enumerate() {
@@ -432,8 +439,9 @@ mod tests {
             .collect();
         tools.push([148.0, 0.0, 0.0]);
         let run = |interpolation, normals| {
-            let o = CompensateOptions { interpolation, normals, radius: None };
-            compensate_toolpath(&tools, None, &t_match, &a_match, &sv, &sf, o).unwrap()
+            let o = CompensateOptions { interpolation, normals, radius: None, max_edge: None };
+            let scan = ScanSurface { points: &sv, faces: Some(&sf) };
+            compensate_toolpath(&tools, None, &t_match, &a_match, scan, o).unwrap()
         };
         let errors = |c: &Compensated| {
             let (mut dist, mut angle) = (0.0f64, 0.0f64);
