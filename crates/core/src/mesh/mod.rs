@@ -5,8 +5,6 @@
 pub mod closest;
 pub mod delaunay;
 pub mod geodesic;
-pub mod geodesic_exact;
-pub mod geodesic_heat;
 pub mod insert;
 pub mod locate;
 pub mod thin;
@@ -14,8 +12,7 @@ pub mod thin;
 pub use closest::{closest_points, Closest, TriangleBvh};
 pub use delaunay::{delaunay_xy, edge_length, peel_long_edges};
 pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod, GeodesicSolver};
-pub use geodesic_exact::geodesic_exact;
-pub use geodesic_heat::{geodesic_heat, HeatSolver};
+pub use geodesic::{geodesic_exact, geodesic_heat, HeatSolver};
 pub use insert::{insert_points, Inserted, Landing};
 pub use locate::{XyLanding, XyLocator};
 pub use thin::{thin_xy, xy_area};

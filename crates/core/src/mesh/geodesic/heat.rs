@@ -47,7 +47,7 @@
 //! boundary; the papers suggest averaging the Neumann and the Dirichlet (u = 0 on the boundary)
 //! solutions. Measured against exact polyhedral distances it does not pay (`HeatOptions`), so
 //! the default is Neumann alone.
-use super::geodesic::{check_input, unreached};
+use super::{check_input, unreached};
 use crate::error::{check_finite_points, Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -414,7 +414,7 @@ impl HeatSolver {
     /// vertices).
     pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<Self> {
         check_finite_points("vertices", vertices)?;
-        super::check_faces(vertices.len(), faces)?;
+        crate::mesh::check_faces(vertices.len(), faces)?;
         Self::with_options(vertices, faces, HeatOptions::default())
     }
 

@@ -8,8 +8,13 @@
 //! min(T_A + |AC|, T_B + |BC|). Obtuse triangles need no unfolding this way: where the line
 //! misses AB the edge update is taken, which is what the neighbouring triangle's update then
 //! improves on.
-use super::geodesic_heat::{HeatOptions, HeatSolver};
+mod exact;
+mod heat;
+
 use crate::error::{check_finite_points, Error, Result};
+pub use exact::geodesic_exact;
+use heat::HeatOptions;
+pub use heat::{geodesic_heat, HeatSolver};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -266,7 +271,7 @@ pub fn geodesic_fmm(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]
 pub(super) fn check_input(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize]) -> Result<()> {
     check_sources(vertices.len(), sources)?;
     check_finite_points("vertices", vertices)?;
-    super::check_faces(vertices.len(), faces)
+    crate::mesh::check_faces(vertices.len(), faces)
 }
 
 /// Sources among the `n` vertices.
@@ -319,7 +324,7 @@ pub struct GeodesicSolver {
 }
 
 enum Prepared {
-    Exact(Box<super::geodesic_exact::ExactGeodesics>),
+    Exact(Box<exact::ExactGeodesics>),
     Fmm(Marching),
     Heat(Box<HeatSolver>),
 }
@@ -329,9 +334,7 @@ impl GeodesicSolver {
     pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]], method: GeodesicMethod) -> Result<Self> {
         check_input(vertices, faces, &[])?;
         let prepared = match method {
-            GeodesicMethod::Exact => {
-                Prepared::Exact(Box::new(super::geodesic_exact::ExactGeodesics::new(vertices, faces)))
-            }
+            GeodesicMethod::Exact => Prepared::Exact(Box::new(exact::ExactGeodesics::new(vertices, faces))),
             GeodesicMethod::Fmm => Prepared::Fmm(Marching::new(vertices, faces)),
             GeodesicMethod::Heat => {
                 Prepared::Heat(Box::new(HeatSolver::with_options(vertices, faces, HeatOptions::default())?))
