@@ -43,10 +43,10 @@
 //!   boundary) so that boundary edges are flipped too, as potpourri3d does; a non-manifold or
 //!   inconsistently oriented edge is never flipped and simply couples its faces.
 //!
-//! Boundaries: the heat flow with Neumann conditions (natural for L) bends the field along the
-//! boundary; the papers suggest averaging the Neumann and the Dirichlet (u = 0 on the boundary)
-//! solutions. Measured against exact polyhedral distances it does not pay (`HeatOptions`), so
-//! the default is Neumann alone.
+//! Boundaries: the heat flow with Neumann conditions (natural for L). The papers suggest
+//! averaging the Neumann and the Dirichlet (u = 0 on the boundary) solutions; measured against
+//! exact polyhedral distances that lost on every source (docs/mesh.md), so it is not offered.
+use super::intrinsic::{area, Intrinsic, NONE};
 use super::{check_input, unreached};
 use crate::error::{check_finite_points, Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -57,36 +57,6 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
-
-const NONE: u32 = u32::MAX;
-
-/// Variants of the method, kept so that they can be measured against one another
-/// (`bunny_report`). Mean |error| / mean distance against exact polyhedral distances on the
-/// Stanford bunny (34834 vertices, holes), sources 14029 / 0 / 5000, potpourri3d's robust heat
-/// solver 0.458 / 0.878 / 0.731 %:
-///
-/// | triangulation | Neumann | Neumann–Dirichlet average |
-/// |---|---|---|
-/// | input (cotan) | 0.455 / 0.872 / 0.696 % | 0.460 / 0.888 / 0.734 % |
-/// | intrinsic Delaunay | **0.450 / 0.845 / 0.685 %** | 0.456 / 0.858 / 0.719 % |
-///
-/// The intrinsic Delaunay triangulation gains a little on every source; the average loses on
-/// every source, and on an open cylinder against its unrolling too (1.09 % Neumann, 1.86 %
-/// averaged).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct HeatOptions {
-    /// Flip to the intrinsic Delaunay triangulation before building the operators.
-    pub intrinsic_delaunay: bool,
-    /// Average the Neumann and Dirichlet heat solutions on meshes with a boundary.
-    pub average_boundary: bool,
-}
-
-impl Default for HeatOptions {
-    /// The variant that measured best.
-    fn default() -> Self {
-        HeatOptions { intrinsic_delaunay: true, average_boundary: false }
-    }
-}
 
 /// The heat method's operators for one mesh, factored once: `distances` then costs a few
 /// triangular solves per source. Built by `HeatSolver::new`; `Sync`, so sources can run in
@@ -104,15 +74,12 @@ pub struct HeatSolver {
     tri: Vec<[u32; 3]>,
     area: Vec<f64>,
     grad: Vec<[[f64; 2]; 3]>,
-    /// Vertices held at 0 in the Dirichlet heat system and in the Poisson system.
-    on_boundary: Vec<bool>,
+    /// Vertices held at 0 in the Poisson system.
     poisson_pin: Vec<bool>,
-    /// One symbolic factorization (the three matrices share one sparsity pattern) and the
-    /// numeric factors: Neumann heat, Dirichlet heat (when averaging and there is a boundary),
-    /// Poisson.
+    /// One symbolic factorization (the two matrices share one sparsity pattern) and the
+    /// numeric factors of the heat (Neumann) and Poisson systems.
     symbolic: Option<SymbolicCholesky<usize>>,
     heat: Vec<f64>,
-    heat_dirichlet: Option<Vec<f64>>,
     poisson: Vec<f64>,
 }
 
@@ -177,171 +144,6 @@ fn distance(p: &[f64; 3], q: &[f64; 3]) -> f64 {
         return m;
     }
     m * ((d[0] / m).powi(2) + (d[1] / m).powi(2) + (d[2] / m).powi(2)).sqrt()
-}
-
-/// The area of a triangle from its side lengths (Kahan's ordering of Heron's formula, accurate
-/// for needles); 0 when the lengths violate the triangle inequality.
-fn area(a: f64, b: f64, c: f64) -> f64 {
-    let mut s = [a, b, c];
-    s.sort_unstable_by(|x, y| y.total_cmp(x));
-    let [a, b, c] = s;
-    let p = (a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c));
-    if p > 0.0 {
-        0.25 * p.sqrt()
-    } else {
-        0.0
-    }
-}
-
-/// Strict triangle inequalities.
-fn is_triangle(a: f64, b: f64, c: f64) -> bool {
-    a < b + c && b < a + c && c < a + b
-}
-
-/// A triangulation held as edge lengths: halfedge 3f + k runs from corner k to corner k + 1 of
-/// face f, and its twin is the halfedge of the other face along the same edge, in the opposite
-/// direction, when the edge has exactly two faces oriented alike (NONE otherwise: such an edge
-/// is never flipped). A flip may leave two faces sharing two edges, or a vertex twice in one
-/// face: a Δ-complex, which the operators below handle since they only accumulate by corner.
-struct Intrinsic {
-    tri: Vec<[u32; 3]>,
-    len: Vec<f64>,
-    twin: Vec<u32>,
-}
-
-impl Intrinsic {
-    /// The cotangent of the angle opposite halfedge h in its face.
-    fn cot_opposite(&self, h: usize) -> f64 {
-        let (f, k) = (h / 3, h % 3);
-        let (a, b, c) = (self.len[3 * f + (k + 1) % 3], self.len[3 * f + (k + 2) % 3], self.len[h]);
-        (a * a + b * b - c * c) / (4.0 * area(a, b, c))
-    }
-
-    /// Flips until every flippable edge is Delaunay (opposite angles summing to ≤ π). Each flip
-    /// lowers the Dirichlet energy of the piecewise-linear interpolant (Rippa), so the loop
-    /// ends; the cap only guards against a rounding cycle.
-    fn flip_to_delaunay(&mut self) {
-        let nh = self.len.len();
-        let mut stack: Vec<usize> = (0..nh).filter(|&h| self.twin[h] != NONE && h < self.twin[h] as usize).collect();
-        let mut queued = vec![false; nh];
-        for &h in &stack {
-            queued[h] = true;
-        }
-        let mut budget = 20 * nh + 100;
-        while let Some(h) = stack.pop() {
-            queued[h] = false;
-            let g = self.twin[h];
-            // A tolerance so that a cocircular pair (a square's diagonal) is left alone.
-            if g == NONE {
-                continue;
-            }
-            let sum = self.cot_opposite(h) + self.cot_opposite(g as usize);
-            if sum.is_nan() || sum >= -1e-12 {
-                continue;
-            }
-            if budget == 0 {
-                break;
-            }
-            if !self.flip(h) {
-                continue;
-            }
-            budget -= 1;
-            let (f1, f2) = (h / 3, g as usize / 3);
-            for s in [3 * f1 + 1, 3 * f1 + 2, 3 * f2 + 1, 3 * f2 + 2] {
-                if self.twin[s] != NONE && !queued[s] {
-                    queued[s] = true;
-                    stack.push(s);
-                }
-            }
-        }
-    }
-
-    /// The tufted cover (Sharp & Crane 2020): the faces twice, a front and a back sheet, glued
-    /// edge to edge as the mesh is and front to back along the boundary `boundary` (front
-    /// halfedges). A boundary edge then has two opposite angles too and is flipped like any
-    /// other when they sum to more than π: on an open mesh a boundary triangle with an obtuse
-    /// angle opposite the boundary (a convex hull's slivers) otherwise keeps a negative cotangent
-    /// weight, the heat goes negative and the distances there fall to half (measured on a random
-    /// xy Delaunay mesh: 8 % mean error, 54 % worst; potpourri3d, which builds this cover, 1.2 %).
-    /// Without flips both sheets are alike and each counts half: the operators are the mesh's.
-    fn tufted(self, boundary: &[usize]) -> Intrinsic {
-        let f = self.tri.len();
-        // The back copy of face (a, b, c) is (b, a, c): halfedge k of the front runs along the
-        // same edge as halfedge [0, 2, 1][k] of the back, the other way.
-        let back = |h: usize| 3 * (f + h / 3) + [0, 2, 1][h % 3];
-        let (mut tri, mut len) = (self.tri, self.len);
-        tri.extend_from_within(..);
-        len.extend_from_within(..);
-        for t in &mut tri[f..] {
-            *t = [t[1], t[0], t[2]];
-        }
-        for l in len[3 * f..].chunks_exact_mut(3) {
-            l.swap(1, 2);
-        }
-        let mut twin = vec![NONE; 2 * self.twin.len()];
-        for (h, &t) in self.twin.iter().enumerate() {
-            if t != NONE {
-                twin[h] = t;
-                twin[back(h)] = back(t as usize) as u32;
-            }
-        }
-        for &h in boundary {
-            twin[h] = back(h) as u32;
-            twin[back(h)] = h as u32;
-        }
-        Intrinsic { tri, len, twin }
-    }
-
-    /// Replaces the edge of halfedge h (a → b, in face (a, b, i), its twin in (b, a, j)) by the
-    /// edge i–j, measured in the plane where both triangles are laid out. Refused (false) when
-    /// the two faces are one or a new triangle would be degenerate.
-    fn flip(&mut self, h: usize) -> bool {
-        let g = self.twin[h] as usize;
-        let (f1, k1, f2, k2) = (h / 3, h % 3, g / 3, g % 3);
-        if f1 == f2 {
-            return false;
-        }
-        let (h1, h2) = (3 * f1 + (k1 + 1) % 3, 3 * f1 + (k1 + 2) % 3);
-        let (g1, g2) = (3 * f2 + (k2 + 1) % 3, 3 * f2 + (k2 + 2) % 3);
-        let (a, b, i) = (self.tri[f1][k1], self.tri[f1][(k1 + 1) % 3], self.tri[f1][(k1 + 2) % 3]);
-        let j = self.tri[f2][(k2 + 2) % 3];
-        // h: a→b, h1: b→i, h2: i→a; g: b→a, g1: a→j, g2: j→b.
-        let (lab, lbi, lia, laj, ljb) = (self.len[h], self.len[h1], self.len[h2], self.len[g1], self.len[g2]);
-        if lab.is_nan() || lab <= 0.0 {
-            return false;
-        }
-        // a at the origin, b on the x axis, i above it, j below.
-        let xi = (lab * lab + lia * lia - lbi * lbi) / (2.0 * lab);
-        let yi = 2.0 * area(lab, lbi, lia) / lab;
-        let xj = (lab * lab + laj * laj - ljb * ljb) / (2.0 * lab);
-        let yj = 2.0 * area(lab, laj, ljb) / lab;
-        let d = (xi - xj).hypot(yi + yj);
-        if !(is_triangle(d, lia, laj) && is_triangle(d, ljb, lbi)) {
-            return false;
-        }
-        // New faces (j, i, a) and (i, j, b): slot 0 of each is the new edge; the four outer
-        // halfedges move to the slots listed, their twins follow.
-        let old = [h1, h2, g1, g2];
-        let new = [3 * f2 + 2, 3 * f1 + 1, 3 * f1 + 2, 3 * f2 + 1];
-        let saved = old.map(|x| (self.len[x], self.twin[x]));
-        let moved = |x: u32| old.iter().position(|&o| o == x as usize).map_or(x, |q| new[q] as u32);
-        for q in 0..4 {
-            let (l, t) = saved[q];
-            self.len[new[q]] = l;
-            let t = if t == NONE { NONE } else { moved(t) };
-            self.twin[new[q]] = t;
-            if t != NONE {
-                self.twin[t as usize] = new[q] as u32;
-            }
-        }
-        self.len[3 * f1] = d;
-        self.len[3 * f2] = d;
-        self.twin[3 * f1] = (3 * f2) as u32;
-        self.twin[3 * f2] = (3 * f1) as u32;
-        self.tri[f1] = [j, i, a];
-        self.tri[f2] = [i, j, b];
-        true
-    }
 }
 
 /// The gradients of the three hat functions of a triangle with side lengths `l` (l[k] from
@@ -415,10 +217,6 @@ impl HeatSolver {
     pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<Self> {
         check_finite_points("vertices", vertices)?;
         crate::mesh::check_faces(vertices.len(), faces)?;
-        Self::with_options(vertices, faces, HeatOptions::default())
-    }
-
-    pub(crate) fn with_options(vertices: &[[f64; 3]], faces: &[[u32; 3]], opts: HeatOptions) -> Result<Self> {
         let n = vertices.len();
         let nh = 3 * faces.len();
         let mut len: Vec<f64> = (0..nh)
@@ -437,22 +235,17 @@ impl HeatSolver {
             .collect();
         keys.sort_unstable();
         let mut twin = vec![NONE; nh];
-        let mut on_boundary = vec![false; n];
         let mut boundary_half = Vec::new();
         let longest = len.iter().fold(0.0f64, |m, &l| m.max(l));
         let (mut sum, mut edges) = (0.0f64, 0usize);
         for group in keys.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
-            let (a, b, h) = group[0];
+            let h = group[0].2;
             if longest > 0.0 {
                 sum += len[h as usize] / longest;
             }
             edges += 1;
             match group {
-                [_] => {
-                    on_boundary[a as usize] = true;
-                    on_boundary[b as usize] = true;
-                    boundary_half.push(h as usize);
-                }
+                [_] => boundary_half.push(h as usize),
                 [(_, _, p), (_, _, q)] => {
                     let (p, q) = (*p as usize, *q as usize);
                     let from = |h: usize| faces[h / 3][h % 3];
@@ -476,11 +269,9 @@ impl HeatSolver {
             tri: faces.to_vec(),
             area: Vec::new(),
             grad: Vec::new(),
-            on_boundary,
             poisson_pin: vec![false; n],
             symbolic: None,
             heat: Vec::new(),
-            heat_dirichlet: None,
             poisson: Vec::new(),
         };
         // All edges of zero length: each component is a single point, nothing to solve.
@@ -504,13 +295,11 @@ impl HeatSolver {
         let mut it = Intrinsic { tri: faces.to_vec(), len, twin };
         // Each face of the tufted cover stands for half of one of the mesh's faces.
         let mut share = 1.0;
-        if opts.intrinsic_delaunay {
-            if !boundary_half.is_empty() {
-                it = it.tufted(&boundary_half);
-                share = 0.5;
-            }
-            it.flip_to_delaunay();
+        if !boundary_half.is_empty() {
+            it = it.tufted(&boundary_half);
+            share = 0.5;
         }
+        it.flip_to_delaunay();
         let geometry: Vec<([[f64; 2]; 3], f64)> = it
             .len
             .chunks_exact(3)
@@ -545,9 +334,6 @@ impl HeatSolver {
         // The first vertex of each component holds the Poisson solution's constant.
         solver.poisson_pin = (0..n).map(|v| unused[v] || solver.component[v] == v as u32).collect();
         let poisson = pattern.pinned(&stiffness, &solver.poisson_pin);
-        let boundary_pin: Vec<bool> = (0..n).map(|v| unused[v] || solver.on_boundary[v]).collect();
-        let dirichlet = (opts.average_boundary && solver.on_boundary.iter().any(|&b| b))
-            .then(|| pattern.pinned(&heat, &boundary_pin));
 
         let symbolic = factorize_symbolic_cholesky(
             pattern.sym.as_ref(),
@@ -556,13 +342,10 @@ impl HeatSolver {
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| Error::invalid("faces", format!("the mesh's Laplacian could not be analysed: {e:?}")))?;
-        let ((heat, poisson), dirichlet) = rayon::join(
-            || rayon::join(|| factor(&symbolic, &pattern, &heat), || factor(&symbolic, &pattern, &poisson)),
-            || dirichlet.map(|d| factor(&symbolic, &pattern, &d)),
-        );
+        let (heat, poisson) =
+            rayon::join(|| factor(&symbolic, &pattern, &heat), || factor(&symbolic, &pattern, &poisson));
         solver.heat = heat?;
         solver.poisson = poisson?;
-        solver.heat_dirichlet = dirichlet.transpose()?;
         solver.symbolic = Some(symbolic);
         Ok(solver)
     }
@@ -641,17 +424,6 @@ impl HeatSolver {
         if k > 0 {
             self.solve(&self.heat, &mut u);
         }
-        if let (Some(hd), true) = (&self.heat_dirichlet, k > 0) {
-            // A source on the boundary has no Dirichlet heat: its column stays 0.
-            let mut w = vec![0.0; n * k];
-            for (j, &s) in solved.iter().enumerate() {
-                w[j * n + s] = if self.on_boundary[s] { 0.0 } else { 1.0 };
-            }
-            self.solve(hd, &mut w);
-            for (u, w) in u.iter_mut().zip(&w) {
-                *u += w;
-            }
-        }
         let mut b = vec![0.0; n * k];
         for (u, b) in u.chunks_exact(n).zip(b.chunks_exact_mut(n)) {
             self.poisson_rhs(u, b);
@@ -698,7 +470,7 @@ pub fn geodesic_heat(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize
     if sources.is_empty() {
         return Ok(Vec::new());
     }
-    HeatSolver::with_options(vertices, faces, HeatOptions::default())?.distances_from(sources)
+    HeatSolver::new(vertices, faces)?.distances_from(sources)
 }
 
 #[cfg(test)]
@@ -917,73 +689,5 @@ mod tests {
                 assert_eq!(it.len[t as usize], it.len[h]);
             }
         }
-    }
-
-    /// Reads a little-endian f64/u32 mesh dump: nv, nf (u64), vertices (f64 × 3nv), faces
-    /// (u32 × 3nf), ns (u64), sources (u64 × ns).
-    fn read_dump(path: &str) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<usize>) {
-        let b = std::fs::read(path).expect("the dump");
-        let (nv, nf) = (
-            u64::from_le_bytes(b[..8].try_into().unwrap()) as usize,
-            u64::from_le_bytes(b[8..16].try_into().unwrap()) as usize,
-        );
-        let mut at = 16;
-        let mut v = Vec::with_capacity(nv);
-        for _ in 0..nv {
-            let mut p = [0.0; 3];
-            for x in &mut p {
-                *x = f64::from_le_bytes(b[at..at + 8].try_into().unwrap());
-                at += 8;
-            }
-            v.push(p);
-        }
-        let mut f = Vec::with_capacity(nf);
-        for _ in 0..nf {
-            let mut t = [0u32; 3];
-            for x in &mut t {
-                *x = u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
-                at += 4;
-            }
-            f.push(t);
-        }
-        let ns = u64::from_le_bytes(b[at..at + 8].try_into().unwrap()) as usize;
-        at += 8;
-        let s =
-            (0..ns).map(|k| u64::from_le_bytes(b[at + 8 * k..at + 8 * k + 8].try_into().unwrap()) as usize).collect();
-        (v, f, s)
-    }
-
-    /// Measurement, not a test: `HEAT_DUMP=mesh.bin HEAT_OUT=dir cargo test --release --lib
-    /// bunny_report -- --ignored --nocapture`. Writes each variant's distances for the dump's
-    /// first three sources to dir/<variant>.bin (f64 rows), then times `geodesic_heat` on all
-    /// the dump's sources (factorization included), best of 3, and prints it. The Python side
-    /// (scripts in the commit message) compares with exact distances and potpourri3d.
-    #[test]
-    #[ignore = "needs a mesh dump; a measurement"]
-    fn bunny_report() {
-        let (Ok(dump), Ok(out)) = (std::env::var("HEAT_DUMP"), std::env::var("HEAT_OUT")) else { return };
-        let (v, f, s) = read_dump(&dump);
-        if std::env::var("HEAT_TIMING_ONLY").is_err() {
-            for (name, delaunay, average) in
-                [("cotan", false, false), ("cotan_avg", false, true), ("idt", true, false), ("idt_avg", true, true)]
-            {
-                let opts = HeatOptions { intrinsic_delaunay: delaunay, average_boundary: average };
-                let t0 = std::time::Instant::now();
-                let solver = HeatSolver::with_options(&v, &f, opts).unwrap();
-                let built = t0.elapsed().as_secs_f64();
-                let rows = solver.distances_from(&s[..3]).unwrap();
-                let bytes: Vec<u8> = rows.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
-                std::fs::write(format!("{out}/{name}.bin"), bytes).unwrap();
-                println!("VARIANT {name} build {built:.4} s");
-            }
-        }
-        let mut best = f64::INFINITY;
-        for _ in 0..3 {
-            let t0 = std::time::Instant::now();
-            let d = geodesic_heat(&v, &f, &s).unwrap();
-            best = best.min(t0.elapsed().as_secs_f64());
-            assert_eq!(d.len(), s.len());
-        }
-        println!("HEAT_TIME {best:.6}");
     }
 }

@@ -10,10 +10,10 @@
 //! improves on.
 mod exact;
 mod heat;
+mod intrinsic;
 
 use crate::error::{check_finite_points, Error, Result};
 pub use exact::geodesic_exact;
-use heat::HeatOptions;
 pub use heat::{geodesic_heat, HeatSolver};
 use nalgebra::Vector3;
 use rayon::prelude::*;
@@ -336,9 +336,7 @@ impl GeodesicSolver {
         let prepared = match method {
             GeodesicMethod::Exact => Prepared::Exact(Box::new(exact::ExactGeodesics::new(vertices, faces))),
             GeodesicMethod::Fmm => Prepared::Fmm(Marching::new(vertices, faces)),
-            GeodesicMethod::Heat => {
-                Prepared::Heat(Box::new(HeatSolver::with_options(vertices, faces, HeatOptions::default())?))
-            }
+            GeodesicMethod::Heat => Prepared::Heat(Box::new(HeatSolver::new(vertices, faces)?)),
         };
         Ok(GeodesicSolver { n: vertices.len(), method, prepared })
     }

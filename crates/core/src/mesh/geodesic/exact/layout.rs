@@ -132,8 +132,8 @@ pub(super) struct Edges {
 
 impl Edges {
     /// The half-edges sorted by their vertex pair, then by number: a counting sort by the
-    /// smaller vertex, then each vertex's few sorted (a third of the layout's time went to a
-    /// comparison sort of all of them).
+    /// smaller vertex, then each vertex's few sorted (a comparison sort of all of them was the
+    /// layout's slowest step).
     pub(super) fn new(n: usize, faces: &[[u32; 3]]) -> Self {
         let mut first = vec![0u32; n + 1];
         for face in faces.iter().filter(|face| distinct(face)) {
@@ -220,8 +220,7 @@ impl Layout {
         let points: Vec<[f64; 3]> = outer.iter().map(|&v| given_points[v as usize]).collect();
 
         // The faces' geometry (in parallel) and the undirected edges (a serial counting sort) at
-        // once, on the two threads they need: one after the other they took 14 of the layout's
-        // 22 ms on the bunny.
+        // once: the serial sort would otherwise leave the other threads idle.
         let ((mut half, angle, mut pseudo), (edges, around)) =
             rayon::join(|| geometry(&points, &faces), || (Edges::new(n, &faces), Around::new(n, &faces)));
         let Edges { edge_of, edge_start, edge_half } = edges;

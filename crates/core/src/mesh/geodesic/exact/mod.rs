@@ -79,9 +79,9 @@
 //! faces and new distances of vertices on both. A round has two halves: first what the part had
 //! queued, then, with the other's news of the round before, what that brings; so a part whose
 //! round was light goes on with the next round's first half instead of waiting (`Rounds`). On
-//! two threads the parts run at once (one source on the bunny 1.6–1.8× faster than on one), on
-//! one in turn, and in turn too once two threads stop paying (when another program keeps the
-//! second core busy); nothing depends on the threads, so neither do the distances. Out of
+//! two threads or more the parts run at once, on one in turn: a fixed rule (the mesh's size and
+//! the pool's thread count), never the clock or the host's load. The rounds are the same either
+//! way, so the distances are too, bit for bit. Out of
 //! order within a band, a part may settle a pseudo-source before a shorter path to it arrives
 //! from the other: it then emits again, at the shorter distance, and what it emitted before
 //! loses to that (a pseudo-source too early costs time, never accuracy). A source's row alone
@@ -97,7 +97,7 @@
 //! pieces is taken from a pool of emptied lists when its first window comes and given back when
 //! it has crossed (only the front holds storage, and it is warm in cache), every square root a
 //! window's tests share is taken once, and the buffers are kept from one source to the next
-//! and, up to 256 MB, from one mesh to the next (`KEPT`).
+//! (and from call to call of a prepared mesh; they are freed with it).
 //!
 //! Degenerate input: a non-manifold edge passes each window on to every other face on it. A
 //! vertex on a boundary or non-manifold edge, where the faces around it are not one fan, or on a
@@ -147,40 +147,27 @@ const WORK_PER_FACE: usize = 100_000;
 const NONE: u32 = u32::MAX;
 /// Faces per block of the Morton order; the blocks go alternately to the two parts of a
 /// propagation. Smaller blocks share each round's work more evenly but make more news to
-/// exchange (on the bunny, messages per side taken: 64 faces 0.39, 256 0.20, 1024 0.11; the
-/// longer part of each round, summed, 0.55–0.57 of all sides taken at all three).
+/// exchange (on the bunny, messages per side taken: 64 faces 0.39, 256 0.20, 1024 0.11, while
+/// the longer part of the rounds stays about 0.56 of all sides taken).
 const FACE_BLOCK: usize = 256;
-/// Faces below which one source runs in one part: with a few blocks each, two parts on two
-/// threads gained nothing (icospheres, two threads against one: 320 faces 0.8×, 1280 faces
-/// 1.0–1.1×; 5120 faces 1.1–1.4×, 20 480 faces 1.2–1.6×).
+/// Faces below which one source runs in one part: with a few blocks each, the parts would
+/// exchange about as much as they work (BENCHMARKS.md, exact geodesics).
 const PAIRED_FACES: usize = 8 * FACE_BLOCK;
 /// `Half::mate` of a half-edge on an edge of more than two faces.
 const MANY: u32 = u32::MAX - 1;
 /// `Half::mate` flag: the mate runs the same way (faces oriented inconsistently).
 const SAME: u32 = 1 << 31;
 
-/// Propagation buffers of meshes laid out before (their `ExactGeodesics` dropped), kept for the
-/// next: a page's first touch costs 1.5–2 µs on this host, and each `geodesic_distances` call on
-/// the bunny freed its 21 MB of buffers and touched some 7,700 new pages again (prepared, the
-/// calls touch none). Kept, a call touches none either and takes 4–5 % less time (one source,
-/// 131 → 126 ms at the least). At most `KEPT_BYTES` are kept: a large mesh does not leave all
-/// its buffers behind.
-static KEPT: std::sync::Mutex<Vec<Work>> = std::sync::Mutex::new(Vec::new());
-
-/// The most memory of propagation buffers kept for later meshes (`KEPT`): the bunny's take 21 MB,
-/// about 300 bytes per face.
-const KEPT_BYTES: usize = 256 << 20;
-
 /// A mesh laid out once for exact geodesics (`GeodesicSolver` with `GeodesicMethod::Exact`):
 /// each call of `distances` reuses the layout and the propagation buffers of earlier calls (one
-/// set per thread that has worked on it, a few tens of bytes per half-edge), and the first call
-/// those that meshes before left (`KEPT`).
+/// set per thread that has worked on it, a few tens of bytes per half-edge). They are freed with
+/// it: nothing is kept for the life of the process.
 pub(super) struct ExactGeodesics {
     layout: Layout,
     n: usize,
     /// Buffers not in use, handed from source to source and from call to call: rayon calls a
     /// `map_init` initialiser once per job it splits off, which here is about once per source.
-    idle: std::sync::Mutex<Vec<Work>>,
+    idle: std::sync::Mutex<Vec<Buffers>>,
 }
 
 impl ExactGeodesics {
@@ -203,10 +190,7 @@ impl ExactGeodesics {
         sources
             .par_iter()
             .map(|&s| {
-                let take = || {
-                    let mine = self.idle.lock().ok().and_then(|mut idle| idle.pop());
-                    mine.or_else(|| KEPT.lock().ok().and_then(|mut kept| kept.pop())).unwrap_or_default()
-                };
+                let take = || self.idle.lock().ok().and_then(|mut idle| idle.pop()).unwrap_or_default();
                 let mut works = [take(), take()];
                 let row = distances_from(&self.layout, &mut works, self.n, s, split);
                 if let Ok(mut idle) = self.idle.lock() {
@@ -221,27 +205,6 @@ impl ExactGeodesics {
     }
 }
 
-impl Drop for ExactGeodesics {
-    /// Hands the buffers to the next mesh (`KEPT`), as far as `KEPT_BYTES` allows.
-    fn drop(&mut self) {
-        let mine = std::mem::take(self.idle.get_mut().unwrap_or_else(|e| e.into_inner()));
-        let mut left = Vec::new();
-        if let Ok(mut kept) = KEPT.lock() {
-            let mut bytes: usize = kept.iter().map(Work::bytes).sum();
-            for work in mine {
-                let more = work.bytes();
-                if bytes + more <= KEPT_BYTES {
-                    bytes += more;
-                    kept.push(work);
-                } else {
-                    left.push(work);
-                }
-            }
-        }
-        drop(left); // freed outside the lock
-    }
-}
-
 /// Exact geodesic distances along the mesh surface from each source vertex to every vertex,
 /// one row per source, sources in parallel. A vertex that no face uses, or that no face path
 /// reaches, is `inf`. Degenerate and non-manifold meshes are accepted (see the module notes).
@@ -251,7 +214,7 @@ pub fn geodesic_exact(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usiz
 }
 
 /// One row of `geodesic_exact`, in the given numbering.
-fn distances_from(layout: &Layout, works: &mut [Work; 2], n: usize, s: usize, split: Split) -> Result<Vec<f64>> {
+fn distances_from(layout: &Layout, works: &mut [Buffers; 2], n: usize, s: usize, split: Split) -> Result<Vec<f64>> {
     let inner = layout.inner[s] as usize;
     if layout.around.of(inner).is_empty() {
         return Ok(unreached(n, s));

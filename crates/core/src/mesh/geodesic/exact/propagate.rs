@@ -4,9 +4,9 @@ use super::*;
 
 /// A half-edge as the propagation knows it when windows join it: the pieces of the windows
 /// waiting there, in order along the edge and disjoint (rule 3). 32 bytes, two to a cache line;
-/// rule 2's best path, used only when the side's turn comes, is kept apart (`Work::best`).
+/// rule 2's best path, used only when the side's turn comes, is kept apart (`Buffers::best`).
 pub(super) struct Side {
-    pub(super) env: Vec<Seg>,
+    pub(super) env: Vec<Window>,
     /// The key (as queued) of the side's one live queue entry, `u64::MAX` for none: a side is
     /// queued once, at its earliest window, not once per window.
     pub(super) queued: u64,
@@ -14,20 +14,20 @@ pub(super) struct Side {
 
 /// The buffers of a propagation, kept from one source to the next.
 #[derive(Default)]
-pub(super) struct Work {
+pub(super) struct Buffers {
     pub(super) d: Vec<f64>,
     /// Per half-edge, rule 2's best path from it to its face's apex: length, where it crosses.
     pub(super) best: Vec<(f64, f64)>,
     /// Per half-edge, the windows waiting there.
     pub(super) side: Vec<Side>,
-    pub(super) queue: Option<Radix>,
+    pub(super) queue: Option<RadixQueue>,
     pub(super) ids: u64,
-    pub(super) out: Vec<Seg>,
+    pub(super) out: Vec<Window>,
     /// Emptied piece lists, last emptied first: a side takes one when its first window comes,
     /// and gives it back once its windows have crossed. So only the sides on the front hold
     /// storage, and the storage they get was in use a moment ago (still in cache); a list of
-    /// its own per side took 14 % more time on the bunny (allocation, first touches of memory).
-    pub(super) spare: Vec<Vec<Seg>>,
+    /// its own per side would cost an allocation and the first touches of its memory.
+    pub(super) spare: Vec<Vec<Window>>,
     pub(super) pieces: Vec<(f64, f64)>,
     pub(super) kept: Vec<(f64, f64)>,
     pub(super) batch: Vec<Crossing>,
@@ -38,22 +38,21 @@ pub(super) struct Work {
     /// each queued once when the batch is done, at the least distance of all it gave. Queued
     /// again at each window that came in lower, as a batch's windows mostly do, a source on the
     /// bunny made 0.76 M queue entries for 0.11 M turns of a side, 0.61 M of them stale, and the
-    /// radix heap moved entries 4.8 M times; once per batch, 0.23 M, 0.08 M and 0.9 M (8–10 %
-    /// less time, on one thread and on two).
+    /// radix heap moved entries 4.8 M times; once per batch, 0.23 M, 0.08 M and 0.9 M.
     pub(super) touched: Vec<u32>,
     /// What this part tells the other at the end of a round, and the pieces of its joins.
     pub(super) outbox: Vec<Message>,
     pub(super) outbox_pieces: Vec<(f64, f64)>,
 }
 
-/// News from one part of a propagation to the other, delivered between rounds.
+/// A message from one part of a propagation to the other, delivered between rounds.
 #[derive(Clone, Copy)]
 pub(super) enum Message {
     /// A vertex with faces in both parts is reached at this distance.
     Relax { v: u32, dist: f64 },
     /// A window joins side `t` (of the receiver's) with its pieces `outbox_pieces[from..to]`,
     /// left after the cut by the windows on the sender's side of the edge.
-    Join { t: u32, w: Seg, least: f64, slack: f64, from: u32, to: u32 },
+    Join { t: u32, w: Window, least: f64, slack: f64, from: u32, to: u32 },
     /// A pseudo-source lying on an edge reaches the face of half-edge `t` directly.
     EmitFromEdge { t: u32, x: f64, dv: f64 },
 }
@@ -73,28 +72,17 @@ pub(super) struct Crossing {
 
 /// One part of the propagation from one source: the faces of `Layout::owner` `me` (all when
 /// `me` is `WHOLE`), with its own copy of the vertex distances.
-pub(super) struct Run<'a> {
+pub(super) struct Wavefront<'a> {
     pub(super) m: &'a Layout,
-    pub(super) w: &'a mut Work,
-    pub(super) queue: Radix,
+    pub(super) w: &'a mut Buffers,
+    pub(super) queue: RadixQueue,
     pub(super) me: u8,
     pub(super) budget: usize,
     /// The budget when the round began.
     pub(super) started: usize,
 }
 
-impl Work {
-    /// The memory it holds, about: the large buffers and the piece lists (all back in `spare`
-    /// once a propagation has run its course).
-    pub(super) fn bytes(&self) -> usize {
-        use std::mem::size_of;
-        let lists: usize = self.spare.iter().map(Vec::capacity).sum();
-        size_of::<f64>() * (self.d.capacity() + self.emitted.capacity())
-            + size_of::<(f64, f64)>() * self.best.capacity()
-            + size_of::<Side>() * self.side.capacity()
-            + size_of::<Seg>() * lists
-    }
-
+impl Buffers {
     /// Ready for a propagation on `m`: every distance unknown, no window waiting.
     pub(super) fn reset(&mut self, m: &Layout) {
         let (nv, nh) = (m.points.len(), m.half.len());
@@ -120,15 +108,15 @@ impl Work {
     }
 }
 
-impl<'a> Run<'a> {
-    /// Part `me` of a propagation on `m`, with buffers `w` (`Work::reset`).
-    pub(super) fn new(m: &'a Layout, w: &'a mut Work, me: u8) -> Self {
+impl<'a> Wavefront<'a> {
+    /// Part `me` of a propagation on `m`, with buffers `w` (`Buffers::reset`).
+    pub(super) fn new(m: &'a Layout, w: &'a mut Buffers, me: u8) -> Self {
         w.ids = me as u64;
-        let mut queue = w.queue.take().unwrap_or_else(Radix::new);
+        let mut queue = w.queue.take().unwrap_or_else(RadixQueue::new);
         queue.clear();
         // A budget for each part: neither can hang.
         let budget = WORK_PER_FACE.saturating_mul(m.faces.len()).max(1_000_000);
-        Run { m, w, queue, me, budget, started: budget }
+        Wavefront { m, w, queue, me, budget, started: budget }
     }
 
     pub(super) fn mine(&self, h: usize) -> bool {
@@ -197,7 +185,7 @@ impl<'a> Run<'a> {
     }
 
     /// Hands this round's news for the other part to `mail` (which the other has read).
-    pub(super) fn post(&mut self, mail: &mut News) {
+    pub(super) fn post(&mut self, mail: &mut Handover) {
         mail.messages.clear();
         mail.pieces.clear();
         std::mem::swap(&mut mail.messages, &mut self.w.outbox);
@@ -205,7 +193,7 @@ impl<'a> Run<'a> {
     }
 
     /// The other part's news of the last round.
-    pub(super) fn receive(&mut self, news: &News) {
+    pub(super) fn receive(&mut self, news: &Handover) {
         let pieces = &news.pieces;
         for &message in &news.messages {
             match message {
@@ -372,7 +360,7 @@ impl<'a> Run<'a> {
         batch.clear();
         let mut best = self.w.best[h];
         // Rule 1 is not applied again here with the ends' latest distances: on the bunny that
-        // dropped 307 of a source's 1.5 M windows, and cost 3.5 % of the time.
+        // dropped 307 of a source's 1.5 M windows, for more work than it saved.
         for s in &mine {
             let (b0, b1) = (s.b0, s.b1);
             // Straight when the apex's ray crosses the window, else through the nearer end.
@@ -449,7 +437,7 @@ impl<'a> Run<'a> {
 
     /// A window leaving its face through half-edge `h` on [t0, t1] of h's frame, source (sx, sy)
     /// with the face on −y: for each face beyond, rule 3 and the queue. `ends`: the distances of
-    /// h's start and end (`Run::ends`).
+    /// h's start and end (`Wavefront::ends`).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn spawn(&mut self, h: usize, t0: f64, t1: f64, sx: f64, sy: f64, sigma: f64, ends: [f64; 2]) {
         let m = self.m;
@@ -467,7 +455,7 @@ impl<'a> Run<'a> {
         if !(t1 - t0 > MIN_WIDTH * l) {
             return;
         }
-        let seg = Seg { b0: t0, b1: t1, x: sx, y: sy, sigma, id: 0 };
+        let seg = Window { b0: t0, b1: t1, x: sx, y: sy, sigma, id: 0 };
         let least = seg.least(t0, t1, f0, f1);
         let slack = self.slack(least + l);
         match m.half[h].mate {
@@ -477,7 +465,7 @@ impl<'a> Run<'a> {
                     self.join(h, t, same, seg, least, slack);
                 }
             }
-            // The common case, without the iterator (it cost 6 % of the instructions).
+            // The common case, without the iterator (on the hottest path, its setup shows).
             mate => self.join(h, (mate & !SAME) as usize, mate & SAME != 0, seg, least, slack),
         }
     }
@@ -485,15 +473,15 @@ impl<'a> Run<'a> {
     /// The window `w` leaving through `h` (in h's frame) joins side `t` of the same edge (running
     /// the `same` way as h or not): rule 3 against the windows waiting on the edge, then the
     /// queue, at the window's `least` distance.
-    // Inlined at its two calls in `spawn`, the 48-byte window is not copied (8 sources on one
-    // thread 8 % faster; inlining `spawn` or `merge` too was slower, 4–17 %).
+    // Inlined at its two calls in `spawn`, the 48-byte window is not copied through the call;
+    // `spawn` and `merge` stay calls (inlined too, they grew the hot loop past the cache).
     #[inline(always)]
-    pub(super) fn join(&mut self, h: usize, t: usize, same: bool, w: Seg, least: f64, slack: f64) {
+    pub(super) fn join(&mut self, h: usize, t: usize, same: bool, w: Window, least: f64, slack: f64) {
         let m = self.m;
         let l = m.half[h].len;
         // Ids odd in one part, even in the other: pieces of one window join, of two never.
         self.w.ids += 2;
-        let mut w = Seg { id: self.w.ids, ..w };
+        let mut w = Window { id: self.w.ids, ..w };
         if !same {
             w = w.mirrored(l);
         }
@@ -538,7 +526,7 @@ impl<'a> Run<'a> {
     /// Rule 3 across the edge (of length `l`): cuts `self.w.pieces` (of `w`, on a side of the
     /// edge) where a window waiting on its other side `u` (running the `same` way or not) beats
     /// `w` by more than `slack`.
-    pub(super) fn cut_by_side(&mut self, u: usize, same: bool, w: &Seg, l: f64, slack: f64) {
+    pub(super) fn cut_by_side(&mut self, u: usize, same: bool, w: &Window, l: f64, slack: f64) {
         let ww = &mut *self.w;
         let list = &ww.side[u].env;
         if list.is_empty() || ww.pieces.is_empty() {
@@ -581,10 +569,10 @@ impl<'a> Run<'a> {
     /// list waiting on side `h` where it beats what is there by more than `slack`. Returns
     /// whether it took any.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn merge(&mut self, h: usize, w: &Seg, b0: f64, b1: f64, l: f64, slack: f64) -> bool {
+    pub(super) fn merge(&mut self, h: usize, w: &Window, b0: f64, b1: f64, l: f64, slack: f64) -> bool {
         let narrow = MIN_WIDTH * l;
         let ww = &mut *self.w;
-        let w = Seg { b0, b1, ..*w };
+        let w = Window { b0, b1, ..*w };
         let list = &mut ww.side[h].env;
         if list.capacity() == 0 {
             if let Some(spare) = ww.spare.pop() {

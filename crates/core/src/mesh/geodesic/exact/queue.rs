@@ -6,7 +6,7 @@
 /// last key taken, and each is moved at most once per bit: a few cheap moves instead of a
 /// binary heap's cache misses. Keys are distances ≥ 0, whose f64 bits order like the numbers.
 /// Equal keys come out last in, first out, the same on every run.
-pub(super) struct Radix {
+pub(super) struct RadixQueue {
     pub(super) last: u64,
     pub(super) bins: Vec<Vec<(u64, u64)>>,
     /// Bit b set when bin b holds entries (64 bins: keys are ≥ 0, their sign bits never differ).
@@ -18,9 +18,9 @@ pub(super) struct Radix {
     pub(super) behind: std::collections::BinaryHeap<std::cmp::Reverse<(u64, u64)>>,
 }
 
-impl Radix {
+impl RadixQueue {
     pub(super) fn new() -> Self {
-        Radix { last: 0, bins: (0..64).map(|_| Vec::new()).collect(), full: 0, behind: Default::default() }
+        RadixQueue { last: 0, bins: (0..64).map(|_| Vec::new()).collect(), full: 0, behind: Default::default() }
     }
 
     pub(super) fn clear(&mut self) {
@@ -71,8 +71,7 @@ impl Radix {
         let mut moving = std::mem::take(&mut self.bins[b]);
         let last = moving.iter().map(|e| e.0).min().unwrap_or(self.last);
         // The keys of bin b differ from the new least below bit b: they all go to lower bins.
-        // Local copies of the bins and bits keep the loop in registers (1 % fewer instructions
-        // in all on the bunny).
+        // Local copies of the bins and bits keep the loop in registers.
         let (lower, mut full) = (&mut self.bins[..b], self.full & !(1 << b));
         for &e in &moving {
             let to = Self::bin(e.0, last);

@@ -2,7 +2,7 @@
 //! each other what they found between rounds (module notes of `exact`).
 use super::*;
 
-/// How the propagation from one source runs: in one part (`Run::me` = `WHOLE`), as each source
+/// How the propagation from one source runs: in one part (`Wavefront::me` = `WHOLE`), as each source
 /// of a call with several (they run in parallel); or in two parts on two threads, or in turn on
 /// one, as the one source of a call.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -12,35 +12,36 @@ pub(super) enum Split {
     InTurn,
 }
 
-/// `Run::me` of a propagation in one part: every face is its own.
+/// `Wavefront::me` of a propagation in one part: every face is its own.
 pub(super) const WHOLE: u8 = 2;
 
 /// The propagation from inner vertex `source`: in one part (`Split::Whole`), or in two (the
 /// faces of each `Layout::owner`) that take the queued work in rounds, each round the distances
-/// up to a bound, and exchange their news between rounds; on two threads when `Paired` (until
-/// they stop paying), else in turn on this one. The parts and the bounds depend on neither, so
+/// up to a bound, and exchange their news between rounds; on two threads when `Paired`, else in
+/// turn on this one. The parts and the bounds depend on neither, so
 /// the distances do not either. The result in `works[0].d`; false when the work budget ran out.
-pub(super) fn propagate_in_parts(layout: &Layout, works: &mut [Work; 2], source: usize, split: Split) -> bool {
+pub(super) fn propagate_in_parts(layout: &Layout, works: &mut [Buffers; 2], source: usize, split: Split) -> bool {
     let [w0, w1] = works;
     if split == Split::Whole {
         w0.reset(layout);
-        let mut whole = Run::new(layout, w0, WHOLE);
+        let mut whole = Wavefront::new(layout, w0, WHOLE);
         whole.start(source);
         let ok = whole.round(f64::INFINITY);
         whole.finish();
         return ok;
     }
-    // Both parts' buffers at once: the first time, their memory's first touches (some 10 MB a
-    // part) took 8.5 ms on the bunny in turn, 5 ms at once.
+    // Both parts' buffers at once: the first time, the first touches of their memory (some
+    // 10 MB a part on the bunny) overlap.
     rayon::join(|| w0.reset(layout), || w1.reset(layout));
-    let (mut a, mut b) = (Run::new(layout, w0, 0), Run::new(layout, w1, 1));
+    let (mut a, mut b) = (Wavefront::new(layout, w0, 0), Wavefront::new(layout, w1, 1));
     a.start(source);
     b.start(source);
     let mut rounds = Rounds::new(layout);
-    // On two threads until they stop paying (see `in_two_threads`), then in turn on this one:
-    // the rounds are the same either way.
-    let paired = if split == Split::Paired { in_two_threads(&mut a, &mut b, &mut rounds, stops_paying) } else { None };
-    let ok = paired.unwrap_or_else(|| in_turn(&mut a, &mut b, &mut rounds));
+    // On two threads or in turn on this one: the rounds, and so the distances, are the same.
+    let ok = match split {
+        Split::Paired => in_two_threads(&mut a, &mut b, &mut rounds),
+        _ => in_turn(&mut a, &mut b, &mut rounds),
+    };
     for (x, y) in a.w.d.iter_mut().zip(&b.w.d) {
         *x = x.min(*y);
     }
@@ -51,7 +52,7 @@ pub(super) fn propagate_in_parts(layout: &Layout, works: &mut [Work; 2], source:
 
 /// The rounds left, taken in turn on this thread: each part's early half, then each part's late
 /// half, round after round (the order of `Rounds`, so the bits of two threads).
-pub(super) fn in_turn(a: &mut Run, b: &mut Run, rounds: &mut Rounds) -> bool {
+pub(super) fn in_turn(a: &mut Wavefront, b: &mut Wavefront, rounds: &mut Rounds) -> bool {
     // Each part steps its own copy of the band, as on two threads.
     let mut bands = [rounds.band; 2];
     let ok = loop {
@@ -72,22 +73,13 @@ pub(super) fn in_turn(a: &mut Run, b: &mut Run, rounds: &mut Rounds) -> bool {
     ok
 }
 
-/// Whether the rounds on two threads so far, `paired` ns, stopped paying against the parts'
-/// own times summed, `in_turn` ns (about what taking them in turn costs): after 20 ms, so that
-/// a slow start does not decide, when they saved less than a tenth. Unloaded, two threads take
-/// about 0.55 of the sum on the bunny. A call after the machine was idle for a moment starts
-/// slowly: both threads did a quarter of their usual work in its first 6–7 ms (the host wakes
-/// the idle cores), and judged after 5 ms, a call on the bunny 50 ms after the last gave up the
-/// pair in 5 of 15 tries and took one thread's time (208–223 ms against 112–134 ms).
-pub(super) fn stops_paying(paired: u64, in_turn: u64) -> bool {
-    paired > 20_000_000 && 10 * paired > 9 * in_turn
-}
+/// Spins before a part waiting for the other's report parks its thread (`Rounds::wait`).
+const SPINS: u32 = 256;
 
 /// Sides a round takes (both parts) that the band aims at: a round's synchronisation small
 /// against its work, and the order within a band close to the distances' (out of order,
 /// windows are made that a nearer one would have cut: on the bunny 0.74 M sides taken with
-/// rounds of 256–1024 sides, as with 16–64, and 0.88 M with 2048–8192; aiming at 256–2048
-/// changes the time by 1 %).
+/// rounds of 256–1024 sides, as with 16–64, and 0.88 M with 2048–8192).
 pub(super) const ROUND_SIDES: usize = 512;
 
 /// The reports a part keeps: the other reads round k's news in its own round k + 1 and the rest
@@ -99,9 +91,8 @@ pub(super) const REPORTS: usize = 4;
 /// the round's bound in two halves: early, what p had queued; then, once the other part has
 /// ended its round k − 1, late: its news of that round taken, what that brings. So a part whose
 /// round was light goes on with the next round's early half instead of waiting for the other
-/// to end its round (waiting for it at every round, with the news taken first, the bunny took
-/// 8–13 % longer on two threads; putting aside the early half's work that the news can touch,
-/// the faces with a vertex on the other part's, 3 % longer, for 1.5 % fewer sides taken). Both
+/// to end its round (a part waiting for the other at every round, news first, idles whenever
+/// the rounds' work is uneven). Both
 /// parts set round k's bound from both parts' reports of round k − 2 (the last either knows of
 /// the other when it starts round k), each with its own copy of the band, so the rounds are
 /// the same on two threads and on one. Rounds are numbered from 2; the reports of rounds 0 and
@@ -112,13 +103,13 @@ pub(super) struct Rounds {
     pub(super) completed: [std::sync::atomic::AtomicU64; 2],
     /// The next round to take, and the band as set for the one before.
     pub(super) next: u64,
-    pub(super) band: Band,
+    pub(super) band: Horizon,
 }
 
 /// What a part tells of its round: its news (in a mutex, as the other part's thread reads it;
 /// never contended, the rounds keep writing and reading apart) and how it stands after it.
 pub(super) struct Report {
-    pub(super) news: std::sync::Mutex<News>,
+    pub(super) news: std::sync::Mutex<Handover>,
     /// Sides taken in the round; `usize::MAX` for the start.
     pub(super) done: std::sync::atomic::AtomicUsize,
     /// The least distance queued after the round, inf when nothing is.
@@ -136,26 +127,26 @@ impl Report {
 
 /// A part's messages of a round and the pieces of its joins.
 #[derive(Default)]
-pub(super) struct News {
+pub(super) struct Handover {
     pub(super) messages: Vec<Message>,
     pub(super) pieces: Vec<(f64, f64)>,
 }
 
 /// A part's news, as the round it came from left it (a panic there, a bug, is raised on its own).
-pub(super) fn lock(news: &std::sync::Mutex<News>) -> std::sync::MutexGuard<'_, News> {
+pub(super) fn lock(news: &std::sync::Mutex<Handover>) -> std::sync::MutexGuard<'_, Handover> {
     news.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// The bounds of the rounds: each a band beyond the last (or beyond the least distance queued,
 /// when that is further), the band adapted to the work of the rounds.
 #[derive(Clone, Copy)]
-pub(super) struct Band {
+pub(super) struct Horizon {
     /// The bands of the last two rounds, the last first.
     pub(super) widths: [f64; 2],
     pub(super) bound: f64,
 }
 
-impl Band {
+impl Horizon {
     /// A round's bound from both parts' reports of two rounds before (`done` sides between them,
     /// the `least` distance queued in either); None when both were idle then: nothing is queued
     /// and no news is on its way, so the rounds are over. The band is that round's, scaled to
@@ -182,7 +173,26 @@ impl Rounds {
             reports: std::array::from_fn(|_| std::array::from_fn(|_| Report::start())),
             completed: [1.into(), 1.into()],
             next: 2,
-            band: Band { widths: [layout.mean_edge; 2], bound: 0.0 },
+            band: Horizon { widths: [layout.mean_edge; 2], bound: 0.0 },
+        }
+    }
+
+    /// Waits until part `p` has reported round `k` (or a part failed). A round takes tens of
+    /// microseconds, so the wait spins a few hundred times first (a wake-up through the OS
+    /// costs about as much as a round); then it parks until the other part, which unparks this
+    /// thread after each report, has written it. No clock: what the parts compute, and in what
+    /// order, does not depend on how long a wait takes.
+    pub(super) fn wait(&self, p: usize, k: u64, failed: &std::sync::atomic::AtomicBool) {
+        use std::sync::atomic::Ordering::{Acquire, Relaxed};
+        let ready = || self.completed[p].load(Acquire) >= k || failed.load(Relaxed);
+        for _ in 0..SPINS {
+            if ready() {
+                return;
+            }
+            std::hint::spin_loop();
+        }
+        while !ready() {
+            std::thread::park();
         }
     }
 
@@ -193,7 +203,7 @@ impl Rounds {
     /// The early half of a part's round k on `run`: the bound set from the reports of round
     /// k − 2 (on `band`, the part's copy), and what the part has queued up to it taken. None when
     /// the rounds are over, else the bound and whether the work budget held.
-    pub(super) fn early(&self, run: &mut Run, k: u64, band: &mut Band) -> Option<(f64, bool)> {
+    pub(super) fn early(&self, run: &mut Wavefront, k: u64, band: &mut Horizon) -> Option<(f64, bool)> {
         use std::sync::atomic::Ordering::Relaxed;
         let before = [0, 1].map(|q| self.report(q, k - 2));
         let done =
@@ -207,7 +217,7 @@ impl Rounds {
     /// The late half: the other part's news of round k − 1 taken, then what it queued up to
     /// `bound`, and the round reported. False when the work budget ran out. The other part's
     /// report of round k − 1 must be written.
-    pub(super) fn late(&self, run: &mut Run, p: usize, k: u64, bound: f64) -> bool {
+    pub(super) fn late(&self, run: &mut Wavefront, p: usize, k: u64, bound: f64) -> bool {
         use std::sync::atomic::Ordering::{Relaxed, Release};
         run.receive(&lock(&self.report(1 - p, k - 1).news));
         let ok = run.round(bound);
@@ -248,126 +258,66 @@ pub(super) fn held<T>(
     }
 }
 
-/// How a part left its rounds on two threads.
-pub(super) enum Left {
-    Done,
-    Failed,
-    /// Stopped before this round: two threads stopped paying.
-    Stopped(u64),
-}
-
 /// A thread's part of the rounds on two threads: its rounds from `rounds.next` on, before each
-/// round's late half waiting until the other part has reported the round before. Leaves when
-/// the rounds are over, when either part fails, or at `stop_at`. `judge`, given the time since
-/// the start and this thread's own time in its rounds, says when to stop (three rounds on, so
-/// that the other thread, which reads `stop_at` after waiting for this one, stops at the same
-/// round). Returns how it left, its band, and the payload of a panic (a bug) in its rounds.
+/// round's late half waiting until the other part has reported the round before
+/// (`Rounds::wait`). Leaves when the rounds are over or either part fails. Returns whether the
+/// work budget held, its band, and the payload of a panic (a bug) in its rounds.
 pub(super) fn take_rounds(
     rounds: &Rounds,
-    run: &mut Run,
+    run: &mut Wavefront,
     p: usize,
     failed: &std::sync::atomic::AtomicBool,
-    stop_at: &std::sync::atomic::AtomicU64,
-    mut judge: impl FnMut(u64, u64) -> bool,
-) -> (Left, Band, Option<Panic>) {
-    use std::sync::atomic::Ordering::{Acquire, Relaxed};
-    use std::time::Instant;
-    let (started, mut busy, mut band) = (Instant::now(), 0u64, rounds.band);
+    other: &std::thread::Thread,
+) -> (bool, Horizon, Option<Panic>) {
+    use std::sync::atomic::Ordering::Relaxed;
+    let mut band = rounds.band;
     let mut k = rounds.next;
+    // However this part leaves, the other may be waiting for its report: wake it.
+    let leave = |ok: bool, band: Horizon, panic: Option<Panic>| {
+        other.unpark();
+        (ok, band, panic)
+    };
     loop {
         if failed.load(Relaxed) {
-            return (Left::Failed, band, None);
+            return leave(false, band, None);
         }
-        if k >= stop_at.load(Relaxed) {
-            return (Left::Stopped(k), band, None);
-        }
-        let round = Instant::now();
         let early =
             held(failed, || rounds.early(run, k, &mut band).map_or((None, true), |(bound, ok)| (Some(bound), ok)));
         let bound = match early {
             Ok(Some(bound)) => bound,
-            Ok(None) => return (Left::Done, band, None),
-            Err(panic) => return (Left::Failed, band, panic),
+            Ok(None) => return leave(true, band, None),
+            Err(panic) => return leave(false, band, panic),
         };
-        busy += round.elapsed().as_nanos() as u64;
-        let mut spins = 0u32;
-        while rounds.completed[1 - p].load(Acquire) + 1 < k && !failed.load(Relaxed) {
-            // A round lasts tens of microseconds: spin rather than sleep, but yield the core
-            // after a while in case it is shared.
-            spins += 1;
-            if spins < 1 << 14 {
-                std::hint::spin_loop();
-            } else {
-                std::thread::yield_now();
-            }
-        }
+        rounds.wait(1 - p, k - 1, failed);
         if failed.load(Relaxed) {
-            return (Left::Failed, band, None);
+            return leave(false, band, None);
         }
-        let round = Instant::now();
         if let Err(panic) = held(failed, || ((), rounds.late(run, p, k, bound))) {
-            return (Left::Failed, band, panic);
+            return leave(false, band, panic);
         }
-        busy += round.elapsed().as_nanos() as u64;
-        // Decided after round k is reported: the other part waits for round k + 1's report
-        // before it starts round k + 3, so both stop there.
-        if stop_at.load(Relaxed) == u64::MAX && judge(started.elapsed().as_nanos() as u64, busy) {
-            stop_at.store(k + 3, Relaxed);
-        }
+        other.unpark();
         k += 1;
     }
 }
 
-/// The rounds with part `b` on a thread of its own (see `Rounds`). Some(ok) when the rounds
-/// are done. The second thread pays only while the machine gives each thread a core: once the
-/// rounds stop paying, the second thread stops and None tells the caller to take the rest in
-/// turn (on the bunny, with the machine's other core busy, the pair took 1.3–5× one thread's
-/// time; with this, one thread's and the 20 ms before it is judged: 220–303 ms against 207–219
-/// on one thread, with a busy loop on the other core). `gives_up` is `stops_paying`, or a
-/// test's judge.
-pub(super) fn in_two_threads(
-    a: &mut Run,
-    b: &mut Run,
-    rounds: &mut Rounds,
-    gives_up: fn(u64, u64) -> bool,
-) -> Option<bool> {
+/// The rounds with part `b` on a thread of its own (see `Rounds`): true when they are done,
+/// false when the work budget ran out. The rounds are those `in_turn` takes, so the distances
+/// are the same on one thread and on two.
+pub(super) fn in_two_threads(a: &mut Wavefront, b: &mut Wavefront, rounds: &mut Rounds) -> bool {
     use std::panic::resume_unwind;
-    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
-    let (failed, stop_at, b_busy) = (AtomicBool::new(false), AtomicU64::new(u64::MAX), AtomicU64::new(0));
+    use std::sync::atomic::AtomicBool;
+    let failed = AtomicBool::new(false);
     let shared = &*rounds;
-    // The rounds' time on two threads against the parts' own times summed (what taking them
-    // in turn would cost, about), from the second thread's first round on: it may start late
-    // when its core was idle (see `stops_paying`).
-    let mut from = None;
-    let judge = |paired: u64, a_busy: u64| {
-        let b = b_busy.load(Relaxed);
-        if b == 0 {
-            return false;
-        }
-        let (paired_before, a_before, b_before) = *from.get_or_insert((paired, a_busy, b));
-        gives_up(paired - paired_before, a_busy - a_before + b - b_before)
-    };
-    let ((left, band, a_panic), b_panic) = std::thread::scope(|scope| {
-        let second = scope.spawn(|| {
-            take_rounds(shared, b, 1, &failed, &stop_at, |_, busy| {
-                b_busy.store(busy, Relaxed);
-                false
-            })
-            .2
-        });
-        let first = take_rounds(shared, a, 0, &failed, &stop_at, judge);
-        (first, second.join().ok().flatten())
+    let caller = std::thread::current();
+    let ((ok, band, a_panic), b_panic) = std::thread::scope(|scope| {
+        let second = scope.spawn(|| take_rounds(shared, b, 1, &failed, &caller));
+        let first = take_rounds(shared, a, 0, &failed, second.thread());
+        let (b_ok, _, b_panic) = second.join().unwrap_or((false, first.1, None));
+        ((first.0 && b_ok, first.1, first.2), b_panic)
     });
     if let Some(payload) = a_panic.or(b_panic) {
         resume_unwind(payload);
     }
     rounds.band = band;
-    match left {
-        Left::Done => Some(true),
-        Left::Failed => Some(false),
-        Left::Stopped(k) => {
-            rounds.next = k;
-            None
-        }
-    }
+    ok
 }

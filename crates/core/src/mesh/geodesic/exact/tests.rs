@@ -368,68 +368,34 @@ fn one_source_on_two_threads_is_the_same_as_on_one_and_in_a_batch() {
     }
 }
 
-/// Buffers a mesh leaves behind (`KEPT`) serve the next, larger or smaller, with the bits of
-/// fresh ones.
+/// Buffers an earlier source or mesh left serve the next, larger or smaller, with the bits of
+/// fresh ones; so do a prepared mesh's buffers from call to call.
 #[test]
-fn buffers_left_by_another_mesh_give_the_bits_of_fresh_ones() {
+fn buffers_used_before_give_the_bits_of_fresh_ones() {
     let bumpy = |n: usize| {
         let (mut v, f) = grid(n, n, 0.5);
         v.iter_mut().for_each(|p| p[2] = 0.2 * (1.3 * p[0]).sin() * (1.1 * p[1]).cos());
         (v, f)
     };
     let (big, small) = (bumpy(50), bumpy(30));
-    let row = |(v, f): &(Vec<[f64; 3]>, Vec<[u32; 3]>), works: &mut [Work; 2], split| {
+    let row = |(v, f): &(Vec<[f64; 3]>, Vec<[u32; 3]>), works: &mut [Buffers; 2], split| {
         let layout = Layout::new(v, f);
         distances_from(&layout, works, v.len(), 7, split).unwrap()
     };
     for split in [Split::Whole, Split::InTurn] {
         let fresh = [&big, &small].map(|mesh| row(mesh, &mut Default::default(), split));
-        let mut used: [Work; 2] = Default::default();
+        let mut used: [Buffers; 2] = Default::default();
         for (k, mesh) in [&small, &big, &small, &big].into_iter().enumerate() {
             let again = row(mesh, &mut used, split);
             let expected = &fresh[(k + 1) % 2];
             assert!(again.iter().zip(expected).all(|(x, y)| x.to_bits() == y.to_bits()), "mesh {k}");
         }
     }
-    // And through `KEPT` (shared with the tests running beside this one): whichever buffers
-    // the next mesh gets, its row is that of fresh ones.
-    let used = ExactGeodesics::new(&big.0, &big.1);
-    used.distances(&[7, 8]).unwrap();
-    drop(used);
-    let d = ExactGeodesics::new(&small.0, &small.1).distances(&[7]).unwrap();
-    // One part: the small mesh is below `PAIRED_FACES`.
-    assert!(small.1.len() < PAIRED_FACES);
-    let fresh = row(&small, &mut Default::default(), Split::Whole);
-    assert!(d[0].iter().zip(&fresh).all(|(x, y)| x.to_bits() == y.to_bits()));
-}
-
-#[test]
-fn two_threads_that_stop_paying_hand_the_rest_to_one_with_the_same_result() {
-    use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
-    // A judge that gives up on two threads after five rounds, as when the cores are busy.
-    static JUDGED: AtomicUsize = AtomicUsize::new(0);
-    let after_five = |_: u64, _: u64| JUDGED.fetch_add(1, Relaxed) + 1 >= 5;
-    let (mut v, f) = grid(60, 60, 0.5);
-    v.iter_mut().for_each(|p| p[2] = 0.2 * (1.3 * p[0]).sin() * (1.1 * p[1]).cos());
-    let layout = Layout::new(&v, &f);
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    for s in [1830, 7] {
-        let alone = pool.install(|| geodesic_exact(&v, &f, &[s]).unwrap());
-        let (mut w0, mut w1) = (Work::default(), Work::default());
-        w0.reset(&layout);
-        w1.reset(&layout);
-        let (mut a, mut b) = (Run::new(&layout, &mut w0, 0), Run::new(&layout, &mut w1, 1));
-        let inner = layout.inner[s] as usize;
-        a.start(inner);
-        b.start(inner);
-        let mut rounds = Rounds::new(&layout);
-        JUDGED.store(0, Relaxed);
-        assert!(in_two_threads(&mut a, &mut b, &mut rounds, after_five).is_none());
-        assert_eq!(JUDGED.load(Relaxed), 5);
-        assert!(in_turn(&mut a, &mut b, &mut rounds));
-        let row = layout.inner.iter().map(|&i| a.w.d[i as usize].min(b.w.d[i as usize]));
-        assert!(row.zip(&alone[0]).all(|(x, y)| x.to_bits() == y.to_bits()), "source {s}");
-    }
+    let prepared = ExactGeodesics::new(&big.0, &big.1);
+    let first = prepared.distances(&[7, 8, 9]).unwrap();
+    let again = prepared.distances(&[9, 7]).unwrap();
+    let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+    assert!(same(&again[0], &first[2]) && same(&again[1], &first[0]));
 }
 
 /// A propagation whose work budget runs out says so, in one part and in two, in turn and on
@@ -441,184 +407,23 @@ fn a_propagation_out_of_its_work_budget_fails() {
     v.iter_mut().for_each(|p| p[2] = 0.2 * (1.3 * p[0]).sin() * (1.1 * p[1]).cos());
     let layout = Layout::new(&v, &f);
     let inner = layout.inner[1830] as usize;
-    let mut w = Work::default();
+    let mut w = Buffers::default();
     w.reset(&layout);
-    let mut whole = Run::new(&layout, &mut w, WHOLE);
+    let mut whole = Wavefront::new(&layout, &mut w, WHOLE);
     whole.budget = 200;
     whole.start(inner);
     assert!(!whole.round(f64::INFINITY));
     for paired in [false, true] {
-        let (mut w0, mut w1) = (Work::default(), Work::default());
+        let (mut w0, mut w1) = (Buffers::default(), Buffers::default());
         w0.reset(&layout);
         w1.reset(&layout);
-        let (mut a, mut b) = (Run::new(&layout, &mut w0, 0), Run::new(&layout, &mut w1, 1));
+        let (mut a, mut b) = (Wavefront::new(&layout, &mut w0, 0), Wavefront::new(&layout, &mut w1, 1));
         (a.budget, b.budget) = (200, 200);
         a.start(inner);
         b.start(inner);
         let mut rounds = Rounds::new(&layout);
-        let ok = if paired {
-            in_two_threads(&mut a, &mut b, &mut rounds, |_, _| false)
-        } else {
-            Some(in_turn(&mut a, &mut b, &mut rounds))
-        };
-        assert_eq!(ok, Some(false), "paired: {paired}");
+        let ok =
+            if paired { in_two_threads(&mut a, &mut b, &mut rounds) } else { in_turn(&mut a, &mut b, &mut rounds) };
+        assert!(!ok, "paired: {paired}");
     }
-}
-
-/// Reference distances written by pygeodesic (Kirsanov's exact MMP), see `reference_dir`.
-struct Reference {
-    vertices: Vec<[f64; 3]>,
-    faces: Vec<[u32; 3]>,
-    /// (source, pygeodesic's seconds, distances)
-    runs: Vec<(usize, f64, Vec<f64>)>,
-}
-
-/// `$GEOREF_DIR`, else `target/georef`: text files "nv nf ns", the vertices, the faces, then
-/// per source "source s seconds" and its nv distances, made by
-/// `scripts/geodesic_reference.py` (the data are not in the repository).
-fn reference(name: &str) -> Option<Reference> {
-    let dir = std::env::var("GEOREF_DIR").unwrap_or_else(|_| {
-        let target =
-            std::env::var("CARGO_TARGET_DIR").unwrap_or_else(|_| format!("{}/target", env!("CARGO_MANIFEST_DIR")));
-        format!("{target}/georef")
-    });
-    let text = std::fs::read_to_string(format!("{dir}/{name}.txt")).ok()?;
-    let mut t = text.split_whitespace();
-    let mut next = || t.next().expect("a complete reference file");
-    let (nv, nf, ns): (usize, usize, usize) =
-        (next().parse().unwrap(), next().parse().unwrap(), next().parse().unwrap());
-    let vertices = (0..nv).map(|_| [0; 3].map(|_| next().parse().unwrap())).collect();
-    let faces = (0..nf).map(|_| [0; 3].map(|_| next().parse().unwrap())).collect();
-    let runs = (0..ns)
-        .map(|_| {
-            assert_eq!(next(), "source");
-            let (s, secs) = (next().parse().unwrap(), next().parse().unwrap());
-            (s, secs, (0..nv).map(|_| next().parse().unwrap()).collect())
-        })
-        .collect();
-    Some(Reference { vertices, faces, runs })
-}
-
-/// Worst |ours − pygeodesic's| over every vertex of every reference source, and each
-/// source's time (one thread) next to pygeodesic's.
-fn compare(name: &str, r: &Reference) -> f64 {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let mut worst_all: f64 = 0.0;
-    for (s, secs, truth) in &r.runs {
-        let start = std::time::Instant::now();
-        let d = pool.install(|| geodesic_exact(&r.vertices, &r.faces, &[*s]).unwrap());
-        let ours = start.elapsed().as_secs_f64();
-        let e = worst(&d[0], |i| truth[i]);
-        if e > 1e-9 {
-            let bad: Vec<_> = (0..truth.len()).filter(|&i| (d[0][i] - truth[i]).abs() > 1e-9).collect();
-            eprintln!(
-                "  {} bad, e.g. {:?}",
-                bad.len(),
-                bad.iter().take(5).map(|&i| (i, d[0][i], truth[i])).collect::<Vec<_>>()
-            );
-        }
-        eprintln!(
-            "{name} source {s}: worst |diff| {e:.3e}, {ours:.4} s here, {secs:.4} s pygeodesic ({:.1}x)",
-            secs / ours
-        );
-        worst_all = worst_all.max(e);
-    }
-    eprintln!("{name}: worst |diff| over {} sources {worst_all:.3e}", r.runs.len());
-    worst_all
-}
-
-#[test]
-fn small_meshes_match_pygeodesic_when_the_reference_is_there() {
-    for name in ["flat", "hedgehog"] {
-        match reference(name) {
-            Some(r) => assert!(compare(name, &r) < 1e-9, "{name}"),
-            None => eprintln!("{name}: no reference file, skipped (see `reference`)"),
-        }
-    }
-}
-
-/// The Stanford bunny of `$BUNNY_PLY` (default data/stanford-bunny-mesh/ in the repository):
-/// 35947 vertices, holes at its base, 1113 vertices no face uses. Published check:
-/// d(14558 → 13039) = 0.22686869313968416 (pygeodesic's notebook); with
-/// `target/georef/bunny.txt` every vertex of every reference source as well.
-/// `cargo test --release --lib mesh::geodesic_exact -- --ignored --nocapture`
-/// One source on the bunny, timed: `cargo test --release --lib geodesic_exact::tests::bunny_time
-/// -- --ignored --nocapture`.
-#[test]
-#[ignore = "a timing, not a test (bench_mesh.py measures it)"]
-fn bunny_time() {
-    let Ok(text) =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/stanford-bunny-mesh/stanford_bunny.ply"))
-    else {
-        return;
-    };
-    let (v, f) = read_ascii_ply(&text);
-    let t = std::time::Instant::now();
-    let layout = Layout::new(&v, &f);
-    let mut works = [Work::default(), Work::default()];
-    eprintln!("layout {:?}, pseudo-sources {}", t.elapsed(), layout.pseudo.iter().filter(|&&p| p).count());
-    for s in [0, 14558] {
-        let mut best = f64::INFINITY;
-        let mut d = Vec::new();
-        for _ in 0..4 {
-            let t = std::time::Instant::now();
-            d = distances_from(&layout, &mut works, v.len(), s, Split::Paired).unwrap();
-            best = best.min(t.elapsed().as_secs_f64());
-        }
-        eprintln!("source {s}: best of 4 {best:.4} s, d[13039] = {}", d[13039]);
-    }
-}
-
-#[test]
-#[ignore = "slow in debug builds"]
-fn bunny_matches_pygeodesic() {
-    let path = std::env::var("BUNNY_PLY").unwrap_or_else(|_| {
-        concat!(env!("CARGO_MANIFEST_DIR"), "/data/stanford-bunny-mesh/stanford_bunny.ply").to_string()
-    });
-    let Ok(text) = std::fs::read_to_string(&path) else {
-        eprintln!("{path}: not readable, skipped");
-        return;
-    };
-    let (vertices, faces) = read_ascii_ply(&text);
-    assert_eq!((vertices.len(), faces.len()), (35947, 69451));
-    let d = geodesic_exact(&vertices, &faces, &[14558]).unwrap();
-    let published = 0.22686869313968416;
-    eprintln!("bunny d(14558 -> 13039) = {:.17} (published {published})", d[0][13039]);
-    assert!((d[0][13039] - published).abs() < 1e-9);
-    match reference("bunny") {
-        Some(r) => {
-            assert!(r.vertices == vertices && r.faces == faces, "the reference is of another bunny");
-            assert!(compare("bunny", &r) < 1e-9);
-        }
-        None => eprintln!("bunny: no reference file, only the published value checked"),
-    }
-}
-
-/// The vertices (x y z first, single precision as the file declares) and triangles of an
-/// ASCII PLY.
-fn read_ascii_ply(text: &str) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-    let (header, body) = text.split_once("end_header").expect("a PLY header");
-    let count = |what: &str| -> usize {
-        header
-            .lines()
-            .find_map(|l| l.strip_prefix(&format!("element {what} ")))
-            .and_then(|n| n.trim().parse().ok())
-            .expect("an element count")
-    };
-    let (nv, nf) = (count("vertex"), count("face"));
-    let mut lines = body.lines().filter(|l| !l.trim().is_empty());
-    let vertices = (0..nv)
-        .map(|_| {
-            let mut t = lines.next().expect("a vertex line").split_whitespace();
-            [0; 3].map(|_| t.next().and_then(|x| x.parse::<f32>().ok()).expect("a coordinate") as f64)
-        })
-        .collect();
-    let faces = (0..nf)
-        .map(|_| {
-            let mut t = lines.next().expect("a face line").split_whitespace();
-            assert_eq!(t.next(), Some("3"), "triangles only");
-            [0; 3].map(|_| t.next().and_then(|x| x.parse().ok()).expect("an index"))
-        })
-        .collect();
-    (vertices, faces)
 }

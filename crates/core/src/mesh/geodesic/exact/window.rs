@@ -6,7 +6,7 @@ use super::*;
 /// (see the module notes): [b0, b1], source (x, y) with y < 0, σ. A window that later windows
 /// cut keeps its `id` on every piece left.
 #[derive(Clone, Copy)]
-pub(super) struct Seg {
+pub(super) struct Window {
     pub(super) b0: f64,
     pub(super) b1: f64,
     pub(super) x: f64,
@@ -15,7 +15,7 @@ pub(super) struct Seg {
     pub(super) id: u64,
 }
 
-impl Seg {
+impl Window {
     /// The distance it carries to (t, 0) of its edge.
     pub(super) fn at(&self, t: f64) -> f64 {
         self.sigma + hyp(t - self.x, self.y)
@@ -34,8 +34,8 @@ impl Seg {
     }
 
     /// The same piece in the frame of the edge's other direction.
-    pub(super) fn mirrored(&self, l: f64) -> Seg {
-        Seg { b0: l - self.b1, b1: l - self.b0, x: l - self.x, ..*self }
+    pub(super) fn mirrored(&self, l: f64) -> Window {
+        Window { b0: l - self.b1, b1: l - self.b0, x: l - self.x, ..*self }
     }
 }
 
@@ -108,8 +108,8 @@ pub(super) fn on_edge(num: f64, den: f64) -> Option<f64> {
 /// when the σ are equal, which rounding can push to a negative discriminant: it is clamped at
 /// 0); each root is polished by Newton steps on f_w − f_o itself, since squaring loses
 /// precision near the roots and the cut is made there.
-#[inline(always)] // 2 % faster than a call from each `share`
-pub(super) fn crossings(w: &Seg, o: &Seg, lo: f64, hi: f64) -> ([f64; 2], usize) {
+#[inline(always)] // on the hottest path, once per pair of windows: no call there
+pub(super) fn crossings(w: &Window, o: &Window, lo: f64, hi: f64) -> ([f64; 2], usize) {
     let (a1, a2, delta) = (w.x, o.x, o.sigma - w.sigma);
     let (h1, h2) = (w.y * w.y, o.y * o.y);
     let alpha = 2.0 * (a2 - a1);
@@ -163,7 +163,7 @@ pub(super) fn crossings(w: &Seg, o: &Seg, lo: f64, hi: f64) -> ([f64; 2], usize)
 
 /// How `w` and `o` share (lo, hi): the sub-intervals, in order, each with whether `w` keeps it,
 /// which it does where w − o ≤ `bar`; passed to `take` as (from, to, w keeps).
-pub(super) fn share(w: &Seg, o: &Seg, lo: f64, hi: f64, bar: f64, mut take: impl FnMut(f64, f64, bool)) {
+pub(super) fn share(w: &Window, o: &Window, lo: f64, hi: f64, bar: f64, mut take: impl FnMut(f64, f64, bool)) {
     // Each window's most and least on [lo, hi] from its values at the ends (f is convex).
     let (w0, w1, o0, o1) = (w.at(lo), w.at(hi), o.at(lo), o.at(hi));
     if w0.max(w1) - o.least(lo, hi, o0, o1) <= bar {
@@ -203,20 +203,20 @@ pub(super) fn share(w: &Seg, o: &Seg, lo: f64, hi: f64, bar: f64, mut take: impl
 
 /// Appends [a, b] of `seg` to `out`, joined to the last piece when that is the same window and
 /// ends at `a`; pieces of at most `narrow` are dropped.
-pub(super) fn append(out: &mut Vec<Seg>, seg: &Seg, a: f64, b: f64, narrow: f64) {
+pub(super) fn append(out: &mut Vec<Window>, seg: &Window, a: f64, b: f64, narrow: f64) {
     if !(b - a > narrow) {
         return;
     }
     match out.last_mut() {
         Some(last) if last.id == seg.id && last.b1 == a => last.b1 = b,
-        _ => out.push(Seg { b0: a, b1: b, ..*seg }),
+        _ => out.push(Window { b0: a, b1: b, ..*seg }),
     }
 }
 
 /// The pieces of `list` (in order, disjoint) that overlap (b0, b1). A batch's windows mostly
 /// reach an edge in order, so the end of the list is tried first; a window overlaps few pieces,
 /// so they are counted one by one (a binary search's chain of dependent loads cost more).
-pub(super) fn overlapping(list: &[Seg], b0: f64, b1: f64) -> std::ops::Range<usize> {
+pub(super) fn overlapping(list: &[Window], b0: f64, b1: f64) -> std::ops::Range<usize> {
     let n = list.len();
     let i = if list.last().is_none_or(|s| s.b1 <= b0) { n } else { list.partition_point(|s| s.b1 <= b0) };
     let j = i + list[i..].iter().take_while(|s| s.b0 < b1).count();
