@@ -165,3 +165,23 @@ def test_cad_as_one_point_set_is_clustered_into_contours(run):
     for c in r2.contours:
         ref = by_centroid[tuple(np.round(c.theoretical.mean(0), 3))]
         assert abs(c.error.mean - ref.error.mean) < 1e-4
+
+
+def test_the_bending_surface_is_the_least_squares_polynomial():
+    # The core's fit against NumPy's least squares on the same design matrix: the same polynomial
+    # to rounding, the degree lowered until three points hold each coefficient.
+    from machscan import _core
+
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(-90, 90, 200), rng.uniform(-60, 60, 200)
+    dz = 0.05 + 1e-3 * x - 2e-5 * x * y + 3e-7 * y**3 + rng.normal(0, 0.002, 200)
+    fit = _core.fit_bending_surface(x, y, dz, degree=4)
+    u, v = (x - fit["center"][0]) / fit["scale"], (y - fit["center"][1]) / fit["scale"]
+    a = np.column_stack([u**i * v**j for i, j in fit["exponents"]])
+    coef, *_ = np.linalg.lstsq(a, dz, rcond=None)
+    assert fit["degree"] == 4 and len(coef) == 15
+    assert np.abs(fit["coefficients"] - coef).max() < 1e-12
+    assert fit["rms_residual"] == pytest.approx(np.sqrt(np.mean((dz - a @ coef) ** 2)), rel=1e-12)
+    at = _core.bending_surface_at(fit["exponents"], fit["coefficients"], fit["center"], fit["scale"], x[:5], y[:5])
+    assert np.abs(at - a[:5] @ coef).max() < 1e-12
+    assert _core.fit_bending_surface(x[:20], y[:20], dz[:20], degree=4)["degree"] == 2
