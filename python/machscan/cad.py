@@ -18,13 +18,6 @@ from numpy.typing import NDArray
 Polyline = NDArray[np.float64]
 
 
-def _cells_to_floats(cells: list[str], path: Path, line: int) -> list[float]:
-    try:
-        return [float(c) for c in cells]
-    except ValueError:
-        raise ValueError(f"{path}: line {line}: expected numbers, got {cells}") from None
-
-
 def read_contours_csv(path: str | os.PathLike[str], delimiter: str = ",") -> list[Polyline]:
     """Read contours from a CSV file.
 
@@ -44,25 +37,14 @@ def read_contours_csv(path: str | os.PathLike[str], delimiter: str = ",") -> lis
     list of ndarray (n, 3)
         z = 0 where the file has only x, y.
     """
+    from machscan.io import read_table
+
     p = Path(path)
-    rows: list[list[float]] = []
-    header: list[str] = []
-    with open(p, newline="") as fh:
-        for k, cells in enumerate(csv.reader(fh, delimiter=delimiter), start=1):
-            cells = [c.strip() for c in cells if c.strip() != ""]
-            if not cells or cells[0].startswith("#"):
-                continue
-            if not rows and not header and not _is_number(cells[0]):
-                header = [c.lower() for c in cells]
-                continue
-            rows.append(_cells_to_floats(cells, p, k))
-    if not rows:
+    table = read_table(p, delimiter=delimiter, widths=(2, 3, 4), nan_columns=(), name="path")
+    if table.values.shape[0] == 0:
         raise ValueError(f"{p}: no points")
-    width = len(rows[0])
-    if any(len(r) != width for r in rows):
-        bad = next(i for i, r in enumerate(rows) if len(r) != width)
-        raise ValueError(f"{p}: row {bad + 1} has {len(rows[bad])} values, the first has {width}")
-    a = np.array(rows, dtype=np.float64)
+    a, width = table.values, table.values.shape[1]
+    header = [c.lower() for c in table.header or ()]
     # A contour id column: named in the header, or the first of 4 columns.
     has_id = (bool(header) and header[0] in ("contour", "id", "contour_id")) or (not header and width == 4)
     ids = a[:, 0] if has_id else np.zeros(len(a))
@@ -77,14 +59,6 @@ def read_contours_csv(path: str | os.PathLike[str], delimiter: str = ",") -> lis
 def _split_by_id(ids: NDArray[np.float64], pts: NDArray[np.float64]) -> list[Polyline]:
     _, first = np.unique(ids, return_index=True)
     return [pts[ids == ids[i]] for i in sorted(first)]
-
-
-def _is_number(s: str) -> bool:
-    try:
-        float(s)
-        return True
-    except ValueError:
-        return False
 
 
 def read_contours_apt(path: str | os.PathLike[str], split_distance: float = 5.0) -> list[Polyline]:

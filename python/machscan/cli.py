@@ -34,7 +34,6 @@ import argparse
 import os
 import sys
 import time
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import get_args
@@ -114,18 +113,13 @@ def _load_scan(args: argparse.Namespace):
 def _csv_readings(path: Path) -> int:
     """Readings per frame of a frames CSV: the width of its first data row, less a leading
     time column when the header names one."""
-    header: list[str] = []
-    with open(path) as fh:
-        for line in fh:
-            cells = [c.strip() for c in line.split(",")]
-            try:
-                float(cells[0])
-            except ValueError:
-                header = header or cells
-                continue
-            timed = bool(header) and header[0].lower() in ("t", "time", "timestamp")
-            return len(cells) - (1 if timed else 0)
-    raise ValueError(f"scan: {path}: no frames")
+    from machscan.io import read_table
+
+    table = read_table(path, delimiter=",", name="scan")
+    if table.values.shape[0] == 0:
+        raise ValueError(f"scan: {path}: no frames")
+    timed = bool(table.header) and table.header[0].lower() in ("t", "time", "timestamp")
+    return table.values.shape[1] - (1 if timed else 0)
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -596,18 +590,6 @@ def _grind(args: argparse.Namespace) -> int:
     return 0 if holds else 3
 
 
-def _check_finite(name: str, path: Path, rows: np.ndarray, nan_columns: tuple[int, ...] = ()) -> None:
-    """Refuses rows read from ``path`` (for ``name``) that are not all finite, naming the first; NaN is allowed in
-    ``nan_columns`` (a value not measured)."""
-    finite = np.isfinite(rows)
-    for c in nan_columns:
-        if c < rows.shape[1]:
-            finite[:, c] |= np.isnan(rows[:, c])
-    bad = np.flatnonzero(~finite.all(axis=1))
-    if bad.size:
-        raise ValueError(f"{name}: {path} has {bad.size} rows that are not finite, the first at row {bad[0]}")
-
-
 def _check_positive_mm(option: str, value: float) -> None:
     """Refuses an option's length in mm that is not a positive number (nan, inf, 0 and below)."""
     if not (np.isfinite(value) and value > 0):
@@ -615,32 +597,12 @@ def _check_positive_mm(option: str, value: float) -> None:
 
 
 def _read_rows(path: Path, name: str, widths: tuple[int, ...], nan_columns: tuple[int, ...] = ()) -> np.ndarray:
-    """A CSV table of numbers of one of ``widths`` columns; ``#`` starts a comment; a first line with a field
-    that is not a number and letters in it is a header (``x,y,z``)."""
-    try:
-        # Numbers are ASCII: a header or comment in another encoding (µ, ° in cp1252) must not stop the read.
-        text = Path(path).read_bytes().decode("utf-8-sig", errors="replace")
-    except OSError as e:
-        raise ValueError(f"{name}: cannot read {path} ({e.strerror})") from None
-    lines = text.splitlines()
-    start = next((i for i, line in enumerate(lines) if line.split("#")[0].strip()), len(lines))
-    first = lines[start].split("#")[0] if start < len(lines) else ""
+    """A comma-separated table of numbers of one of ``widths`` columns (machscan.io.read_table's rules)."""
+    from machscan.io import read_table
 
-    from machscan.cad import _is_number
-
-    header = not all(_is_number(f) for f in first.split(",")) and any(c.isalpha() for c in first)
-    body = lines[start + 1 :] if header else lines
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": said below, by name
-            rows = np.loadtxt(body, delimiter=",", ndmin=2, comments="#")
-    except ValueError as e:
-        raise ValueError(f"{name}: {path} is not a comma-separated table of numbers ({e})") from None
+    rows = read_table(path, delimiter=",", widths=widths, nan_columns=nan_columns, name=name).values
     if rows.size == 0:
         raise ValueError(f"{name}: {path} holds no rows of numbers")
-    _check_finite(name, path, rows, nan_columns)
-    if rows.shape[1] not in widths:
-        raise ValueError(f"{name}: {path} has {rows.shape[1]} columns, expected {' or '.join(map(str, widths))}")
     return rows
 
 
@@ -653,8 +615,6 @@ def _compensate(args: argparse.Namespace) -> int:
     if args.theoretical is None or args.scan is None or args.toolpath is None or args.locating is None or args.matching is None:
         raise ValueError("compensate: give THEORETICAL SCAN TOOLPATH --locating and --matching (or --simulate)")
     theoretical, scan = read_points(args.theoretical), read_points(args.scan)
-    _check_finite("THEORETICAL", args.theoretical, theoretical)
-    _check_finite("SCAN", args.scan, scan)
     locating = _read_rows(args.locating, "--locating", (6,))
     if len(locating) != 2:
         raise ValueError(f"--locating: {args.locating} has {len(locating)} rows, expected the 2 locating points")

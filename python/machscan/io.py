@@ -40,11 +40,13 @@ __all__ = [
     "WRITE_FORMATS",
     "CloudFile",
     "FileFormatError",
+    "Table",
     "Toolpath",
     "TriangleMesh",
     "read",
     "read_mesh",
     "read_points",
+    "read_table",
     "read_toolpath",
     "write_mesh",
     "write_points",
@@ -323,6 +325,89 @@ def write_mesh(
 
 
 write = write_points
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Table:
+    """A numeric table as :func:`read_table` reads it.
+
+    Attributes
+    ----------
+    values : ndarray (R, C)
+        The numbers, one row per data line.
+    lines : ndarray of int64 (R,)
+        The file's line (1-based) of each row, for messages.
+    header : tuple of str or None
+        The header's cells, when the file has one.
+    """
+
+    values: NDArray[np.float64]
+    lines: NDArray[np.int64]
+    header: tuple[str, ...] | None
+
+    def __repr__(self) -> str:
+        return f"Table({self.values.shape[0]} rows × {self.values.shape[1]} columns, header={self.header})"
+
+
+def read_table(
+    path: str | os.PathLike[str],
+    *,
+    delimiter: str | None = None,
+    widths: tuple[int, ...] | None = None,
+    nan_columns: tuple[int, ...] | None = None,
+    name: str | None = None,
+) -> Table:
+    """Read a numeric table (CSV, TSV or whitespace-separated) by machscan's one set of rules.
+
+    Blank lines are skipped; ``#`` starts a comment anywhere on a line, ``//`` at its start. The
+    first line left is a header when one of its cells is not a number and it holds a letter; any
+    other line that is not numbers is an error. A line that is not UTF-8 is read as Latin-1, so
+    a header or comment written in cp1252 (µ, °) reads. Every data row has as many cells as the
+    first. Every table machscan reads (scan exports, probe plans, locating and matching points,
+    contours) goes through this reader.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    delimiter : str, optional
+        One character; by default cells split on runs of whitespace and commas. With a delimiter
+        cells are trimmed and an empty one is an error.
+    widths : tuple of int, optional
+        The column counts taken; by default any.
+    nan_columns : tuple of int, optional
+        The columns (0-based) that may hold NaN or inf (missing values); by default every column.
+        ``()`` requires every value to be finite.
+    name : str, optional
+        The argument the file is named by in messages (default ``"path"``).
+
+    Returns
+    -------
+    Table
+
+    Raises
+    ------
+    FileFormatError
+        A rule broken, naming the file, the line (and column) and ``name``.
+    OSError
+        The file cannot be read (``FileNotFoundError``, ``PermissionError``, ...).
+
+    Examples
+    --------
+    >>> t = machscan.io.read_table("plan.csv", delimiter=",", widths=(6,), nan_columns=())  # doctest: +SKIP
+    >>> t.values.shape, t.header
+    ((24, 6), ('x', 'y', 'z', 'nx', 'ny', 'nz'))
+    """
+    if delimiter is not None and len(delimiter) != 1:
+        raise ValueError(f"delimiter: expected one character or None, got {delimiter!r}")
+    arrays = _core.read_table(
+        os.fspath(path),
+        name=name or "path",
+        delimiter=delimiter,
+        widths=None if widths is None else list(widths),
+        nan_columns=None if nan_columns is None else list(nan_columns),
+    )
+    header = arrays["header"]
+    return Table(values=arrays["values"], lines=arrays["lines"], header=None if header is None else tuple(header))
 
 
 @dataclass(frozen=True, eq=False, repr=False)

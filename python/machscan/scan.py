@@ -26,7 +26,6 @@ The formulas and their papers: ``docs/kinematics.md``.
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import os
@@ -589,11 +588,11 @@ def read_scan_csv(
 
     Notes
     -----
-    Either file may start with one header line: a first line whose first cell is not a number
-    is skipped. Frame times come from the frames file if it has timestamps, else from the
-    poses file's ``t`` column, else ``i / profiler.frame_rate``; when both files carry times
-    they must agree (to 1e-9 s). Blank lines are ignored. Every problem raises ``ValueError``
-    naming the file and the line.
+    Both files are read by :func:`machscan.io.read_table` (a header line, comments, cp1252
+    text). Frame times come from the frames file if it has timestamps, else from the poses
+    file's ``t`` column, else ``i / profiler.frame_rate``; when both files carry times they
+    must agree (to 1e-9 s). A problem in a file raises ``ValueError`` (``FileFormatError`` for
+    its content) naming the file and the line; a file that cannot be read, ``OSError``.
 
     Examples
     --------
@@ -603,17 +602,13 @@ def read_scan_csv(
     if not isinstance(profiler, Profiler):
         raise ValueError(f"profiler: expected a machscan.scan.Profiler, got {type(profiler).__name__}")
     n = profiler.readings
-    fdata, flines = _read_numeric_csv(
-        frames_csv,
-        "frames_csv",
-        delimiter,
-        (n, n + 1),
-        {n: "N readings", n + 1: "a timestamp and N readings"},
-        n_desc=f"N = profiler.readings = {n}",
-    )
-    pdata, plines = _read_numeric_csv(
-        poses_csv, "poses_csv", delimiter, (6, 7), {6: "X, Y, Z, A, C, C2", 7: "t, X, Y, Z, A, C, C2"}, n_desc="poses"
-    )
+    from machscan.io import read_table
+
+    # Readings may be NaN (no reading); poses and times may not (the frames' times: below).
+    frames_table = read_table(frames_csv, delimiter=delimiter, widths=(n, n + 1), name="frames_csv")
+    poses_table = read_table(poses_csv, delimiter=delimiter, widths=(6, 7), nan_columns=(), name="poses_csv")
+    fdata, flines = frames_table.values, frames_table.lines
+    pdata, plines = poses_table.values, poses_table.lines
     ff, fp = os.fspath(frames_csv), os.fspath(poses_csv)
     if fdata.shape[0] != pdata.shape[0]:
         raise ValueError(
@@ -626,11 +621,6 @@ def read_scan_csv(
     frames = fdata[:, 1:] if ftimes is not None else fdata
     ptimes = pdata[:, 0] if pdata.shape[1] == 7 else None
     poses = pdata[:, 1:] if ptimes is not None else pdata
-    bad = np.flatnonzero(~np.isfinite(poses).all(axis=1))
-    if bad.size:
-        raise ValueError(
-            f"poses_csv: {fp!r}, line {plines[bad[0]]}: pose is not finite ({', '.join(repr(float(v)) for v in poses[bad[0]])})"
-        )
     if ftimes is not None and ptimes is not None:
         off = np.flatnonzero(np.abs(ftimes - ptimes) > 1e-9)
         if off.size:
@@ -653,13 +643,11 @@ def read_scan_csv(
             )
         times = np.arange(frames.shape[0], dtype=np.float64) / profiler.frame_rate
         src, lines = "", flines
-    if src:
+    if src == "frames_csv":
         nonfinite = np.flatnonzero(~np.isfinite(times))
         if nonfinite.size:
-            raise ValueError(
-                f"{src}: {os.fspath(frames_csv if src == 'frames_csv' else poses_csv)!r}, "
-                f"line {lines[nonfinite[0]]}: timestamp is not finite"
-            )
+            raise ValueError(f"frames_csv: {ff!r}, line {lines[nonfinite[0]]}: timestamp is not finite")
+    if src:
         back = np.flatnonzero(np.diff(times) < 0.0)
         if back.size:
             i = int(back[0]) + 1
@@ -752,65 +740,3 @@ def _check_finite_rows(a: np.ndarray, name: str, what: str) -> None:
         raise ValueError(
             f"{name}: row {i} is not finite ([{vals}]); expected {what} ({bad.size} bad row{'s' if bad.size > 1 else ''} in all)"
         )
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
-
-
-def _read_numeric_csv(path, argname: str, delimiter: str, widths: tuple[int, ...], width_desc: dict[int, str], n_desc: str):
-    """Parse a numeric CSV with an optional header line.
-
-    Returns the (rows, cols) float64 array and the 1-based file line number of every row.
-    The fast path is ``np.loadtxt``; when it fails the file is scanned line by line to report
-    the first problem with its line number.
-    """
-    p = os.fspath(path)
-    try:
-        with open(p, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except OSError as exc:
-        raise ValueError(f"{argname}: cannot read {p!r} ({exc.strerror})") from None
-    raw_lines = text.splitlines()
-    numbered = [(i + 1, ln) for i, ln in enumerate(raw_lines) if ln.strip()]
-    if numbered and not _is_number(numbered[0][1].split(delimiter)[0].strip()):
-        numbered = numbered[1:]  # header line
-    if not numbered:
-        return np.zeros((0, widths[0])), []
-    line_numbers = [i for i, _ in numbered]
-    body = "\n".join(ln for _, ln in numbered)
-    data = None
-    try:
-        data = np.loadtxt(io.StringIO(body), delimiter=delimiter, dtype=np.float64, ndmin=2, comments=None)
-    except ValueError:
-        data = None
-    if data is not None and data.shape[1] in widths:
-        return data, line_numbers
-    # Slow path: find the first problem and say where it is.
-    first_width = None
-    for lineno, ln in numbered:
-        cells = ln.split(delimiter)
-        if first_width is None:
-            first_width = len(cells)
-            if first_width not in widths:
-                choices = " or ".join(f"{w} cells ({width_desc[w]})" for w in widths)
-                raise ValueError(f"{argname}: {p!r}, line {lineno}: expected {choices} with {n_desc}, got {first_width}")
-        elif len(cells) != first_width:
-            raise ValueError(
-                f"{argname}: {p!r}, line {lineno}: ragged row, expected {first_width} cells "
-                f"({width_desc[first_width]}) like the first data row, got {len(cells)}"
-            )
-        for j, c in enumerate(cells):
-            cs = c.strip()
-            if not cs:
-                raise ValueError(
-                    f"{argname}: {p!r}, line {lineno}, column {j + 1}: empty cell (write invalid readings as the sentinel or nan)"
-                )
-            if not _is_number(cs):
-                raise ValueError(f"{argname}: {p!r}, line {lineno}, column {j + 1}: cannot read {cs!r} as a number")
-    # loadtxt failed but every cell parses with float(): should not happen; be explicit.
-    raise ValueError(f"{argname}: {p!r} could not be parsed as a numeric table")

@@ -3,11 +3,40 @@
 //! `TriangleMesh` and `Toolpath` objects.
 use super::convert::{count, enter, to_numpy, triangle_indices, Dim, F64Array};
 use super::error::IntoPy;
-use machscan_core::io::{CloudRef, Dtype, FileFormat, TextColumns, WriteOptions};
+use machscan_core::io::{
+    read_table as read_table_core, CloudRef, Dtype, FileFormat, TableOptions, TextColumns, WriteOptions,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
+
+/// A numeric table (CSV, TSV, whitespace) by machscan's one set of rules (header, comments,
+/// encodings; see ``machscan.io.read_table``); the ``_TableArrays`` keys ``values`` (R, C),
+/// ``lines`` (R,) and ``header`` (list of str, or None).
+#[pyfunction]
+#[pyo3(signature = (path, *, name, delimiter=None, widths=None, nan_columns=None))]
+fn read_table<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    name: &str,
+    delimiter: Option<char>,
+    widths: Option<Vec<i64>>,
+    nan_columns: Option<Vec<i64>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let widths: Vec<usize> =
+        widths.unwrap_or_default().into_iter().map(|w| count("widths", w)).collect::<PyResult<_>>()?;
+    let nan: Option<Vec<usize>> =
+        nan_columns.map(|c| c.into_iter().map(|j| count("nan_columns", j)).collect::<PyResult<_>>()).transpose()?;
+    let options = TableOptions { name, delimiter, widths: &widths, nan_columns: nan.as_deref() };
+    let t = enter(py, || read_table_core(&path, &options))?;
+    let (rows, columns) = (t.rows(), t.columns);
+    let d = PyDict::new(py);
+    d.set_item("values", to_numpy(py, t.values, &[rows, columns])?)?;
+    d.set_item("lines", to_numpy(py, t.lines.into_iter().map(|l| l as i64).collect(), &[rows])?)?;
+    d.set_item("header", t.header)?;
+    Ok(d)
+}
 
 /// Read a point or mesh file by its extension (see ``machscan.io.read``); returns the
 /// ``CloudArrays`` ``points``, ``normals`` (or None), ``scalars`` and ``triangles``.
@@ -144,6 +173,7 @@ fn write_toolpath(
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_table, m)?)?;
     m.add_function(wrap_pyfunction!(read_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(write_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(readable_formats, m)?)?;

@@ -8,6 +8,7 @@ mod obj;
 mod pcd;
 mod ply;
 mod stl;
+mod table;
 mod text;
 
 pub use apt::{parse_apt, read_apt, write_apt, Toolpath};
@@ -16,6 +17,7 @@ pub use obj::parse_obj;
 pub use pcd::{parse_pcd, PcdEncoding};
 pub use ply::parse_ply;
 pub use stl::parse_stl;
+pub use table::{parse_table, read_table, Table, TableOptions};
 pub use text::{parse_mesh_txt, read_xyz};
 
 use crate::error::{Error, Result};
