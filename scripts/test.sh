@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The README's test command: installs what the tests need (system libraries included) and runs
-# every check: formatting and lints (cargo fmt, clippy, ruff), the Rust unit tests, the stub check
-# of the extension, and pytest over the tests and the notebooks.
+# every check: formatting and lints (cargo fmt, clippy, ruff), the Rust unit tests of the core,
+# the abi3 wheel built once and installed into a fresh venv with the test extra, the stub check
+# and the type check of the package, and pytest over the tests and the notebooks against that
+# wheel: what `pip install machscan-*.whl` gives a user is what is tested.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -19,11 +21,18 @@ fi
 echo "== cargo fmt --check"
 cargo fmt --all --check
 
-echo "== building and installing machscan (release) with its test dependencies"
-python -m pip install --quiet --disable-pip-version-check ".[test]"
+echo "== the wheel (release, abi3: CPython >= 3.10), built once"
+rm -rf target/ci-wheel
+python -m pip wheel --quiet --disable-pip-version-check --no-deps --wheel-dir target/ci-wheel .
+wheel=$(ls target/ci-wheel/machscan-*-abi3-*.whl)
+
+echo "== a fresh venv with the wheel and the test dependencies"
+python -m venv --clear target/ci-venv
+venv_python="$PWD/target/ci-venv/bin/python"
+"$venv_python" -m pip install --quiet --disable-pip-version-check "${wheel}[test]"
 
 echo "== ruff"
-python -m ruff check python tests benchmarks scripts
+"$venv_python" -m ruff check python tests benchmarks scripts
 
 echo "== cargo clippy"
 cargo clippy --quiet --workspace --all-targets -- -D warnings
@@ -31,9 +40,10 @@ cargo clippy --quiet --workspace --all-targets -- -D warnings
 echo "== cargo test (the core, without Python)"
 cargo test --quiet -p machscan-core
 
-echo "== stub check of machscan._core"
-# Run from outside the source tree so the installed package is the one checked.
-(cd /tmp && python -m mypy.stubtest machscan._core)
+echo "== stub check of machscan._core and the type check of the package"
+# From outside the source tree, so the installed wheel is the one checked.
+(cd /tmp && "$venv_python" -m mypy.stubtest machscan._core)
+"$venv_python" -m mypy python/machscan
 
-echo "== pytest (tests and notebooks)"
-python -m pytest -q -p no:cacheprovider --nbmake tests notebooks "$@"
+echo "== pytest (tests and notebooks), against the wheel"
+"$venv_python" -m pytest -q -p no:cacheprovider --nbmake tests notebooks "$@"

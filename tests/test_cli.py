@@ -163,7 +163,7 @@ GOTO/101,100,0
     "name, text, msg",
     [
         ("bad.csv", "x,y,z\n1,2,3\n4,five,6\n", "line 3"),
-        ("ragged.csv", "1,2,3\n4,5\n", "row 2"),
+        ("ragged.csv", "1,2,3\n4,5\n", "line 2"),
         ("empty.csv", "x,y\n", "no points"),
         ("bad.apt", "GOTO/1,2\n", "line 1"),
         ("none.apt", "PARTNO/X\nFINI\n", "no GOTO"),

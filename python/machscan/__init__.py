@@ -63,12 +63,13 @@ from machscan.grooves import (
     FitCriteria,
     GrooveFits,
     GrooveModel,
+    GrooveOptions,
     GrooveStatus,
     LevelledFrame,
     fit_grooves,
     level_groove_frame,
 )
-from machscan.inspection import ContourResult, Decomposition, GrooveReport, inspect_grooves
+from machscan.inspection import ContourResult, Decomposition, GrooveReport, InspectionOptions, inspect_grooves
 from machscan.io import CloudFile, FileFormatError, TriangleMesh, read_mesh, read_points, write_mesh, write_points
 from machscan.kinematics import (
     SENTINEL,
@@ -95,6 +96,7 @@ from machscan.mesh import (
 from machscan.registration import (
     BlankAlignment,
     EnvelopeFit,
+    IcpCriteria,
     IcpResult,
     PositioningErrors,
     PositioningResult,
@@ -140,10 +142,13 @@ __all__ = [
     "GrindingPaths",
     "GrooveFits",
     "GrooveModel",
+    "GrooveOptions",
     "GrooveReport",
     "GrooveStatus",
+    "IcpCriteria",
     "IcpResult",
     "InsertedPoints",
+    "InspectionOptions",
     "IsometricMatch",
     "KinematicChain",
     "LevelledFrame",

@@ -8,6 +8,8 @@ Python layer's result classes take (``tests/test_seam.py`` checks they agree).""
 from os import PathLike
 from typing import Any, Literal, Sequence, TypedDict, final, overload
 
+from machscan.grooves import GrooveOptions
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -275,6 +277,11 @@ class _ContourErrorArrays(TypedDict):
     mean: float
     std: float
     max: float
+
+class _TableArrays(TypedDict):
+    values: _F64
+    lines: _I64
+    header: list[str] | None
 
 class _BendingSurfaceArrays(TypedDict):
     degree: int
@@ -819,6 +826,18 @@ class KinematicChain:
 
 # ---- io ---------------------------------------------------------------------------------------
 
+def read_table(
+    path: _Path,
+    *,
+    name: str,
+    delimiter: str | None = None,
+    widths: Sequence[int] | None = None,
+    nan_columns: Sequence[int] | None = None,
+) -> _TableArrays:
+    """A numeric table (CSV, TSV, whitespace) by machscan's one set of rules (header, comments,
+    encodings; see ``machscan.io.read_table``); the ``_TableArrays`` keys ``values`` (R, C),
+    ``lines`` (R,) and ``header`` (list of str, or None).
+    """
 def read_cloud(
     path: _Path, *, delimiter: str | None = None, columns: tuple[int, int, int] = (0, 1, 2)
 ) -> _CloudArrays:
@@ -871,11 +890,11 @@ def fit_criteria_defaults() -> _CriteriaDefaults:
     "section": {...}}`` with ``max_iterations``, ``cost_tolerance``, ``step_tolerance``,
     ``gradient_tolerance``.
     """
-def fit_grooves(x: ArrayLike, z: ArrayLike, options: _GrooveOptions) -> _GrooveFitArrays:
+def fit_grooves(x: ArrayLike, z: ArrayLike, options: GrooveOptions) -> _GrooveFitArrays:
     """Measure the groove of every frame (SPEC G); ``machscan.fit_grooves`` documents it and wraps
     the ``_GrooveFitArrays`` this returns.
     """
-def view_groove_frame(x: ArrayLike, z: ArrayLike, options: _GrooveOptions) -> _FrameViewArrays:
+def view_groove_frame(x: ArrayLike, z: ArrayLike, options: GrooveOptions) -> _FrameViewArrays:
     """One frame as the fit sees it: the levelled readings ``x``, ``z``, the fitted shape
     ``shape_x``, ``shape_z`` (evaluated here, so figures draw exactly what was fitted), the
     ``tilt`` and the fit of that frame (``_GrooveFitArrays`` of length 1);

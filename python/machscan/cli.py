@@ -36,9 +36,12 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import get_args
+from typing import TYPE_CHECKING, get_args
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from machscan.inspection import InspectionOptions
 
 #: Point files that hold x, y, z per line and nothing else (what Open3D and PCL read as such).
 _TEXT_POINTS = (".xyz", ".csv", ".txt", ".pts", ".asc")
@@ -118,7 +121,7 @@ def _csv_readings(path: Path) -> int:
     table = read_table(path, delimiter=",", name="scan")
     if table.values.shape[0] == 0:
         raise ValueError(f"scan: {path}: no frames")
-    timed = bool(table.header) and table.header[0].lower() in ("t", "time", "timestamp")
+    timed = table.header is not None and table.header[0].lower() in ("t", "time", "timestamp")
     return table.values.shape[1] - (1 if timed else 0)
 
 
@@ -139,7 +142,7 @@ def _demo(args: argparse.Namespace) -> int:
     print(
         f"round trip: workpiece points vs the true bent surface, away from the grooves ({err.n:,} points): "
         f"mean {err.mean * 1e3:+.2f} µm, robust sigma {err.robust_sigma * 1e3:.1f} µm "
-        f"(profiler noise {scan.profiler.noise * 1e3:.1f} µm), {err.n_outliers} spikes beyond "
+        f"(profiler noise {(scan.profiler.noise or 0.0) * 1e3:.1f} µm), {err.n_outliers} spikes beyond "
         f"{err.outlier_threshold * 1e3:.0f} µm"
     )
     t0 = time.perf_counter()
@@ -170,7 +173,7 @@ def _grooves(args: argparse.Namespace) -> int:
     scan = _load_scan(args)
     _check_readings(scan)
     cad = read_contours(args.cad)
-    report = inspect_grooves(scan, cad, **_groove_options(args), progress=args.progress)
+    report = inspect_grooves(scan, cad, _groove_options(args), progress=args.progress)
     print(report.summary())
     paths = report.to_csv(args.out)
     print(f"\nwritten   : {', '.join(str(p) for p in paths)}")
@@ -201,7 +204,7 @@ class BatchGrooves:
     folder: str
 
 
-def inspect_groove_file(path: str, cad: list, options: dict, out: str) -> BatchGrooves:
+def inspect_groove_file(path: str, cad: list, options: InspectionOptions, out: str) -> BatchGrooves:
     """One task of `machscan batch grooves`: the scan at `path` inspected, its tables written to
     `out`/<scan name>/."""
     from machscan.inspection import inspect_grooves
@@ -214,7 +217,7 @@ def inspect_groove_file(path: str, cad: list, options: dict, out: str) -> BatchG
         scan = open_scan(p).compute()
     else:
         scan = Scan.load(p)
-    report = inspect_grooves(scan, cad, **options)
+    report = inspect_grooves(scan, cad, options)
     folder = Path(out) / p.stem
     report.to_csv(folder)
     problem = report.matching_problem() or (None if report.contours else "no contour was matched")
@@ -571,7 +574,7 @@ def _grind(args: argparse.Namespace) -> int:
     elif (out / "grind.cl").exists():
         # An earlier run's path beside this run's refusal would be taken for this one.
         (out / "grind.cl").unlink()
-        written.append(f"(the grind.cl of an earlier run in {out} removed)")
+        print(f"removed   : the grind.cl of an earlier run in {out}")
     print(f"written   : {', '.join(str(w) for w in written)}")
     holds = True
     if not paths.tool_fits.all():
@@ -772,58 +775,72 @@ def _scan_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _groove_arguments(p: argparse.ArgumentParser) -> None:
-    """The groove inspection's options, shared by `grooves` and `batch grooves`."""
-    from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
+    """The groove inspection's options, shared by `grooves` and `batch grooves`; the defaults are
+    InspectionOptions' (one source)."""
     from machscan.grooves import Template
+    from machscan.inspection import InspectionOptions
 
+    default = InspectionOptions()
     p.add_argument(
-        "--window", type=int, default=200, help="readings around the line center fitted per frame (default: %(default)s)"
+        "--window",
+        type=int,
+        default=default.groove.window,
+        help="readings around the line center fitted per frame (default: %(default)s)",
     )
     p.add_argument(
         "--template",
         choices=get_args(Template),
-        default=GROOVE_DEFAULTS["template"],
+        default=default.groove.template,
         help="groove shape fitted: the best of the four section models (auto), one of them, or the "
         "paper's tanh template (default: %(default)s)",
     )
     p.add_argument(
         "--alpha",
         type=float,
-        default=GROOVE_DEFAULTS["alpha"],
+        default=default.groove.alpha,
         help="tanh template only: shape coefficient, 1/mm (default: %(default)s)",
     )
     p.add_argument(
         "--nominal-width",
         type=float,
-        default=GROOVE_DEFAULTS["nominal_width"],
+        default=default.groove.nominal_width,
         help="tanh template only: starting groove width, mm (default: %(default)s)",
     )
     p.add_argument(
         "--max-se-ratio",
         type=float,
-        default=None,
+        default=default.max_se_ratio,
         help="leave out frames whose width or depth standard error exceeds this many times the "
         "median (default: keep all; 5 suits the tanh template)",
     )
-    p.add_argument("--cluster-radius", type=float, default=5.0, help="contour segmentation distance, mm (default: %(default)s)")
+    p.add_argument(
+        "--cluster-radius",
+        type=float,
+        default=default.cluster_radius,
+        help="contour segmentation distance, mm (default: %(default)s)",
+    )
     p.add_argument(
         "--max-match-distance",
         type=float,
-        default=10.0,
+        default=default.max_match_distance,
         help="largest distance between a scanned contour and its CAD contour, mm (default: %(default)s)",
     )
 
 
-def _groove_options(args: argparse.Namespace) -> dict:
-    """The keyword arguments of inspect_grooves from the options of `_groove_arguments`."""
-    return dict(
-        window=args.window,
-        template=args.template,
-        alpha=args.alpha,
-        nominal_width=args.nominal_width,
-        cluster_radius=args.cluster_radius,
-        max_match_distance=args.max_match_distance,
-        max_se_ratio=args.max_se_ratio,
+def _groove_options(args: argparse.Namespace) -> InspectionOptions:
+    """The inspection's options from those of `_groove_arguments`."""
+    from machscan.inspection import InspectionOptions
+
+    return InspectionOptions().with_changes(
+        dict(
+            window=args.window,
+            template=args.template,
+            alpha=args.alpha,
+            nominal_width=args.nominal_width,
+            cluster_radius=args.cluster_radius,
+            max_match_distance=args.max_match_distance,
+            max_se_ratio=args.max_se_ratio,
+        )
     )
 
 

@@ -184,7 +184,7 @@ def join_centers(centers: ArrayLike, spacing: float = ACTUAL_SPACING) -> NDArray
         return resample_polyline(q, spacing, closed=True)
     out = []
     start = 0
-    for end in list(cuts) + [len(pts) - 1]:
+    for end in [int(c) for c in cuts] + [len(pts) - 1]:
         piece = pts[start : end + 1]
         out.append(piece if len(piece) == 1 else resample_polyline(piece, spacing, closed=False))
         start = end + 1

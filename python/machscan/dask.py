@@ -99,10 +99,10 @@ def _frames_array(frames: Any, name: str = "frames") -> da.Array:
 # ---- grooves -------------------------------------------------------------------------------
 
 
-def _groove_dtype(n_readings: int, options: dict[str, Any]) -> np.dtype:
+def _groove_dtype(n_readings: int, options: _grooves.GrooveOptions) -> np.dtype:
     """The record of one frame's fit: the GrooveFits arrays' names and dtypes, from a call on no
     frames (one source for them: the in-memory result)."""
-    empty = _grooves.fit_grooves(np.arange(n_readings, dtype=np.float64), np.empty((0, n_readings)), **options)
+    empty = _grooves.fit_grooves(np.arange(n_readings, dtype=np.float64), np.empty((0, n_readings)), options)
     return np.dtype([(f.name, getattr(empty, f.name).dtype) for f in fields(empty) if f.name != "template"])
 
 
@@ -112,9 +112,11 @@ def _valid_readings(block: np.ndarray, profiler: Profiler) -> np.ndarray:
     return np.where(profiler.valid_mask(block), block, np.nan)
 
 
-def _fit_block(block: np.ndarray, x: np.ndarray, options: dict[str, Any], dtype: np.dtype, threads: int | None) -> np.ndarray:
+def _fit_block(
+    block: np.ndarray, x: np.ndarray, options: _grooves.GrooveOptions, dtype: np.dtype, threads: int | None
+) -> np.ndarray:
     with thread_limit(threads):
-        fits = _grooves.fit_grooves(x, block, **options)
+        fits = _grooves.fit_grooves(x, block, options)
     out = np.empty(len(fits), dtype=dtype)
     for name in dtype.names or ():
         out[name] = getattr(fits, name)
@@ -157,7 +159,14 @@ class DaskGrooveFits:
         return f"DaskGrooveFits({len(self)} frames in {self.records.numblocks[0]} chunks, lazy)"
 
 
-def fit_grooves(x: Any, frames: Any = None, *, threads: int | None = TASK_THREADS, **kwargs: Any) -> DaskGrooveFits:
+def fit_grooves(
+    x: Any,
+    frames: Any = None,
+    options: _grooves.GrooveOptions | None = None,
+    *,
+    threads: int | None = TASK_THREADS,
+    **changes: Any,
+) -> DaskGrooveFits:
     """:func:`machscan.fit_grooves` over frames chunked along the frames: lazy, one task per chunk.
 
     Parameters
@@ -168,10 +177,12 @@ def fit_grooves(x: Any, frames: Any = None, *, threads: int | None = TASK_THREAD
     frames : dask or NumPy array (F, N)
         Readings, mm (NaN: invalid); NumPy arrays are chunked every ``CHUNK_FRAMES`` frames, and
         chunks across the readings are joined.
+    options : GrooveOptions, optional
+        How the groove is measured, as in :func:`machscan.fit_grooves`.
     threads : int or None
         Threads each task's fits run on (None: all cores).
-    **kwargs
-        The options of :func:`machscan.fit_grooves` (``window``, ``template``, ...).
+    **changes
+        Fields of :class:`machscan.GrooveOptions` changed for this call (``window=200``, ...).
 
     Returns
     -------
@@ -186,7 +197,7 @@ def fit_grooves(x: Any, frames: Any = None, *, threads: int | None = TASK_THREAD
     >>> result = fits.compute()       # a machscan.GrooveFits
     """
     threads = _task_threads(threads)
-    if "progress" in kwargs:
+    if "progress" in changes:
         raise ValueError("progress: not per task; use Dask's bars (dask.diagnostics.ProgressBar, distributed.progress)")
     if isinstance(x, (LazyScan, Scan)):
         if frames is not None:
@@ -194,18 +205,18 @@ def fit_grooves(x: Any, frames: Any = None, *, threads: int | None = TASK_THREAD
         scan = x
         profiler = scan.profiler
         x = profiler.x
-        frames = _frames_array(scan.frames).map_blocks(_valid_readings, profiler, dtype=np.float64)
+        frames = da.map_blocks(_valid_readings, _frames_array(scan.frames), profiler, dtype=np.float64)
     elif frames is None:
         raise ValueError("frames: missing (give x and frames, or a scan)")
     x = np.ascontiguousarray(x, dtype=np.float64)
     frames = _frames_array(frames)
     if x.ndim != 1 or x.shape[0] != frames.shape[1]:
         raise ValueError(f"x: expected shape ({frames.shape[1]},) (one abscissa per reading of frames), got {x.shape}")
-    template = kwargs.get("template", _grooves.DEFAULTS["template"])
-    dtype = _groove_dtype(x.shape[0], kwargs)
-    fit = functools.partial(_fit_block, x=x, options=kwargs, dtype=dtype, threads=threads)
+    options = _grooves.groove_options(options, changes, "machscan.dask.fit_grooves")
+    dtype = _groove_dtype(x.shape[0], options)
+    fit = functools.partial(_fit_block, x=x, options=options, dtype=dtype, threads=threads)
     records = frames.map_blocks(fit, dtype=dtype, drop_axis=1, meta=np.empty((0,), dtype))
-    return DaskGrooveFits(records, template)
+    return DaskGrooveFits(records, options.template)
 
 
 # ---- frames to points -----------------------------------------------------------------------
@@ -437,6 +448,11 @@ def save_scan(scan: Scan | LazyScan, path: str | os.PathLike, *, chunk_frames: i
             root.create_array(name, data=np.asarray(value, dtype=np.float64))
 
 
+def _stored(root: Any, name: str) -> np.ndarray:
+    """A small array of a Zarr scan, read whole."""
+    return np.asarray(root[name][...])
+
+
 def open_scan(path: str | os.PathLike) -> LazyScan:
     """Open a scan written by :func:`save_scan` lazily: frames, poses and frame times as Dask
     arrays on the stored chunks."""
@@ -451,7 +467,7 @@ def open_scan(path: str | os.PathLike) -> LazyScan:
         if not os.path.exists(p):
             raise FileNotFoundError(f"path: no such scan {p!r}") from None
         raise ValueError(f"path: {p!r} is not a Zarr scan ({exc})") from None
-    attrs = dict(root.attrs)
+    attrs: dict[str, Any] = dict(root.attrs)
     if attrs.get("format") != _ZARR_FORMAT:
         raise ValueError(f"path: {p!r} is not a machscan scan (no format {_ZARR_FORMAT!r} in its attributes)")
     if int(attrs.get("version", 0)) > _ZARR_VERSION:
@@ -467,10 +483,10 @@ def open_scan(path: str | os.PathLike) -> LazyScan:
         poses=da.from_zarr(p, component="poses"),
         frame_times=da.from_zarr(p, component="frame_times"),
         profiler=Profiler.from_dict(attrs["profiler"]),
-        c2_offset=np.asarray(root["c2_offset"][...]),
-        mount=np.asarray(root["mount"][...]),
-        axis_times=np.asarray(root["axis_times"][...]) if has_axes else None,
-        axis_samples=np.asarray(root["axis_samples"][...]) if has_axes else None,
+        c2_offset=_stored(root, "c2_offset"),
+        mount=_stored(root, "mount"),
+        axis_times=_stored(root, "axis_times") if has_axes else None,
+        axis_samples=_stored(root, "axis_samples") if has_axes else None,
         metadata=attrs.get("metadata") or {},
     )
 

@@ -16,15 +16,17 @@ The formulas and their papers: ``docs/grooves.md``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
 from enum import IntEnum
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
 from machscan import progress as _progress
+from machscan._options import changed
 
 __all__ = [
     "CRITERIA_DEFAULTS",
@@ -32,6 +34,7 @@ __all__ = [
     "FitCriteria",
     "GrooveFits",
     "GrooveModel",
+    "GrooveOptions",
     "GrooveStatus",
     "LevelledFrame",
     "Template",
@@ -81,6 +84,87 @@ class FitCriteria:
     cost_tolerance: float | None = None
     step_tolerance: float | None = None
     gradient_tolerance: float | None = None
+
+
+@dataclass(frozen=True)
+class GrooveOptions:
+    """How every frame's groove is measured: the options of :func:`fit_grooves`,
+    :func:`level_groove_frame`, :func:`machscan.inspect_grooves` (its ``groove``),
+    :func:`machscan.dask.fit_grooves` and the ``machscan grooves`` command, each default written
+    once, in the core (:data:`DEFAULTS`).
+
+    Attributes
+    ----------
+    template : {"auto", "trapezoid", "v", "round", "u", "tanh"}
+        "auto": the best section model per frame; a model name: that model only; "tanh": the
+        paper's template.
+    alpha : float
+        The tanh template's shape coefficient, mm⁻¹ (paper: 20).
+    nominal_width : float
+        The tanh template pipeline's nominal groove width l, mm (the section models find the
+        groove's extent from the data).
+    window : int, optional
+        Number t of readings kept around the center; None: all.
+    window_center : int, optional
+        Reading index the window is centered on; None: N // 2.
+    fit_alpha : bool
+        Fit the tanh template's α as a fifth parameter.
+    spike_threshold : float or None
+        Spike test threshold, mm (None: off).
+    min_depth : float
+        Shallowest dip that counts as a groove, mm.
+    min_valid : int
+        Fewest valid readings in the window.
+    criteria : FitCriteria
+        When each fit stops; its None fields: each method's own (:data:`CRITERIA_DEFAULTS`).
+    sentinel : float or None
+        The profiler's "no reading" code, mm (default :data:`machscan.SENTINEL`, −99999).
+        Readings equal to it, NaN and readings outside ``valid_range`` are invalid and left out,
+        by the same rule as :func:`machscan.scan_to_wcs` and :meth:`machscan.Profiler.valid_mask`.
+    valid_range : (float, float), optional
+        The profiler's measuring range ``(lo, hi)``, mm.
+
+    Examples
+    --------
+    >>> options = machscan.GrooveOptions(window=200, template="tanh")
+    >>> fits = machscan.fit_grooves(x, z, options)
+    >>> fits = machscan.fit_grooves(x, z, options, window=150)   # one option changed for this call
+    """
+
+    template: Template = DEFAULTS["template"]
+    alpha: float = DEFAULTS["alpha"]
+    nominal_width: float = DEFAULTS["nominal_width"]
+    window: int | None = DEFAULTS["window"]
+    window_center: int | None = DEFAULTS["window_center"]
+    fit_alpha: bool = DEFAULTS["fit_alpha"]
+    spike_threshold: float | None = DEFAULTS["spike_threshold"]
+    min_depth: float = DEFAULTS["min_depth"]
+    min_valid: int = DEFAULTS["min_valid"]
+    criteria: FitCriteria = field(default_factory=lambda: FitCriteria())
+    sentinel: float | None = DEFAULTS["sentinel"]
+    valid_range: tuple[float, float] | None = DEFAULTS["valid_range"]
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.criteria, FitCriteria):
+            raise ValueError(f"criteria: expected a machscan.FitCriteria, got {type(self.criteria).__name__}")
+        if self.valid_range is not None:
+            lo, hi = self.valid_range
+            object.__setattr__(self, "valid_range", (lo, hi))
+
+    def with_changes(self, changes: Mapping[str, Any], where: str = "options") -> GrooveOptions:
+        """These options with ``changes`` (option names and values) made; an unknown name is an
+        error naming it and ``where``, the call it was given to."""
+        return changed(self, changes, where)
+
+
+def groove_options(options: GrooveOptions | None, changes: Mapping[str, Any], where: str) -> GrooveOptions:
+    """The options a call measures with: ``options`` (default ``GrooveOptions()``) with the
+    call's keyword ``changes``."""
+    if options is None:
+        options = GrooveOptions()
+    if not isinstance(options, GrooveOptions):
+        raise ValueError(f"options: expected a machscan.GrooveOptions, got {type(options).__name__}")
+    return options.with_changes(changes, where)
 
 
 class GrooveStatus(IntEnum):
@@ -215,60 +299,13 @@ class GrooveFits:
         return f"GrooveFits({len(self)} frames, {int(self.ok.sum())} converged)"
 
 
-def _options(
-    template,
-    alpha,
-    nominal_width,
-    window,
-    window_center,
-    fit_alpha,
-    spike_threshold,
-    min_depth,
-    min_valid,
-    criteria,
-    sentinel,
-    valid_range,
-) -> dict:
-    """The options dict of the core (the `_GrooveOptions` keys)."""
-    c = FitCriteria() if criteria is None else criteria
-    if not isinstance(c, FitCriteria):
-        raise ValueError(f"criteria: expected a machscan.FitCriteria, got {type(c).__name__}")
-    return dict(
-        template=template,
-        alpha=alpha,
-        nominal_width=nominal_width,
-        window=window,
-        window_center=window_center,
-        fit_alpha=fit_alpha,
-        spike_threshold=spike_threshold,
-        min_depth=min_depth,
-        min_valid=min_valid,
-        max_iterations=c.max_iterations,
-        cost_tolerance=c.cost_tolerance,
-        step_tolerance=c.step_tolerance,
-        gradient_tolerance=c.gradient_tolerance,
-        sentinel=sentinel,
-        valid_range=None if valid_range is None else tuple(valid_range),
-    )
-
-
 def fit_grooves(
     x: ArrayLike,
     z: ArrayLike,
-    alpha: float = DEFAULTS["alpha"],
-    nominal_width: float = DEFAULTS["nominal_width"],
-    window: int | None = DEFAULTS["window"],
+    options: GrooveOptions | None = None,
     *,
-    template: Template = DEFAULTS["template"],
-    window_center: int | None = DEFAULTS["window_center"],
-    fit_alpha: bool = DEFAULTS["fit_alpha"],
-    spike_threshold: float | None = DEFAULTS["spike_threshold"],
-    min_depth: float = DEFAULTS["min_depth"],
-    min_valid: int = DEFAULTS["min_valid"],
-    criteria: FitCriteria | None = None,
-    sentinel: float | None = DEFAULTS["sentinel"],
-    valid_range: tuple[float, float] | None = DEFAULTS["valid_range"],
     progress: bool | None = False,
+    **changes: Any,
 ) -> GrooveFits:
     """Measure the groove in every profiler frame (SPEC G): width, depth and center.
 
@@ -310,34 +347,12 @@ def fit_grooves(
     z : array_like, shape (F, N) or (N,)
         Readings (heights), mm, raw as the profiler gives them or with NaN for invalid readings. One frame may be
         given as (N,): the result then has length 1.
-    alpha : float
-        The tanh template's shape coefficient, mm⁻¹ (paper: 20).
-    nominal_width : float
-        The tanh template pipeline's nominal groove width l, mm (the section models find the
-        groove's extent from the data).
-    window : int, optional
-        Number t of readings kept around the center; default all.
-    template : {"auto", "trapezoid", "v", "round", "u", "tanh"}
-        "auto": the best section model per frame; a model name: that model only; "tanh": the
-        paper's template.
-    window_center : int, optional
-        Reading index the window is centered on; default N // 2.
-    fit_alpha : bool
-        Fit the tanh template's α as a fifth parameter.
-    spike_threshold : float or None
-        Spike test threshold, mm (None: off).
-    min_depth : float
-        Shallowest dip that counts as a groove, mm.
-    min_valid : int
-        Fewest valid readings in the window.
-    criteria : FitCriteria, optional
-        When each fit stops; default each method's own.
-    sentinel : float or None
-        The profiler's "no reading" code, mm (default :data:`machscan.SENTINEL`, −99999). Readings equal to it, NaN
-        and readings outside ``valid_range`` are invalid and left out, by the same rule as
-        :func:`machscan.scan_to_wcs` and :meth:`machscan.Profiler.valid_mask`.
-    valid_range : (float, float), optional
-        The profiler's measuring range ``(lo, hi)``, mm.
+    options : GrooveOptions, optional
+        How the groove is measured (default :class:`GrooveOptions()`; every field is described
+        there).
+    **changes
+        Fields of :class:`GrooveOptions` changed for this call: ``fit_grooves(x, z, window=200)``
+        is ``fit_grooves(x, z, GrooveOptions(window=200))``.
     progress : bool or None
         Show a progress bar (frames done, rate, time left) on stderr; None: when stderr is a
         terminal. The frames are then fitted in 50 blocks; the result is the same.
@@ -352,25 +367,12 @@ def fit_grooves(
     >>> fits = machscan.fit_grooves(x, z, window=200)
     >>> fits.width[fits.ok].mean(), fits.model_counts()
     """
-    options = _options(
-        template,
-        alpha,
-        nominal_width,
-        window,
-        window_center,
-        fit_alpha,
-        spike_threshold,
-        min_depth,
-        min_valid,
-        criteria,
-        sentinel,
-        valid_range,
-    )
+    options = groove_options(options, changes, "fit_grooves")
     if np.ndim(z) == 1:  # one frame
         z = np.asarray(z, dtype=np.float64)[np.newaxis, :]
     frames = np.asarray(z, dtype=np.float64) if _progress.wanted(progress) else None
     if frames is None or frames.ndim != 2 or len(frames) == 0:  # the core names a shape error
-        return GrooveFits(**_core.fit_grooves(x, z, options), template=template)
+        return GrooveFits(**_core.fit_grooves(x, z, options), template=options.template)
     z = frames
     step = max(PROGRESS_BLOCK, -(-len(z) // 50))
     parts = []
@@ -378,7 +380,8 @@ def fit_grooves(
         for start in range(0, len(z), step):
             parts.append(_core.fit_grooves(x, z[start : start + step], options))
             shown.update(len(parts[-1]["status"]))
-    return GrooveFits(**{name: np.concatenate([p[name] for p in parts]) for name in parts[0]}, template=template)
+    merged: dict[str, Any] = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}  # type: ignore[literal-required]
+    return GrooveFits(**merged, template=options.template)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -431,44 +434,21 @@ class LevelledFrame:
 def level_groove_frame(
     x: ArrayLike,
     z: ArrayLike,
-    alpha: float = DEFAULTS["alpha"],
-    nominal_width: float = DEFAULTS["nominal_width"],
-    window: int | None = DEFAULTS["window"],
-    *,
-    template: Template = DEFAULTS["template"],
-    window_center: int | None = DEFAULTS["window_center"],
-    fit_alpha: bool = DEFAULTS["fit_alpha"],
-    spike_threshold: float | None = DEFAULTS["spike_threshold"],
-    min_depth: float = DEFAULTS["min_depth"],
-    min_valid: int = DEFAULTS["min_valid"],
-    criteria: FitCriteria | None = None,
-    sentinel: float | None = DEFAULTS["sentinel"],
-    valid_range: tuple[float, float] | None = DEFAULTS["valid_range"],
+    options: GrooveOptions | None = None,
+    **changes: Any,
 ) -> LevelledFrame:
     """One frame levelled exactly as :func:`fit_grooves` levels it, with the shape it fits.
 
     For figures (the levelled profile under its section or template, paper 000 fig. 4) and for
-    checking a fit. Parameters as in :func:`fit_grooves`; ``z`` is one frame, shape (N,).
+    checking a fit. ``options`` and ``**changes`` as in :func:`fit_grooves`; ``z`` is one frame,
+    shape (N,).
 
     Examples
     --------
     >>> lf = machscan.level_groove_frame(x, z[0], window=200)
     >>> lf.model, lf.fit.width[0]
     """
-    options = _options(
-        template,
-        alpha,
-        nominal_width,
-        window,
-        window_center,
-        fit_alpha,
-        spike_threshold,
-        min_depth,
-        min_valid,
-        criteria,
-        sentinel,
-        valid_range,
-    )
+    options = groove_options(options, changes, "level_groove_frame")
     out = _core.view_groove_frame(x, z, options)
-    fit = GrooveFits(**out.pop("fit"), template=template)
-    return LevelledFrame(**out, fit=fit)
+    fit = GrooveFits(**out["fit"], template=options.template)
+    return LevelledFrame(x=out["x"], z=out["z"], shape_x=out["shape_x"], shape_z=out["shape_z"], tilt=out["tilt"], fit=fit)

@@ -12,19 +12,29 @@ from __future__ import annotations
 
 import csv
 import os
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
 from machscan._core import euclidean_clusters, match_contours, nearest_neighbors
+from machscan._options import changed
 from machscan.contours import ACTUAL_SPACING, CAD_SPACING, ContourErrorResult, contour_error, resample_cad
-from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
-from machscan.grooves import GrooveFits, Template, fit_grooves
+from machscan.grooves import GrooveFits, GrooveOptions, fit_grooves
 from machscan.scan import Scan
+
+__all__ = [
+    "INSPECTION_GROOVE",
+    "ContourResult",
+    "Decomposition",
+    "GrooveReport",
+    "InspectionOptions",
+    "inspect_grooves",
+]
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -331,9 +341,9 @@ class GrooveReport:
                 if rows:
                     # Counts are counts; every other column is a length in mm, and says so.
                     names = {k: k if k in _COUNTS else f"{k}_mm" for k in rows[0]}
-                    w = csv.DictWriter(fh, fieldnames=list(names.values()))
-                    w.writeheader()
-                    w.writerows({names[k]: v for k, v in r.items()} for r in rows)
+                    table = csv.DictWriter(fh, fieldnames=list(names.values()))
+                    table.writeheader()
+                    table.writerows({names[k]: v for k, v in r.items()} for r in rows)
             paths.append(path)
         return paths
 
@@ -356,6 +366,73 @@ def _poly_eval(exponents, coefficients, x, y, center, scale):
     """B(x, y) of the bending surface, from the core (any matching shapes of x and y)."""
     x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
     return _core.bending_surface_at(exponents, coefficients, center, scale, x.ravel(), y.ravel()).reshape(x.shape)
+
+
+#: The groove fit of an inspection: paper 000's t = 200 readings around the line center.
+INSPECTION_GROOVE = GrooveOptions(window=200)
+
+
+@dataclass(frozen=True)
+class InspectionOptions:
+    """How :func:`inspect_grooves` (and ``machscan grooves``, ``machscan batch``) measures: the
+    groove fit of every frame, the clustering of the centers into contours, the matching to
+    the CAD and the error decomposition.
+
+    Attributes
+    ----------
+    groove : GrooveOptions
+        The groove fit (see :func:`machscan.fit_grooves`); by default paper 000's window of
+        t = 200 readings around the line center (:data:`INSPECTION_GROOVE`).
+    cluster_radius : float
+        Euclidean clustering radius of the centers, mm (paper: 5 mm; see
+        :func:`machscan.euclidean_clusters`).
+    cluster_k : int or None
+        Nearest neighbours each center links to (paper: 5; None: all within the radius).
+    min_cluster_frames : int
+        Clusters of fewer centers are dropped as strays.
+    cad_spacing, actual_spacing : float
+        The CAD contours and the joined centers resampled every so many mm (step 5 of
+        :func:`inspect_grooves`).
+    max_match_distance : float
+        No cluster is matched to a CAD contour whose centroid is farther, mm.
+    bending_degree : int
+        Total degree of the bending surface B(x, y).
+    max_se_ratio : float, optional
+        Converged fits whose standard error of width or depth exceeds this many times the
+        median are left out as suspect (see ``GrooveReport.suspect``). Off by default: with the
+        section models a large standard error rarely marks a wrong fit (on the demo scan a ratio
+        of 5 left out 43 frames of which 5 were off by more than 25 µm); it guards the tanh
+        template, whose fit converges to a width the data do not fix when a groove lost its
+        flank readings (5 is then a good value).
+
+    Examples
+    --------
+    >>> options = machscan.InspectionOptions(cluster_radius=3.0, groove=machscan.GrooveOptions(window=150))
+    >>> report = machscan.inspect_grooves(scan, cad, options)
+    """
+
+    groove: GrooveOptions = INSPECTION_GROOVE
+    cluster_radius: float = 5.0
+    cluster_k: int | None = 5
+    min_cluster_frames: int = 20
+    cad_spacing: float = CAD_SPACING
+    actual_spacing: float = ACTUAL_SPACING
+    max_match_distance: float = 10.0
+    bending_degree: int = 4
+    max_se_ratio: float | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.groove, GrooveOptions):
+            raise ValueError(f"groove: expected a machscan.GrooveOptions, got {type(self.groove).__name__}")
+
+    def with_changes(self, changes: Mapping[str, Any], where: str = "options") -> InspectionOptions:
+        """These options with ``changes`` made: names of this class's fields, or of
+        :class:`GrooveOptions` fields, which change ``groove``."""
+        groove_names = {f.name for f in fields(GrooveOptions)}
+        groove = {k: v for k, v in changes.items() if k in groove_names}
+        mine = {k: v for k, v in changes.items() if k not in groove_names}
+        options = changed(self, mine, where)
+        return replace(options, groove=options.groove.with_changes(groove, where)) if groove else options
 
 
 # ---- the workflow -------------------------------------------------------------------------
@@ -382,21 +459,10 @@ def _as_polylines(cad_contours: Sequence[ArrayLike] | NDArray[np.float64]) -> li
 def inspect_grooves(
     scan: Scan,
     cad_contours: Sequence[ArrayLike],
+    options: InspectionOptions | None = None,
     *,
-    window: int = 200,
-    template: Template = GROOVE_DEFAULTS["template"],
-    alpha: float = GROOVE_DEFAULTS["alpha"],
-    nominal_width: float = GROOVE_DEFAULTS["nominal_width"],
-    fit_alpha: bool = GROOVE_DEFAULTS["fit_alpha"],
-    cluster_radius: float = 5.0,
-    cluster_k: int | None = 5,
-    min_cluster_frames: int = 20,
-    cad_spacing: float = CAD_SPACING,
-    actual_spacing: float = ACTUAL_SPACING,
-    max_match_distance: float = 10.0,
-    bending_degree: int = 4,
-    max_se_ratio: float | None = None,
     progress: bool | None = False,
+    **changes: Any,
 ) -> GrooveReport:
     """Measure engraved grooves and their contour error from a raw scan (paper 000).
 
@@ -429,20 +495,11 @@ def inspect_grooves(
         ``cad_spacing`` mm. Or the points of the whole drawing as one array: its contours are
         then found by the same Euclidean clustering as the groove centers and its points are
         used as they are (they should be dense: see step 5).
-    window, template, alpha, nominal_width, fit_alpha
-        Groove fit settings (see :func:`machscan.fit_grooves`); ``window`` is the paper's t =
-        200 readings around the line center.
-    cluster_radius, cluster_k, min_cluster_frames
-        Clustering (see :func:`machscan.euclidean_clusters`).
-    cad_spacing, actual_spacing, max_match_distance, bending_degree
-        As above, mm.
-    max_se_ratio : float, optional
-        Converged fits whose standard error of width or depth exceeds this many times the
-        median are left out as suspect (see ``GrooveReport.suspect``). Off by default: with
-        the section models a large standard error rarely marks a wrong fit (on the demo scan a
-        ratio of 5 left out 43 frames of which 5 were off by more than 25 µm); it guards the
-        tanh template, whose fit converges to a width the data do not fix when a groove lost
-        its flank readings (5 is then a good value).
+    options : InspectionOptions, optional
+        How it measures (default :class:`InspectionOptions()`; every field is described there).
+    **changes
+        Fields of :class:`InspectionOptions`, or of its ``groove`` (:class:`GrooveOptions`),
+        changed for this call: ``inspect_grooves(scan, cad, window=150, max_se_ratio=5.0)``.
     progress : bool or None
         A progress bar of the groove fits on stderr (:func:`machscan.fit_grooves`); None: when
         stderr is a terminal.
@@ -459,6 +516,15 @@ def inspect_grooves(
     >>> report = machscan.inspect_grooves(scan, truth.nominal_polylines)
     >>> print(report.summary())
     """
+    if options is None:
+        options = InspectionOptions()
+    if not isinstance(options, InspectionOptions):
+        raise ValueError(f"options: expected a machscan.InspectionOptions, got {type(options).__name__}")
+    options = options.with_changes(changes, "inspect_grooves")
+    groove = options.groove
+    cluster_radius, cluster_k, min_cluster_frames = options.cluster_radius, options.cluster_k, options.min_cluster_frames
+    cad_spacing, actual_spacing = options.cad_spacing, options.actual_spacing
+    max_match_distance, bending_degree, max_se_ratio = options.max_match_distance, options.bending_degree, options.max_se_ratio
     if not isinstance(scan, Scan):
         raise ValueError(f"scan: expected a machscan.Scan, got {type(scan).__name__}")
     cad_cloud = isinstance(cad_contours, np.ndarray) and cad_contours.ndim == 2
@@ -469,13 +535,13 @@ def inspect_grooves(
         if cad_points.shape[1] == 2:
             cad_points = np.column_stack([cad_points, np.zeros(len(cad_points))])
         if cad_points.shape[1] != 3 or len(cad_points) < 3 or not np.isfinite(cad_points).all():
-            raise ValueError(f"cad_contours: expected finite (n, 3) points with n >= 3, got {cad_contours.shape}")
+            raise ValueError(f"cad_contours: expected finite (n, 3) points with n >= 3, got {cad_points.shape}")
         cad_labels = euclidean_clusters(cad_points, cluster_radius, _cluster_k(cluster_k, len(cad_points)))
         polylines = [cad_points[cad_labels == c] for c in range(int(cad_labels.max()) + 1)]
     else:
         polylines = _as_polylines(cad_contours)
-    if window > scan.n_readings:
-        raise ValueError(f"window: {window} readings, but the frames have only {scan.n_readings}")
+    if groove.window is not None and groove.window > scan.n_readings:
+        raise ValueError(f"window: {groove.window} readings, but the frames have only {scan.n_readings}")
     if min_cluster_frames < 1:
         raise ValueError(f"min_cluster_frames: must be at least 1, got {min_cluster_frames}")
     if bending_degree < 0:
@@ -483,9 +549,7 @@ def inspect_grooves(
     prof = scan.profiler
     x = (np.arange(scan.n_readings) - prof.i0) * prof.pitch
     z = np.where(scan.valid_mask(), scan.frames, np.nan)
-    fits = fit_grooves(
-        x, z, alpha=alpha, nominal_width=nominal_width, window=window, template=template, fit_alpha=fit_alpha, progress=progress
-    )
+    fits = fit_grooves(x, z, groove, progress=progress)
     if max_se_ratio is not None and not max_se_ratio > 0:
         raise ValueError(f"max_se_ratio: must be positive or None, got {max_se_ratio}")
     converged = fits.ok

@@ -189,7 +189,8 @@ def read(
     """
     if os.fspath(path).lower().endswith((".las", ".laz")):
         return _read_las(path)
-    return CloudFile(**_core.read_cloud(path, delimiter=delimiter, columns=tuple(columns)))
+    cx, cy, cz = columns
+    return CloudFile(**_core.read_cloud(path, delimiter=delimiter, columns=(cx, cy, cz)))
 
 
 def _read_las(path: str | os.PathLike[str]) -> CloudFile:
@@ -206,7 +207,7 @@ def _read_las(path: str | os.PathLike[str]) -> CloudFile:
         las = laspy.read(p)
     except Exception as e:  # laspy raises its own error types for bad files
         err = FileFormatError(f"{p}: not a readable LAS file ({e})")
-        err.filename = p
+        err.filename = p  # type: ignore[attr-defined]  # set on the instance, as the core does
         raise err from None
     pts = np.column_stack(
         [np.asarray(las.x, dtype=np.float64), np.asarray(las.y, dtype=np.float64), np.asarray(las.z, dtype=np.float64)]
@@ -244,7 +245,7 @@ def read_mesh(path: str | os.PathLike[str]) -> TriangleMesh:
     c = read(path)
     if len(c.triangles) == 0:
         err = FileFormatError(f"{os.fspath(path)}: holds no faces; read it with machscan.io.read as a point cloud")
-        err.filename = os.fspath(path)
+        err.filename = os.fspath(path)  # type: ignore[attr-defined]  # set on the instance, as the core does
         raise err
     return TriangleMesh(vertices=c.points, triangles=c.triangles, normals=c.normals)
 

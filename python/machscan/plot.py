@@ -27,15 +27,15 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
-from machscan.grooves import DEFAULTS as GROOVE_DEFAULTS
-from machscan.grooves import GrooveFits, Template, level_groove_frame
-from machscan.inspection import ContourResult, GrooveReport
+from machscan.grooves import GrooveFits, GrooveOptions, level_groove_frame
+from machscan.inspection import INSPECTION_GROOVE, ContourResult, GrooveReport
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -503,16 +503,10 @@ def levelled_frame(
     z: ArrayLike,
     frame: int,
     fits: GrooveFits | GrooveReport | None = None,
+    options: GrooveOptions | None = None,
     *,
-    window: int | None = 200,
-    template: Template | None = None,
-    alpha: float = GROOVE_DEFAULTS["alpha"],
-    nominal_width: float = GROOVE_DEFAULTS["nominal_width"],
-    window_center: int | None = GROOVE_DEFAULTS["window_center"],
-    spike_threshold: float | None = GROOVE_DEFAULTS["spike_threshold"],
-    min_depth: float = GROOVE_DEFAULTS["min_depth"],
-    min_valid: int = GROOVE_DEFAULTS["min_valid"],
     ax: Axes | None = None,
+    **changes: Any,
 ) -> Figure:
     """One profiler frame levelled as the groove fit sees it, with the fitted section or
     template (paper 000 fig. 4 and 10).
@@ -523,8 +517,8 @@ def levelled_frame(
     figure shows exactly what was fitted. The width (between the flanks at the surface line)
     and the depth (deepest point below it) are marked.
 
-    The settings must be those of the fit (:func:`machscan.inspect_grooves` uses
-    ``window=200``, which is the default here; the template is taken from ``fits``).
+    The options must be those of the fit: by default :func:`machscan.inspect_grooves`'s
+    (``INSPECTION_GROOVE``, a window of 200 readings) with the template of ``fits``.
 
     Parameters
     ----------
@@ -537,10 +531,12 @@ def levelled_frame(
     fits : GrooveFits or GrooveReport, optional
         The fits the figure is of: their template is used, and the frame's values are checked
         against the drawing.
-    window, template, alpha, nominal_width, window_center, spike_threshold, min_depth, min_valid
-        As in :func:`machscan.fit_grooves`; lengths in mm, α in mm⁻¹.
+    options : GrooveOptions, optional
+        As in :func:`machscan.fit_grooves`.
     ax : matplotlib Axes, optional
         Where to draw; default a new figure.
+    **changes
+        Fields of :class:`machscan.GrooveOptions` changed for this figure.
 
     Returns
     -------
@@ -566,20 +562,10 @@ def levelled_frame(
         fits = fits.fits
     if fits is not None and not -len(fits) <= frame < len(fits):
         raise ValueError(f"frame: {frame} is out of range for fits of {len(fits)} frames")
-    if template is None:
-        template = fits.template if fits is not None else GROOVE_DEFAULTS["template"]
-    lf = level_groove_frame(
-        x,
-        row,
-        alpha,
-        nominal_width,
-        window,
-        template=template,
-        window_center=window_center,
-        spike_threshold=spike_threshold,
-        min_depth=min_depth,
-        min_valid=min_valid,
-    )
+    if options is None:
+        template = fits.template if fits is not None else INSPECTION_GROOVE.template
+        options = replace(INSPECTION_GROOVE, template=template)  # type: ignore[arg-type]
+    lf = level_groove_frame(x, row, options, **changes)
     if fits is not None and not np.array_equal(lf.fit.width, fits.width[frame : frame + 1], equal_nan=True):
         raise ValueError("fits: the frame's fit differs from this figure's: pass the settings the fits were made with")
     if ax is None:
@@ -695,19 +681,21 @@ def allowance_map(
     plt = _pyplot()
     from matplotlib.colors import TwoSlopeNorm
 
+    # A 3D axes: matplotlib's stubs type `add_subplot` as the 2D Axes, whose scatter takes (x, y).
+    ax3d: Any
     if ax is None:
         fig = plt.figure(figsize=(8, 6.5), layout="constrained")
-        ax = fig.add_subplot(projection="3d")
-        ax.view_init(elev=elev, azim=azim)
+        ax3d = fig.add_subplot(projection="3d")
+        ax3d.view_init(elev=elev, azim=azim)
     else:
-        fig = ax.figure
+        fig, ax3d = ax.figure, ax
     finite = np.isfinite(a)
     short = finite & (a < min_allowance)
     keep = np.zeros(len(p), dtype=bool)
     keep[:: max(1, int(np.ceil(len(p) / max_points)))] = True
     keep |= short
     if not finite.any():
-        _empty(ax, "no allowance")
+        _empty(ax3d, "no allowance")
         return fig
     lo, hi = float(a[finite].min()), float(a[finite].max())
     # A two-slope norm needs the centre strictly inside the range.
@@ -717,24 +705,24 @@ def allowance_map(
     )
     grey = keep & ~finite
     if grey.any():
-        ax.scatter(*p[grey].T, s=2, color="0.6", lw=0)
+        ax3d.scatter(*p[grey].T, s=2, color="0.6", lw=0)
     ok = keep & finite
-    sc = ax.scatter(*p[ok].T, c=a[ok], cmap=cmap, norm=norm, s=3, lw=0)
+    sc = ax3d.scatter(*p[ok].T, c=a[ok], cmap=cmap, norm=norm, s=3, lw=0)
     if short.any():
-        ax.scatter(*p[short].T, s=12, facecolors="none", edgecolors="k", lw=0.6)
+        ax3d.scatter(*p[short].T, s=12, facecolors="none", edgecolors="k", lw=0.6)
     try:  # equal scales on a 3D axes (matplotlib >= 3.3)
-        ax.set_box_aspect(np.ptp(p[finite], axis=0) + 1e-9)
+        ax3d.set_box_aspect(np.ptp(p[finite], axis=0) + 1e-9)
     except (AttributeError, TypeError):  # pragma: no cover - a 2D axes given
         pass
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
-    if hasattr(ax, "set_zlabel"):
-        ax.set_zlabel("z (mm)")
+    ax3d.set_xlabel("x (mm)")
+    ax3d.set_ylabel("y (mm)")
+    if hasattr(ax3d, "set_zlabel"):
+        ax3d.set_zlabel("z (mm)")
     n_short, n_none = int(short.sum()), int((~finite).sum())
     none = f"; {n_none} without stock measured (grey)" if n_none else ""
-    ax.set_title(
+    ax3d.set_title(
         f"Allowance: min {lo:.3f}, mean {a[finite].mean():.3f}, max {hi:.3f} mm; "
         f"{n_short} point{'s' if n_short != 1 else ''} below {min_allowance:g} mm{none}"
     )
-    fig.colorbar(sc, ax=ax, label="allowance (mm)", shrink=0.7)
+    fig.colorbar(sc, ax3d=ax3d, label="allowance (mm)", shrink=0.7)
     return fig

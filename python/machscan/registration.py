@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
 from machscan._core import ALLOWANCE_NEIGHBORS, coarse_align
+from machscan._options import changed
 
 __all__ = [
     "ALLOWANCE_NEIGHBORS",
@@ -27,6 +28,7 @@ __all__ = [
     "BlankAlignment",
     "BlankSurface",
     "EnvelopeFit",
+    "IcpCriteria",
     "IcpHistory",
     "IcpMethod",
     "IcpResult",
@@ -124,6 +126,26 @@ IcpMethod = Literal["point_to_point", "point_to_plane"]
 RobustKernel = Literal["huber", "tukey"]
 
 
+@dataclass(frozen=True)
+class IcpCriteria:
+    """When :func:`icp` stops (Open3D's ``ICPConvergenceCriteria``, with paper 003's threshold):
+    after ``max_iterations``, or when fitness and rmse changed by less than ``relative_fitness``
+    and ``relative_rmse`` (absolute changes, as Open3D compares them; both 0 run exactly
+    ``max_iterations``), or when the mean squared correspondence distance falls below
+    ``mse_threshold``, mm² (paper 003 eq 10; None: not used). The defaults are the core's
+    (:data:`ICP_DEFAULTS`).
+
+    Examples
+    --------
+    >>> r = machscan.icp(src, tgt, 0.05, criteria=machscan.IcpCriteria(max_iterations=50))
+    """
+
+    max_iterations: int = ICP_DEFAULTS["max_iterations"]
+    relative_fitness: float = ICP_DEFAULTS["relative_fitness"]
+    relative_rmse: float = ICP_DEFAULTS["relative_rmse"]
+    mse_threshold: float | None = ICP_DEFAULTS["mse_threshold"]
+
+
 @dataclass(frozen=True, eq=False)
 class IcpHistory:
     """Fitness and rmse after each iteration (at the transform that iteration reached)."""
@@ -176,23 +198,19 @@ def icp(
     *,
     method: IcpMethod = ICP_DEFAULTS["method"],
     target_normals: ArrayLike | None = None,
-    max_iterations: int = ICP_DEFAULTS["max_iterations"],
-    relative_fitness: float = ICP_DEFAULTS["relative_fitness"],
-    relative_rmse: float = ICP_DEFAULTS["relative_rmse"],
+    criteria: IcpCriteria | None = None,
     robust: RobustKernel | None = ICP_DEFAULTS["robust"],
     robust_scale: float | None = None,
     trim: float = ICP_DEFAULTS["trim"],
-    mse_threshold: float | None = ICP_DEFAULTS["mse_threshold"],
+    **changes: Any,
 ) -> IcpResult:
     """Iterative closest point (SPEC R2; paper 003 §3.2, paper 004 eq 1): the rigid transform
     that brings ``source`` onto ``target``.
 
     A correspondence is a source point's nearest target point closer than ``max_distance``.
     Each iteration estimates an update from the correspondences, applies it and finds them
-    again. It stops after ``max_iterations``, or when fitness and rmse changed by less than
-    ``relative_fitness`` and ``relative_rmse`` (absolute changes, as Open3D compares them; set
-    both to 0 to run exactly ``max_iterations``), or when the mean squared distance is below
-    ``mse_threshold`` (paper 003 eq 10). Fitness and rmse are those of the returned transform.
+    again, until ``criteria`` (:class:`IcpCriteria`) says it is done. Fitness and rmse are those
+    of the returned transform.
     Results do not depend on the thread count; the GIL is released while it runs.
 
     Parameters
@@ -209,9 +227,8 @@ def icp(
         ``Rz(γ) Ry(β) Rx(α)``); converges in fewer iterations on smooth parts.
     target_normals : array_like, shape (M, 3), optional
         For point to plane; estimated from the 20 nearest target points when omitted.
-    max_iterations : int
-    relative_fitness, relative_rmse : float
-        Stop thresholds (Open3D's ``ICPConvergenceCriteria``).
+    criteria : IcpCriteria, optional
+        When it stops (default ``IcpCriteria()``).
     robust : {"huber", "tukey"}, optional
         Robust weights of the residuals (distance, or distance along the normal): Huber bounds
         the influence of outliers, Tukey removes gross ones.
@@ -220,8 +237,8 @@ def icp(
         ``1.345`` (Huber) or ``4.685`` (Tukey) × ``1.4826 · median |r|``.
     trim : float
         Share of the correspondences, the farthest, left out of each estimate (0 ≤ trim < 1).
-    mse_threshold : float, optional
-        Stop when the mean squared correspondence distance is below this, mm².
+    **changes
+        Fields of :class:`IcpCriteria` changed for this call: ``icp(s, t, 0.05, max_iterations=50)``.
 
     Returns
     -------
@@ -234,6 +251,9 @@ def icp(
     >>> r = machscan.icp(measured, model, max_distance=1.0, method="point_to_plane")
     >>> aligned = measured @ r.transformation[:3, :3].T + r.transformation[:3, 3]
     """
+    c = changed(IcpCriteria() if criteria is None else criteria, changes, "icp")
+    if not isinstance(c, IcpCriteria):
+        raise ValueError(f"criteria: expected a machscan.IcpCriteria, got {type(c).__name__}")
     out = _core.icp(
         source,
         target,
@@ -241,13 +261,13 @@ def icp(
         init=init,
         target_normals=target_normals,
         method=method,
-        max_iterations=max_iterations,
-        relative_fitness=relative_fitness,
-        relative_rmse=relative_rmse,
+        max_iterations=c.max_iterations,
+        relative_fitness=c.relative_fitness,
+        relative_rmse=c.relative_rmse,
         robust=robust,
         robust_scale=robust_scale,
         trim=trim,
-        mse_threshold=mse_threshold,
+        mse_threshold=c.mse_threshold,
     )
     history = IcpHistory(out["history_fitness"], out["history_rmse"])
     return IcpResult(

@@ -1,8 +1,7 @@
 //! Bindings of `machscan_core::groove`: the batch groove fit and the view of one frame. The options
-//! travel as one dict with exactly the keys of `groove_defaults()` (the `_GrooveOptions`
-//! TypedDict of the stub), so they are spelled and defaulted in one place each: here from
-//! `GrooveOptions::default()`, and by the Python signatures that read `groove_defaults()`.
-use super::convert::{count, enter, f64_vector_opt, to_numpy, Dim, F64Array};
+//! come as `machscan.GrooveOptions`, read by attribute (`Options`); its defaults are the core's
+//! `GrooveOptions::default()`, handed to Python by `groove_defaults()`.
+use super::convert::{count, count_opt, enter, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::groove::{
     fit_frames, view_frame, FitCriteria, GrooveFit, GrooveOptions, TemplateKind, SECTION_CRITERIA, TANH_CRITERIA,
@@ -12,66 +11,64 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-const KEYS: [&str; 15] = [
-    "template",
-    "alpha",
-    "nominal_width",
-    "window",
-    "window_center",
-    "fit_alpha",
-    "spike_threshold",
-    "min_depth",
-    "min_valid",
-    "max_iterations",
-    "cost_tolerance",
-    "step_tolerance",
-    "gradient_tolerance",
-    "sentinel",
-    "valid_range",
-];
+/// `machscan.FitCriteria`, read by attribute.
+#[derive(FromPyObject)]
+struct Criteria {
+    max_iterations: Option<i64>,
+    cost_tolerance: Option<f64>,
+    step_tolerance: Option<f64>,
+    gradient_tolerance: Option<f64>,
+}
 
-/// `GrooveOptions` from the options dict; a missing or unknown key is an error naming it.
-fn options(d: &Bound<'_, PyDict>) -> PyResult<GrooveOptions> {
-    for k in d.keys() {
-        let k: String = k.extract()?;
-        if !KEYS.contains(&k.as_str()) {
-            return Err(PyValueError::new_err(format!("options: unknown groove option {k:?}")));
-        }
+/// `machscan.GrooveOptions` (a frozen dataclass whose defaults `groove_defaults` gives), read by
+/// attribute; the core parses and checks the values.
+#[derive(FromPyObject)]
+struct Options {
+    template: String,
+    alpha: f64,
+    nominal_width: f64,
+    window: Option<i64>,
+    window_center: Option<i64>,
+    fit_alpha: bool,
+    spike_threshold: Option<f64>,
+    min_depth: f64,
+    min_valid: i64,
+    criteria: Criteria,
+    sentinel: Option<f64>,
+    valid_range: Option<(f64, f64)>,
+}
+
+impl Options {
+    fn core(self) -> PyResult<GrooveOptions> {
+        let c = self.criteria;
+        Ok(GrooveOptions {
+            template: TemplateKind::parse(&self.template).py()?,
+            alpha: self.alpha,
+            fit_alpha: self.fit_alpha,
+            nominal_width: self.nominal_width,
+            window: count_opt("window", self.window)?,
+            window_center: count_opt("window_center", self.window_center)?,
+            spike_threshold: self.spike_threshold,
+            min_depth: self.min_depth,
+            min_valid: count("min_valid", self.min_valid)?,
+            criteria: FitCriteria {
+                max_iterations: count_opt("max_iterations", c.max_iterations)?,
+                cost_tolerance: c.cost_tolerance,
+                step_tolerance: c.step_tolerance,
+                gradient_tolerance: c.gradient_tolerance,
+            },
+            valid: ValidReadings::new(self.valid_range, self.sentinel).py()?,
+        })
     }
-    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        d.get_item(k)?.ok_or_else(|| PyValueError::new_err(format!("options: {k:?} is missing")))
-    };
-    let typed = |k: &str, what: &str| PyValueError::new_err(format!("{k}: expected {what}"));
-    let float = |k: &str| -> PyResult<f64> { get(k)?.extract().map_err(|_| typed(k, "a number")) };
-    let opt_float = |k: &str| -> PyResult<Option<f64>> { get(k)?.extract().map_err(|_| typed(k, "a number or None")) };
-    let int = |k: &str| -> PyResult<i64> { get(k)?.extract().map_err(|_| typed(k, "an integer")) };
-    let opt_count = |k: &str| -> PyResult<Option<usize>> {
-        let v: Option<i64> = get(k)?.extract().map_err(|_| typed(k, "an integer or None"))?;
-        v.map(|v| count(k, v)).transpose()
-    };
-    let template: String = get("template")?.extract().map_err(|_| typed("template", "a str"))?;
-    Ok(GrooveOptions {
-        template: TemplateKind::parse(&template).py()?,
-        alpha: float("alpha")?,
-        fit_alpha: get("fit_alpha")?.extract().map_err(|_| typed("fit_alpha", "a bool"))?,
-        nominal_width: float("nominal_width")?,
-        window: opt_count("window")?,
-        window_center: opt_count("window_center")?,
-        spike_threshold: opt_float("spike_threshold")?,
-        min_depth: float("min_depth")?,
-        min_valid: count("min_valid", int("min_valid")?)?,
-        criteria: FitCriteria {
-            max_iterations: opt_count("max_iterations")?,
-            cost_tolerance: opt_float("cost_tolerance")?,
-            step_tolerance: opt_float("step_tolerance")?,
-            gradient_tolerance: opt_float("gradient_tolerance")?,
-        },
-        valid: ValidReadings::new(
-            f64_vector_opt::<2>(Some(&get("valid_range")?), "valid_range", "(lo, hi) in mm")?.map(|[lo, hi]| (lo, hi)),
-            opt_float("sentinel")?,
-        )
-        .py()?,
-    })
+}
+
+/// The options argument: a `GrooveOptions`, or an error naming it.
+fn options(obj: &Bound<'_, PyAny>) -> PyResult<GrooveOptions> {
+    obj.extract::<Options>()
+        .map_err(|e| {
+            PyValueError::new_err(format!("options: expected a machscan.GrooveOptions ({})", e.value(obj.py())))
+        })?
+        .core()
 }
 
 /// The defaults of the groove options (``GrooveOptions::default()`` in the core), by name; the
@@ -147,7 +144,7 @@ fn fit_grooves<'py>(
     py: Python<'py>,
     x: &Bound<'py, PyAny>,
     z: &Bound<'py, PyAny>,
-    options: &Bound<'py, PyDict>,
+    options: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let o = self::options(options)?;
     let xa = F64Array::extract(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
@@ -169,7 +166,7 @@ fn view_groove_frame<'py>(
     py: Python<'py>,
     x: &Bound<'py, PyAny>,
     z: &Bound<'py, PyAny>,
-    options: &Bound<'py, PyDict>,
+    options: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let o = self::options(options)?;
     let xa = F64Array::extract(x, "x", &[Dim::Any("N")], "(reading abscissae, mm)")?;
