@@ -103,7 +103,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
     declared = _typed_dicts()
     x = (np.arange(64) - 32) * 0.025
     z = np.where(np.abs(x) < 0.25, -0.3, 0.0)[None, :]
-    options = dict(machscan.grooves.DEFAULTS)
+    options = machscan.GrooveOptions()
     path = tmp_path / "t.apt"
     path.write_text("GOTO/1,2,3\n")
     scs = np.array([[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 0, 1.0]])

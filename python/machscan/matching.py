@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from machscan import _core
 from machscan.mesh import GeodesicMethod, _surface
 
-__all__ = ["IsometricMatch", "Jacobian", "MatchStop", "isometric_match"]
+__all__ = ["MATCH_JACOBIAN", "MATCH_METHOD", "MATCH_SPACING", "IsometricMatch", "Jacobian", "MatchStop", "isometric_match"]
 
 #: The Jacobian of the distances: ``"quadratic"``, the paper's (eq 12–13: a quadratic of x, y fitted to a
 #: point's distances to all matching points, differentiated); ``"gradient"``, the gradient of the point's
@@ -78,6 +78,12 @@ class IsometricMatch:
         )
 
 
+#: Defaults of :func:`isometric_match`, which its signature and ``machscan compensate`` read.
+MATCH_JACOBIAN: Jacobian = "quadratic"
+MATCH_METHOD: GeodesicMethod = "exact"
+MATCH_SPACING: float | Literal["auto"] | None = "auto"
+
+
 def isometric_match(
     theoretical_points: ArrayLike | tuple[ArrayLike, ArrayLike],
     actual_points: ArrayLike | tuple[ArrayLike, ArrayLike],
@@ -85,10 +91,10 @@ def isometric_match(
     actual_locating: ArrayLike,
     theoretical_matching: ArrayLike,
     actual_initial: ArrayLike | None = None,
-    jacobian: Jacobian = "quadratic",
+    jacobian: Jacobian = MATCH_JACOBIAN,
     *,
-    method: GeodesicMethod = "exact",
-    spacing: float | Literal["auto"] | None = "auto",
+    method: GeodesicMethod = MATCH_METHOD,
+    spacing: float | Literal["auto"] | None = MATCH_SPACING,
     max_edge: float | None = None,
     max_iterations: int = 50,
     tolerance: float = 1e-3,

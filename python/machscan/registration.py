@@ -24,6 +24,11 @@ __all__ = [
     "ALLOWANCE_NEIGHBORS",
     "ALLOWANCE_SURFACE",
     "ICP_DEFAULTS",
+    "PROBE_KEEP",
+    "PROBE_PATTERN",
+    "PROBE_POINTS",
+    "PROBE_RADIUS",
+    "PROBE_SEED",
     "AlignmentStage",
     "BlankAlignment",
     "BlankSurface",
@@ -494,18 +499,26 @@ class PositioningResult:
 _NOISE_CHI2 = 2 * 16.81
 
 
+#: Defaults of :func:`position_workpiece`, which its signature and ``machscan position`` read.
+PROBE_POINTS = 160
+PROBE_KEEP = 0.5
+PROBE_PATTERN: ProbePattern = "optimal"
+PROBE_SEED = 0
+PROBE_RADIUS = 0.0
+
+
 def position_workpiece(
     model_points: ArrayLike,
     model_normals: ArrayLike,
     measure: ProbeMeasure,
     *,
-    n_points: int = 160,
-    seed: int = 0,
+    n_points: int = PROBE_POINTS,
+    seed: int = PROBE_SEED,
     max_rounds: int = 5,
-    probe_radius: float = 0.0,
+    probe_radius: float = PROBE_RADIUS,
     init: ArrayLike | None = None,
-    keep: float = 0.5,
-    pattern: ProbePattern = "optimal",
+    keep: float = PROBE_KEEP,
+    pattern: ProbePattern = PROBE_PATTERN,
     tolerance: float = 1e-4,
 ) -> PositioningResult:
     """Where a clamped part really sits, by rounds of touch probing (SPEC R6; paper 003 §4).

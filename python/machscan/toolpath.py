@@ -27,6 +27,8 @@ from machscan.io import Toolpath, write_toolpath
 from machscan.mesh import _surface
 
 __all__ = [
+    "COMPENSATE_INTERPOLATION",
+    "COMPENSATE_NORMALS",
     "FEED_STEP",
     "BeadChain",
     "ChainMethod",
@@ -109,14 +111,19 @@ class CompensatedToolpath:
         return f"CompensatedToolpath({len(self.points)} points, {out} outside the matching hull, {off} beyond the scan)"
 
 
+#: Defaults of :func:`compensate_toolpath`, which its signature and ``machscan compensate`` read.
+COMPENSATE_INTERPOLATION: Interpolation = "cubic"
+COMPENSATE_NORMALS: SurfaceNormals = "smooth"
+
+
 def compensate_toolpath(
     tool_points: ArrayLike | Toolpath,
     theoretical_matching: ArrayLike,
     actual_matching: ArrayLike,
     actual_surface: ArrayLike | tuple[ArrayLike, ArrayLike],
     *,
-    interpolation: Interpolation = "cubic",
-    normals: SurfaceNormals = "smooth",
+    interpolation: Interpolation = COMPENSATE_INTERPOLATION,
+    normals: SurfaceNormals = COMPENSATE_NORMALS,
     radius: float | None = None,
     max_edge: float | None = None,
 ) -> CompensatedToolpath:

@@ -1,0 +1,265 @@
+"""What the subcommands share: reading scans and tables, the scan and groove options, summaries."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, get_args
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from machscan.inspection import InspectionOptions
+
+
+#: Point files that hold x, y, z per line and nothing else (what Open3D and PCL read as such).
+_TEXT_POINTS = (".xyz", ".csv", ".txt", ".pts", ".asc")
+
+
+def _write_cloud(path: Path, points: np.ndarray, frame_index: np.ndarray, binary: bool) -> str:
+    """Writes the workpiece points; PLY and PCD keep each point's frame as a scalar field, text files hold x, y, z
+    only. Returns what the file holds, for the console."""
+    from machscan.io import write_points
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() in _TEXT_POINTS:
+        write_points(path, points)
+        return "x, y, z in mm (a text point file keeps no frame index: write .ply or .pcd for it)"
+    write_points(path, points, scalars={"frame": frame_index}, binary=binary)
+    return "x, y, z in mm and the frame of each point"
+
+
+def _warn(text: str) -> None:
+    print(f"machscan: warning: {text}", file=sys.stderr)
+
+
+def _check_readings(scan) -> None:
+    """Warn when one exact value makes up a large share of the valid readings: a "no reading"
+    code the profiler is not told about (its default sentinel is −99999) turns into points."""
+    valid = scan.frames[scan.valid_mask()]
+    if valid.size == 0:
+        _warn("the scan holds no valid readings (all NaN, sentinel or out of range)")
+        return
+    sample = valid[:: max(1, valid.size // 1_000_000)]
+    values, counts = np.unique(sample, return_counts=True)
+    k = int(np.argmax(counts))
+    share = counts[k] / sample.size
+    if share >= 0.05:
+        _warn(
+            f"{100 * share:.0f} % of the valid readings are exactly {values[k]!r}: if that is the profiler's "
+            f"no-reading code, pass --sentinel {values[k]!r} (or --valid-range) so they are dropped"
+        )
+
+
+def _scan_summary(scan, points: np.ndarray, seconds: float) -> list[str]:
+    readings = scan.frames.size
+    dropped = readings - len(points)
+    return [
+        f"scan      : {scan.n_frames} frames x {scan.n_readings} readings "
+        f"({scan.profiler.name}, pitch {scan.profiler.pitch} mm), {scan.duration:.3f} s of scanning",
+        f"points    : {len(points):,} workpiece points in {seconds * 1e3:.0f} ms",
+        f"dropped   : {dropped:,} invalid readings ({100.0 * dropped / readings:.2f} %: dropouts, sentinel, out of range)",
+    ]
+
+
+def _load_scan(args: argparse.Namespace):
+    from machscan.scan import Profiler, Scan, read_scan_csv
+
+    path = Path(args.scan)
+    if path.suffix.lower() == ".npz":
+        return Scan.load(path)
+    missing = [n for n in ("poses", "pitch", "c2_offset", "mount") if getattr(args, n, None) is None]
+    if missing:
+        raise ValueError(f"scan: {path} is a CSV export; give --{' --'.join(m.replace('_', '-') for m in missing)} too")
+    readings = args.readings or _csv_readings(path)
+    profiler = Profiler(
+        readings=readings,
+        pitch=args.pitch,
+        valid_range=tuple(args.valid_range) if args.valid_range else None,
+        sentinel=args.sentinel,
+        name="profiler",
+    )
+    return read_scan_csv(path, args.poses, profiler, args.c2_offset, args.mount)
+
+
+def _csv_readings(path: Path) -> int:
+    """Readings per frame of a frames CSV: the width of its first data row, less a leading
+    time column when the header names one."""
+    from machscan.io import read_table
+
+    table = read_table(path, delimiter=",", name="scan")
+    if table.values.shape[0] == 0:
+        raise ValueError(f"scan: {path}: no frames")
+    timed = table.header is not None and table.header[0].lower() in ("t", "time", "timestamp")
+    return table.values.shape[1] - (1 if timed else 0)
+
+
+def _csv_text(text: str | None) -> str:
+    return "" if text is None else '"' + text.replace('"', "'").replace("\n", " ") + '"'
+
+
+def _read_model(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Model points and outward normals from a file: its normals, or for a mesh (STL/OBJ/PLY
+    with faces) the area-weighted normals of its vertices (outward for a consistently wound
+    mesh)."""
+    from machscan.io import read
+
+    f = read(path)
+    if f.normals is not None:
+        return f.points, f.normals
+    if len(f.triangles):
+        t = f.triangles
+        face = np.cross(f.points[t[:, 1]] - f.points[t[:, 0]], f.points[t[:, 2]] - f.points[t[:, 0]])
+        normals = np.zeros_like(f.points)
+        for k in range(3):
+            np.add.at(normals, t[:, k], face)
+        used = np.linalg.norm(normals, axis=1) > 0
+        return f.points[used], normals[used]
+    raise ValueError(
+        f"model: {path} has no normals (nx, ny, nz) and no triangles: the allowance and the probe "
+        "directions need the model's outward normals"
+    )
+
+
+def _write_table(path: Path, header: str, rows: np.ndarray) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savetxt(path, rows, delimiter=",", header=header, comments="", fmt="%.9g")
+
+
+def out_pose_path(out: Path) -> Path:
+    """Where ``machscan allowance --fit`` writes the blank pose by default: beside the allowance file."""
+    out = Path(out)
+    return out.with_name(out.stem + ".pose.txt")
+
+
+def _read_pose(path: Path, name: str) -> np.ndarray:
+    """A 4 × 4 rigid pose from a text file (as machscan writes them; ``#`` comments)."""
+    try:
+        pose = np.loadtxt(path, ndmin=2)
+    except ValueError as e:
+        raise ValueError(f"{name}: {path} is not a 4 x 4 matrix of numbers ({e})") from None
+    if pose.size != 16 or not np.isfinite(pose).all():
+        raise ValueError(f"{name}: {path} holds {pose.size} values, expected a finite 4 x 4 pose")
+    return pose.reshape(4, 4)
+
+
+def _floats(text: str, count: int, name: str) -> tuple[float, ...]:
+    """``count`` comma-separated numbers."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise ValueError(f"{name}: expected {count} comma-separated numbers, got {text!r}") from None
+    if len(values) != count:
+        raise ValueError(f"{name}: expected {count} comma-separated numbers, got {text!r}")
+    return values
+
+
+def _check_positive_mm(option: str, value: float) -> None:
+    """Refuses an option's length in mm that is not a positive number (nan, inf, 0 and below)."""
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{option}: must be a positive number of mm, got {value:g}")
+
+
+def _read_rows(path: Path, name: str, widths: tuple[int, ...], nan_columns: tuple[int, ...] = ()) -> np.ndarray:
+    """A comma-separated table of numbers of one of ``widths`` columns (machscan.io.read_table's rules)."""
+    from machscan.io import read_table
+
+    rows = read_table(path, delimiter=",", widths=widths, nan_columns=nan_columns, name=name).values
+    if rows.size == 0:
+        raise ValueError(f"{name}: {path} holds no rows of numbers")
+    return rows
+
+
+def _scan_arguments(p: argparse.ArgumentParser) -> None:
+    from machscan.scan import SENTINEL
+
+    p.add_argument("scan", type=Path, help="raw scan: .npz saved by Scan.save, or a CSV export (one frame per row)")
+    g = p.add_argument_group("for a CSV scan")
+    g.add_argument("--poses", type=Path, help="poses CSV (X, Y, Z, A, C, C2 per frame, optional leading t)")
+    g.add_argument("--pitch", type=float, help="reading spacing, mm")
+    g.add_argument("--readings", type=int, help="readings per frame (default: the file's)")
+    g.add_argument("--c2-offset", type=float, nargs=3, metavar=("LX", "LY", "LZ"), help="C2 axis offset, mm")
+    g.add_argument(
+        "--mount", type=float, nargs=6, metavar=("THETA", "PSI", "PHI", "DX", "DY", "DZ"), help="sensor mount, rad and mm"
+    )
+    g.add_argument("--valid-range", type=float, nargs=2, metavar=("LO", "HI"), help="measuring range, mm")
+    g.add_argument(
+        "--sentinel", type=float, default=SENTINEL, help="value the profiler returns for no reading (default: %(default)s)"
+    )
+
+
+def _groove_arguments(p: argparse.ArgumentParser) -> None:
+    """The groove inspection's options, shared by `grooves` and `batch grooves`; the defaults are
+    InspectionOptions' (one source)."""
+    from machscan.grooves import Template
+    from machscan.inspection import InspectionOptions
+
+    default = InspectionOptions()
+    p.add_argument(
+        "--window",
+        type=int,
+        default=default.groove.window,
+        help="readings around the line center fitted per frame (default: %(default)s)",
+    )
+    p.add_argument(
+        "--template",
+        choices=get_args(Template),
+        default=default.groove.template,
+        help="groove shape fitted: the best of the four section models (auto), one of them, or the "
+        "paper's tanh template (default: %(default)s)",
+    )
+    p.add_argument(
+        "--alpha",
+        type=float,
+        default=default.groove.alpha,
+        help="tanh template only: shape coefficient, 1/mm (default: %(default)s)",
+    )
+    p.add_argument(
+        "--nominal-width",
+        type=float,
+        default=default.groove.nominal_width,
+        help="tanh template only: starting groove width, mm (default: %(default)s)",
+    )
+    p.add_argument(
+        "--max-se-ratio",
+        type=float,
+        default=default.max_se_ratio,
+        help="leave out frames whose width or depth standard error exceeds this many times the "
+        "median (default: keep all; 5 suits the tanh template)",
+    )
+    p.add_argument(
+        "--cluster-radius",
+        type=float,
+        default=default.cluster_radius,
+        help="contour segmentation distance, mm (default: %(default)s)",
+    )
+    p.add_argument(
+        "--max-match-distance",
+        type=float,
+        default=default.max_match_distance,
+        help="largest distance between a scanned contour and its CAD contour, mm (default: %(default)s)",
+    )
+
+
+def _groove_options(args: argparse.Namespace) -> InspectionOptions:
+    """The inspection's options from those of `_groove_arguments`."""
+    from machscan.inspection import InspectionOptions
+
+    return InspectionOptions().with_changes(
+        dict(
+            window=args.window,
+            template=args.template,
+            alpha=args.alpha,
+            nominal_width=args.nominal_width,
+            cluster_radius=args.cluster_radius,
+            max_match_distance=args.max_match_distance,
+            max_se_ratio=args.max_se_ratio,
+        )
+    )
+
+
+def _progress_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--progress", action=argparse.BooleanOptionalAction, default=None, help="progress bar on stderr (default: on a terminal)"
+    )
