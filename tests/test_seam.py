@@ -99,6 +99,12 @@ def _typed_dicts():
     return out
 
 
+def _table(tmp_path):
+    path = tmp_path / "table.csv"
+    path.write_text("x,y\n1,2\n")
+    return path
+
+
 def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
     declared = _typed_dicts()
     x = (np.arange(64) - 32) * 0.025
@@ -121,6 +127,7 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
         "_Criteria": _core.fit_criteria_defaults()["tanh"],
         "_ContourErrorArrays": _core.contour_error(P[:10], P[:12]),
         "_BendingSurfaceArrays": _core.fit_bending_surface(P[:, 0], P[:, 1], P[:, 2], degree=2),
+        "_TableArrays": _core.read_table(_table(tmp_path), name="t"),
         "_CloudArrays": _core.read_cloud(DATA / "pcl-bunny-icp/bun0.pcd"),
         "_ToolpathArrays": _core.read_toolpath(path),
         "_MountCalibrationArrays": _core.calibrate_mount(scs, scs + 1.0),

@@ -724,5 +724,5 @@ def allowance_map(
         f"Allowance: min {lo:.3f}, mean {a[finite].mean():.3f}, max {hi:.3f} mm; "
         f"{n_short} point{'s' if n_short != 1 else ''} below {min_allowance:g} mm{none}"
     )
-    fig.colorbar(sc, ax3d=ax3d, label="allowance (mm)", shrink=0.7)
+    fig.colorbar(sc, ax=ax3d, label="allowance (mm)", shrink=0.7)
     return fig

@@ -28,8 +28,8 @@ def _compensate(args: argparse.Namespace) -> int:
     theoretical, scan = read_points(args.theoretical), read_points(args.scan)
     from machscan.scan import _check_finite_rows
 
-    _check_finite_rows(theoretical, f"THEORETICAL {args.theoretical}", "x, y, z in mm")
-    _check_finite_rows(scan, f"SCAN {args.scan}", "x, y, z in mm")
+    _check_finite_rows(theoretical, "THEORETICAL", f"x, y, z in mm, as read from {args.theoretical}")
+    _check_finite_rows(scan, "SCAN", f"x, y, z in mm, as read from {args.scan}")
     locating = _read_rows(args.locating, "--locating", (6,))
     if len(locating) != 2:
         raise ValueError(f"--locating: {args.locating} has {len(locating)} rows, expected the 2 locating points")
