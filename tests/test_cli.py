@@ -20,10 +20,14 @@ def test_help_and_version():
     assert machscan.__version__ in out.stdout
 
 
-def test_import_is_fast():
-    code = "import time; t = time.perf_counter(); import machscan; print(time.perf_counter() - t)"
+def test_import_loads_no_optional_dependency():
+    # What makes `import machscan` slow is an optional library pulled in at import (matplotlib, Dask,
+    # SciPy): they load on first use of the module that needs them. The check is of what is imported,
+    # not of a time (this machine is shared).
+    optional = ("matplotlib", "dask", "distributed", "zarr", "scipy", "open3d", "tqdm", "laspy", "trimesh")
+    code = f"import sys, machscan; print(' '.join(m for m in {optional!r} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert float(out.stdout) < 1.0
+    assert out.stdout.strip() == ""
 
 
 def test_demo_prints_both_tables(tmp_path):

@@ -379,3 +379,35 @@ def test_a_geodesic_solver_refuses_bad_input_by_name():
         machscan.GeodesicSolver(v[:, :2], [[0, 1, 2]])
     with pytest.raises(ValueError, match="vertices"):
         machscan.GeodesicSolver(np.where(v == 5, np.nan, v), [[0, 1, 2]])
+
+
+def test_ctrl_c_stops_a_long_exact_geodesic_call():
+    # Issue #33 §3: a long kernel can be interrupted. In a subprocess, a call that would take tens
+    # of seconds (400 exact sources on a bumpy grid) gets SIGINT a moment after it starts; it must
+    # raise KeyboardInterrupt instead of running to the end, and the next call must run normally.
+    import subprocess
+    import sys
+    import textwrap
+
+    code = textwrap.dedent(
+        """
+        import os, signal, threading
+        import numpy as np
+        import machscan
+
+        n = 150
+        i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+        v = np.column_stack([i.ravel() * 0.5, j.ravel() * 0.5, 0.2 * np.sin(1.3 * i.ravel()) * np.cos(1.1 * j.ravel())])
+        a = (i[:-1, :-1] * n + j[:-1, :-1]).ravel()
+        f = np.vstack([np.column_stack([a, a + n, a + n + 1]), np.column_stack([a, a + n + 1, a + 1])])
+        threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+        try:
+            machscan.geodesic_distances(v, f, list(range(0, n * n, n * n // 400))[:400], method="exact")
+            print("finished")
+        except KeyboardInterrupt:
+            print("interrupted")
+        print("after", np.isfinite(machscan.geodesic_distances(v, f, [0], method="exact")).all())
+        """
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert out.stdout.split() == ["interrupted", "after", "True"], out.stdout + out.stderr

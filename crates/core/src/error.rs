@@ -29,6 +29,9 @@ pub enum Error {
     /// promises more than there is, a number that is not one, ...).
     #[error("{path}: {reason}")]
     Format { path: String, reason: String },
+    /// The user asked a long kernel to stop (`interrupt::request`).
+    #[error("interrupted")]
+    Interrupted,
 }
 
 impl Error {

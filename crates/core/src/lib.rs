@@ -11,6 +11,7 @@ pub mod contour;
 pub mod error;
 pub mod geom;
 pub mod groove;
+pub mod interrupt;
 pub mod io;
 pub mod kinematics;
 pub mod matching;

@@ -225,3 +225,154 @@ fn icp_point_to_point_and_point_to_plane(#[case] threads: usize) {
         );
     }
 }
+
+/// Model points, their normals, and a blank 0.2–0.4 mm over them.
+type ModelAndBlank = (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+/// A blank 0.2–0.4 mm over the wavy surface: model points with their normals, and the blank.
+fn model_and_blank() -> ModelAndBlank {
+    let wave = |x: f64, y: f64| 0.5 * (0.2 * x).sin() * (0.15 * y).cos();
+    let normal = |x: f64, y: f64| {
+        let (gx, gy) = (0.1 * (0.2 * x).cos() * (0.15 * y).cos(), -0.075 * (0.2 * x).sin() * (0.15 * y).sin());
+        let l = (gx * gx + gy * gy + 1.0).sqrt();
+        [-gx / l, -gy / l, 1.0 / l]
+    };
+    let (mut model, mut normals) = (Vec::new(), Vec::new());
+    for i in 0..12 {
+        for j in 0..8 {
+            let (x, y) = (10.0 + 2.0 * i as f64, 8.0 + 2.0 * j as f64);
+            model.push([x, y, wave(x, y)]);
+            normals.push(normal(x, y));
+        }
+    }
+    let mut s = 3u64;
+    // A jittered grid every 0.5 mm (a scan's points are spread evenly, not at random).
+    let blank = (0..64 * 48)
+        .map(|k| {
+            let (x, y) =
+                (5.0 + 0.5 * ((k % 64) as f64 + 0.6 * lcg(&mut s)), 3.0 + 0.5 * ((k / 64) as f64 + 0.6 * lcg(&mut s)));
+            let n = normal(x, y);
+            let d = 0.3 + 0.1 * (0.1 * x).sin();
+            [x + d * n[0], y + d * n[1], wave(x, y) + d * n[2]]
+        })
+        .collect();
+    (model, normals, blank)
+}
+
+#[apply(threads)]
+fn allowance_envelope_and_alignment(#[case] threads: usize) {
+    use crate::registration::{align_blank, allowance, coarse_align, envelope_fit, BlankOptions, BlankSurface};
+    let (model, normals, blank) = model_and_blank();
+    let plane = BlankOptions { surface: BlankSurface::Plane, k: None, spacing: None };
+    let identity = nalgebra::Matrix4::identity();
+    let (a, b) = on_threads_and_one(threads, || {
+        let quadric = allowance(&model, &normals, &blank, &BlankOptions::default()).unwrap();
+        let flat = allowance(&model, &normals, &blank, &plane).unwrap();
+        let fit = envelope_fit(&model, &normals, &blank, 0.1, &BlankOptions::default(), &identity).unwrap();
+        let aligned = align_blank(&model, &normals, &blank, 0.1, &BlankOptions::default(), &identity).unwrap();
+        let coarse = coarse_align(&blank, &model).unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        (
+            bits(&quadric),
+            bits(&flat),
+            bits(fit.transformation.as_slice()),
+            bits(&fit.allowance),
+            bits(aligned.fit.transformation.as_slice()),
+            bits(coarse.as_slice()),
+        )
+    });
+    assert!(a.0.iter().all(|x| f64::from_bits(*x).is_finite()), "the blank covers every model point");
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn probe_points_and_positioning(#[case] threads: usize) {
+    use crate::registration::{cloud_locating_points, positioning_errors, probe_fit, ProbePattern};
+    let (model, normals, _) = model_and_blank();
+    let measured: Vec<[f64; 3]> = model.iter().map(|p| [p[0] + 0.01, p[1] - 0.02, p[2] + 0.03]).collect();
+    let (a, b) = on_threads_and_one(threads, || {
+        let chosen = cloud_locating_points(&model, Some(&normals), 20, 0.5, 12, 7, ProbePattern::Optimal).unwrap();
+        let random = cloud_locating_points(&model, None, 20, 0.5, 12, 7, ProbePattern::Random).unwrap();
+        let errors = positioning_errors(&measured, &model, Some(&normals)).unwrap();
+        let fit = probe_fit(&measured, &model, &normals, 0.0, &nalgebra::Matrix4::identity()).unwrap();
+        (chosen, random, bits(&errors), fit.transformation.as_slice().iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+    });
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn meshes_closest_points_and_geodesics(#[case] threads: usize) {
+    use crate::mesh::{closest_points, delaunay_xy, geodesic_distances, GeodesicMethod};
+    let pts: Vec<[f64; 3]> = surface(6_000).into_iter().filter(|p| p[2] < 1.0).collect();
+    let (a, b) = on_threads_and_one(threads, || {
+        let faces = delaunay_xy(&pts, None).unwrap();
+        let queries: Vec<[f64; 3]> = pts.iter().step_by(7).map(|p| [p[0] + 0.1, p[1] - 0.1, p[2] + 0.3]).collect();
+        let closest: Vec<[u64; 3]> =
+            closest_points(&pts, &faces, &queries).unwrap().iter().map(|c| c.point.map(f64::to_bits)).collect();
+        let rows = |method| {
+            let d = geodesic_distances(&pts, &faces, &[0, 1000, 3000], method).unwrap();
+            d.concat().iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        };
+        let one = geodesic_distances(&pts, &faces, &[2000], GeodesicMethod::Exact).unwrap();
+        let (fmm, exact, heat) = (rows(GeodesicMethod::Fmm), rows(GeodesicMethod::Exact), rows(GeodesicMethod::Heat));
+        (faces, closest, fmm, exact, heat, one)
+    });
+    assert_eq!(a.0, b.0);
+    assert_eq!(a.1, b.1);
+    assert_eq!((&a.2, &a.3, &a.4), (&b.2, &b.3, &b.4));
+    assert!(a.5[0].iter().zip(&b.5[0]).all(|(x, y)| x.to_bits() == y.to_bits()), "one source, two parts");
+}
+
+#[apply(threads)]
+fn grinding_paths_and_the_simulated_pass(#[case] threads: usize) {
+    use crate::toolpath::grinding::{grinding_paths, simulate_removal, GrindingOptions, Stock};
+    let (model, normals, _) = model_and_blank();
+    let allowance: Vec<f64> = model.iter().map(|p| 0.2 + 0.002 * p[0] + 0.001 * p[1]).collect();
+    let options = GrindingOptions {
+        tool_radius: 8.0,
+        scallop_height: 0.01,
+        section_normal: [0.0, 1.0, 0.0],
+        thickness: None,
+        spacing: None,
+        tolerance: None,
+        fit_radius: None,
+        removal: None,
+        feed_step: None,
+    };
+    let (a, b) = on_threads_and_one(threads, || {
+        let g = grinding_paths(&model, &normals, &allowance, &options).unwrap();
+        let depths = vec![0.1; g.points.len()];
+        let blank = Stock { points: &model, normals: &normals, allowance: &allowance };
+        let path = Stock { points: &g.points, normals: &g.normals, allowance: &g.allowance };
+        let (left, nearest) = simulate_removal(blank, path, &g.row, &depths, 8.0).unwrap();
+        (bits(&g.points), g.row, left.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), nearest)
+    });
+    assert!(a.0.len() > 20 && a.2.len() == 96, "a path over the patch: {} points", a.0.len());
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
+fn toolpath_compensation(#[case] threads: usize) {
+    use crate::mesh::ScanSurface;
+    use crate::toolpath::{compensate_toolpath, CompensateOptions, Interpolation, Normals};
+    let scan: Vec<[f64; 3]> = surface(5_000).into_iter().filter(|p| p[2] < 1.0).collect();
+    // Matching points on a grid, the actual ones moved a little (a bend), and tool points between.
+    let theoretical: Vec<[f64; 3]> =
+        (0..36).map(|k| [8.0 + 9.0 * (k % 6) as f64, 5.0 + 6.0 * (k / 6) as f64, 0.0]).collect();
+    let actual: Vec<[f64; 3]> = theoretical.iter().map(|p| [p[0] + 0.002 * p[1], p[1] - 0.001 * p[0], 0.0]).collect();
+    let tools: Vec<[f64; 3]> = (0..400).map(|k| [10.0 + 0.11 * k as f64, 8.0 + 0.05 * k as f64, -0.5]).collect();
+    let (a, b) = on_threads_and_one(threads, || {
+        let mut out = Vec::new();
+        for (interpolation, normals) in
+            [(Interpolation::Cubic, Normals::Smooth), (Interpolation::Linear, Normals::Triangle)]
+        {
+            let o = CompensateOptions { interpolation, normals, radius: None, max_edge: None };
+            let c =
+                compensate_toolpath(&tools, None, &theoretical, &actual, ScanSurface { points: &scan, faces: None }, o)
+                    .unwrap();
+            out.push((bits(&c.points), bits(&c.axes), c.inside, c.on_scan));
+        }
+        out
+    });
+    assert_eq!(a, b);
+}

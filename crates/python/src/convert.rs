@@ -35,6 +35,60 @@ where
     out.py()
 }
 
+/// How often a long kernel's caller looks for a Ctrl-C while it waits (`enter_long`).
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// `enter` for the kernels that can run for seconds (exact geodesics, the isometric match,
+/// grinding paths): the kernel runs on a thread of its own while this one waits for it, looking
+/// for a Ctrl-C every `SIGNAL_POLL` (Python runs its signal handlers only on the main thread,
+/// with the GIL). A Ctrl-C asks the kernel to stop (`machscan_core::interrupt`); it returns at
+/// its next check and the `KeyboardInterrupt` is raised. The wait never changes what the kernel
+/// computes, only how soon a Ctrl-C is seen.
+pub fn enter_long<T, F>(py: Python<'_>, kernel: F) -> PyResult<T>
+where
+    F: FnOnce() -> machscan_core::Result<T> + Send,
+    T: Send,
+{
+    let pool = limited_pool()?;
+    let watch = machscan_core::interrupt::Watch::new();
+    let mut interrupt: Option<PyErr> = None;
+    let out = py.detach(|| {
+        std::thread::scope(|scope| {
+            let (done, finished) = std::sync::mpsc::channel();
+            scope.spawn(move || {
+                let out = match pool {
+                    Some(pool) => pool.install(kernel),
+                    None => kernel(),
+                };
+                // The waiting thread may have left already (it never does before this send).
+                let _ = done.send(out);
+            });
+            loop {
+                match finished.recv_timeout(SIGNAL_POLL) {
+                    Ok(out) => return out,
+                    Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                        return Err(machscan_core::Error::Interrupted);
+                    }
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                        if interrupt.is_none() {
+                            if let Err(e) = Python::attach(|py| py.check_signals()) {
+                                interrupt = Some(e);
+                                machscan_core::interrupt::request();
+                            }
+                        }
+                    }
+                }
+            }
+        })
+    });
+    drop(watch);
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    py.check_signals()?;
+    out.py()
+}
+
 /// The largest thread limit taken: far beyond any machine's cores, short of a typo's millions.
 const MAX_THREADS: usize = 1024;
 

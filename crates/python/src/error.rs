@@ -5,11 +5,12 @@
 //! - `Io` → the `OSError` subclass for its kind (`FileNotFoundError`, `PermissionError`,
 //!   `IsADirectoryError`, ...), built as Python builds its own: `(errno, strerror, filename)`,
 //!   so `.errno` and `.filename` are set;
-//! - `Format` → `machscan.io.FileFormatError`, a `ValueError` subclass naming the file.
+//! - `Format` → `machscan.io.FileFormatError`, a `ValueError` subclass naming the file;
+//! - `Interrupted` → `KeyboardInterrupt` (a long kernel stopped by Ctrl-C).
 use machscan_core::Error;
 use pyo3::exceptions::{
-    PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyNotADirectoryError, PyOSError, PyPermissionError,
-    PyValueError,
+    PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyKeyboardInterrupt, PyNotADirectoryError, PyOSError,
+    PyPermissionError, PyValueError,
 };
 use pyo3::prelude::*;
 use std::io::ErrorKind;
@@ -38,6 +39,7 @@ pub fn to_py(e: Error) -> PyErr {
     {
         match e {
             Error::Shape { .. } | Error::Invalid { .. } => PyValueError::new_err(e.to_string()),
+            Error::Interrupted => PyKeyboardInterrupt::new_err("interrupted"),
             Error::Io { ref path, kind, errno, ref message, .. } => {
                 let args = (errno.unwrap_or(0), message.clone(), path.clone());
                 match kind {

@@ -1,5 +1,5 @@
 //! Bindings of `machscan_core::matching`.
-use super::convert::{count, enter, points_to_numpy, to_numpy, F64Array};
+use super::convert::{count, enter_long, points_to_numpy, to_numpy, F64Array};
 use super::error::IntoPy;
 use super::mesh::surface;
 use machscan_core::error::Error;
@@ -63,7 +63,7 @@ fn isometric_match<'py>(
     let (theoretical, actual) =
         (ScanSurface { points: tpr, faces: tf.as_deref() }, ScanSurface { points: apr, faces: af.as_deref() });
     let meshing = Meshing { max_edge, spacing };
-    let r = enter(py, || run_isometric_match(theoretical, actual, meshing, tlr, alr, tmr, air, options))?;
+    let r = enter_long(py, || run_isometric_match(theoretical, actual, meshing, tlr, alr, tmr, air, options))?;
     let d = PyDict::new(py);
     let k = r.objective.len();
     d.set_item("points", points_to_numpy(py, r.points)?)?;

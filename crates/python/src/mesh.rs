@@ -1,5 +1,5 @@
 //! Bindings of `machscan_core::mesh`.
-use super::convert::{count, enter, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
+use super::convert::{count, enter, enter_long, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::mesh::{
     closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, geodesic_distances as run_geodesic_distances,
@@ -143,7 +143,7 @@ fn geodesic_distances<'py>(
     let src: Vec<usize> = sources.iter().map(|&s| count("sources", s)).collect::<PyResult<_>>()?;
     let method = GeodesicMethod::parse(method).py()?;
     let vr = v.rows::<3>()?;
-    let d = enter(py, || run_geodesic_distances(vr, &tri, &src, method))?;
+    let d = enter_long(py, || run_geodesic_distances(vr, &tri, &src, method))?;
     let k = d.len();
     to_numpy(py, d.into_iter().flatten().collect(), &[k, n])
 }
@@ -181,7 +181,7 @@ impl PyGeodesicSolver {
     /// Distances from each source vertex to every vertex → ``(S, V)``.
     fn distances<'py>(&self, py: Python<'py>, sources: Vec<i64>) -> PyResult<Bound<'py, PyAny>> {
         let src: Vec<usize> = sources.iter().map(|&s| count("sources", s)).collect::<PyResult<_>>()?;
-        let d = enter(py, || self.inner.distances(&src))?;
+        let d = enter_long(py, || self.inner.distances(&src))?;
         let k = d.len();
         to_numpy(py, d.into_iter().flatten().collect(), &[k, self.inner.vertex_count()])
     }

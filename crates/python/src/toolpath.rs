@@ -1,6 +1,6 @@
 //! Bindings of `machscan_core::toolpath`.
 use super::convert::{
-    count, enter, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array,
+    count, enter, enter_long, f64_vector, f64_vector_opt, indices_to_numpy, points_to_numpy, to_numpy, Dim, F64Array,
 };
 use super::error::IntoPy;
 use super::mesh::surface;
@@ -192,7 +192,7 @@ fn grinding_paths<'py>(
     let a = column(allowance, "allowance")?;
     let section_normal = f64_vector::<3>(section_normal, "section_normal", "(a vector)")?;
     let (pr, nr, av) = (p.rows::<3>()?, nn.rows::<3>()?, a.values()?);
-    let r = enter(py, || {
+    let r = enter_long(py, || {
         let options = GrindingOptions {
             tool_radius,
             scallop_height,

@@ -583,6 +583,7 @@ pub fn isometric_match(
     // Accepted steps in a row that lowered T by less than `FLAT` of itself.
     let mut flat = 0;
     let stop = loop {
+        crate::interrupt::check()?;
         if *max_error.last().unwrap_or(&0.0) <= options.tolerance {
             break Stop::Tolerance;
         }

@@ -1098,6 +1098,7 @@ pub fn grinding_paths(
     let built: Vec<std::result::Result<Vec<Row>, Unresolved>> = rows
         .par_iter()
         .map(|&d| -> Result<_> {
+            crate::interrupt::check()?;
             let a = sorted.partition_point(|&x| x < d - 0.5 * thickness);
             let b = sorted.partition_point(|&x| x <= d + 0.5 * thickness);
             if b - a < 2 {

@@ -215,11 +215,13 @@ pub fn geodesic_exact(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usiz
 
 /// One row of `geodesic_exact`, in the given numbering.
 fn distances_from(layout: &Layout, works: &mut [Buffers; 2], n: usize, s: usize, split: Split) -> Result<Vec<f64>> {
+    crate::interrupt::check()?;
     let inner = layout.inner[s] as usize;
     if layout.around.of(inner).is_empty() {
         return Ok(unreached(n, s));
     }
     if !propagate_in_parts(layout, works, inner, split) {
+        crate::interrupt::check()?;
         return Err(Error::invalid(
             "faces",
             format!("the exact propagation from vertex {s} did not settle within its work budget"),

@@ -2,6 +2,9 @@
 //! by batches of windows (module notes of `exact`).
 use super::*;
 
+/// Sides taken between two looks at the interrupt flag.
+const INTERRUPT_SIDES: usize = 4096;
+
 /// A half-edge as the propagation knows it when windows join it: the pieces of the windows
 /// waiting there, in order along the edge and disjoint (rule 3). 32 bytes, two to a cache line;
 /// rule 2's best path, used only when the side's turn comes, is kept apart (`Buffers::best`).
@@ -166,7 +169,9 @@ impl<'a> Wavefront<'a> {
                     self.queue_touched();
                 }
             } else {
-                if budget == 0 {
+                // Out of budget, or asked to stop (looked at every few thousand sides: a load
+                // of a shared flag, kept off the hot path).
+                if budget == 0 || (budget.is_multiple_of(INTERRUPT_SIDES) && crate::interrupt::requested()) {
                     self.budget = 0;
                     return false;
                 }
