@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+__all__ = ["Polyline", "read_contours", "read_contours_apt", "read_contours_csv", "write_contours_csv"]
+
 Polyline = NDArray[np.float64]
 
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 import sys
 from typing import Any
 
+__all__ = ["bar", "wanted"]
+
 
 class _Silent:
     def update(self, n: int = 1) -> None:

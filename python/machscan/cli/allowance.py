@@ -21,8 +21,9 @@ from machscan.registration import (
     BlankSurface,
 )
 
+__all__ = ["add_parser", "run"]
 
-def _allowance(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from machscan.io import read_points, write_points
     from machscan.registration import align_blank, allowance, envelope_fit
 
@@ -114,4 +115,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=ALLOWANCE_SURFACE,
         help="the blank's local surface: quadric, or the paper's plane (default: %(default)s)",
     )
-    al.set_defaults(run=_allowance)
+    al.set_defaults(run=run)

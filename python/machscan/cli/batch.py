@@ -20,6 +20,8 @@ if TYPE_CHECKING:
     from machscan.inspection import InspectionOptions
 
 
+__all__ = ["BatchGrooves", "add_parser", "inspect_groove_file", "run"]
+
 @dataclass(frozen=True)
 class BatchGrooves:
     """What one scan of `machscan batch grooves` gave (its tables are in its folder)."""
@@ -51,7 +53,7 @@ def inspect_groove_file(path: str, cad: list, options: InspectionOptions, out: s
     return BatchGrooves(len(report.fits), int(report.fits.ok.sum()), len(report.contours), problem, str(folder))
 
 
-def _batch_grooves(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     import functools
 
     from machscan.cad import read_contours
@@ -118,4 +120,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bg.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786) to use instead of a local cluster")
     bg.add_argument("--threads", type=int, default=1, help="threads each task's kernels use (default: %(default)s)")
     _progress_argument(bg)
-    bg.set_defaults(run=_batch_grooves)
+    bg.set_defaults(run=run)

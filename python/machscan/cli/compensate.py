@@ -16,8 +16,9 @@ from machscan.cli._shared import (
     _write_table,
 )
 
+__all__ = ["add_parser", "run"]
 
-def _compensate(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from machscan.io import read_points, read_toolpath
 
     _check_positive_mm("--max-error", args.max_error)
@@ -233,4 +234,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="scan spacing of the simulated skin, mm (default: %(default)s)",
     )
     co.add_argument("--seed", type=int, default=0, help="seed of the simulated misplacement and noise (default: %(default)s)")
-    co.set_defaults(run=_compensate)
+    co.set_defaults(run=run)

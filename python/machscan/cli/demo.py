@@ -13,8 +13,9 @@ from machscan.cli._shared import (
     _write_cloud,
 )
 
+__all__ = ["add_parser", "run"]
 
-def _demo(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from machscan import synth
     from machscan.inspection import inspect_grooves
 
@@ -63,4 +64,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     demo.add_argument(
         "--cloud-every", type=int, default=10, help="write the workpiece points of every Nth frame (default: %(default)s)"
     )
-    demo.set_defaults(run=_demo)
+    demo.set_defaults(run=run)

@@ -17,6 +17,7 @@ from machscan.cli._shared import (
     _write_table,
 )
 
+__all__ = ["add_parser", "run"]
 
 def _read_allowance(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Model points, normals and allowance as ``machscan allowance`` writes them: a point file with normals and an
@@ -33,7 +34,7 @@ def _read_allowance(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return f.points, f.normals, f.scalars["allowance"]
 
 
-def _grind(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from machscan.io import read_points
     from machscan.registration import allowance
     from machscan.synth import blade_allowance
@@ -182,4 +183,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     gr.add_argument("--simulate", action="store_true", help="run on the built-in synthetic blade")
     gr.add_argument("--spacing", type=float, default=0.5, help="point spacing of the simulated blade, mm (default: %(default)s)")
     gr.add_argument("--seed", type=int, default=0, help="seed of the simulated allowance (default: %(default)s)")
-    gr.set_defaults(run=_grind)
+    gr.set_defaults(run=run)

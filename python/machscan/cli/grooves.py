@@ -15,8 +15,9 @@ from machscan.cli._shared import (
     _warn,
 )
 
+__all__ = ["add_parser", "run"]
 
-def _grooves(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from machscan.cad import read_contours
     from machscan.inspection import inspect_grooves
 
@@ -51,4 +52,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     gr.add_argument("--out", type=Path, default=Path("grooves"), help="output folder for the CSV tables (default: %(default)s)")
     _groove_arguments(gr)
     _progress_argument(gr)
-    gr.set_defaults(run=_grooves)
+    gr.set_defaults(run=run)

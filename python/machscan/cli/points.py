@@ -14,8 +14,9 @@ from machscan.cli._shared import (
     _write_cloud,
 )
 
+__all__ = ["add_parser", "run"]
 
-def _points(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     scan = _load_scan(args)
     _check_readings(scan)
     t0 = time.perf_counter()
@@ -40,4 +41,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "(default: %(default)s)",
     )
     pts.add_argument("--ascii", action="store_true", help="write ASCII PLY or PCD instead of binary")
-    pts.set_defaults(run=_points)
+    pts.set_defaults(run=run)

@@ -20,8 +20,9 @@ from machscan.registration import (
     PROBE_SEED,
 )
 
+__all__ = ["add_parser", "run"]
 
-def _position(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from machscan import registration
 
     if args.simulate:
@@ -120,4 +121,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--probe-radius", type=float, default=PROBE_RADIUS, help="probe ball radius, mm (default: %(default)s)"
     )
     pos.add_argument("--simulate", action="store_true", help="run the rounds on the built-in synthetic blade")
-    pos.set_defaults(run=_position)
+    pos.set_defaults(run=run)
