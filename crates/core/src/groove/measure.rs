@@ -19,7 +19,8 @@
 //! 5. width = the chosen section's flank crossings with the surface line, depth = its deepest
 //!    point (for V's an Akaike-weighted mean of the sharp and the round-bottomed V, since a tip
 //!    rounded by about a reading spacing is barely visible), center = the crossings' midpoint.
-use super::fit::{fit_line, retain_pairs, GrooveFit, GrooveStatus};
+use super::options::{GrooveFit, GrooveStatus};
+use super::robust::*;
 use super::section::{pieces_jacobian, Beams, Pieces, SectionModel};
 use crate::optim::{bounded_levenberg_marquardt, BoundedLeastSquares, BoundedLmOptions, LeastSquares};
 use nalgebra::{SMatrix, SVector};
@@ -59,179 +60,6 @@ const FINISH: usize = 3;
 /// The fit controls of the section models (`GrooveOptions`' criteria left at None).
 pub const SECTION_CRITERIA: BoundedLmOptions =
     BoundedLmOptions { max_iterations: 15, cost_tolerance: 1e-5, step_tolerance: 1e-6, gradient_tolerance: 0.0 };
-
-// Order statistics (medians, MADs, a percentile: about ten selections per frame, a tenth of
-// its time) run on integer keys with the order of `f64::total_cmp` (sign-magnitude bits made
-// two's complement): the same values are selected, about twice as fast as with a float
-// comparator.
-#[inline(always)]
-fn key(v: f64) -> i64 {
-    let b = v.to_bits() as i64;
-    b ^ ((((b >> 63) as u64) >> 1) as i64)
-}
-
-/// The value of a [`key`] (the map is its own inverse).
-#[inline(always)]
-fn value(k: i64) -> f64 {
-    f64::from_bits(key(f64::from_bits(k as u64)) as u64)
-}
-
-/// The median of the values whose keys these are (the mean of the two middle ones for an even
-/// count; the keys are reordered).
-fn median_of_keys(keys: &mut [i64]) -> f64 {
-    let n = keys.len();
-    let (lo, m, _) = keys.select_nth_unstable(n / 2);
-    if n % 2 == 1 {
-        value(*m)
-    } else {
-        0.5 * (value(lo.iter().copied().max().unwrap_or(*m)) + value(*m))
-    }
-}
-
-/// 1.4826 · median |r − median r|, with `scratch` as work space.
-fn mad_sigma(values: impl Iterator<Item = f64>, scratch: &mut Vec<i64>) -> f64 {
-    scratch.clear();
-    scratch.extend(values.map(key));
-    if scratch.is_empty() {
-        return 0.0;
-    }
-    let m = median_of_keys(scratch);
-    for k in scratch.iter_mut() {
-        *k = key((value(*k) - m).abs());
-    }
-    1.4826 * median_of_keys(scratch)
-}
-
-/// The pairs `(a[i], b[i])` where `keep(i)`, as two vectors (sized once: `unzip` of a filter
-/// grows them by reallocation).
-fn select_pairs(a: &[f64], b: &[f64], keep: impl Fn(usize) -> bool) -> (Vec<f64>, Vec<f64>) {
-    let (mut ka, mut kb) = (Vec::with_capacity(a.len()), Vec::with_capacity(a.len()));
-    for i in 0..a.len() {
-        if keep(i) {
-            ka.push(a[i]);
-            kb.push(b[i]);
-        }
-    }
-    (ka, kb)
-}
-
-/// NumPy's default (linear) percentile, with `scratch` as work space.
-fn percentile(values: &[f64], q: f64, scratch: &mut Vec<i64>) -> f64 {
-    scratch.clear();
-    scratch.extend(values.iter().map(|&v| key(v)));
-    let pos = q / 100.0 * (values.len() - 1) as f64;
-    let (i, t) = (pos.floor() as usize, pos.fract());
-    let (_, a, above) = scratch.select_nth_unstable(i);
-    let a = value(*a);
-    match above.iter().copied().min() {
-        Some(b) if t != 0.0 => a + t * (value(b) - a),
-        _ => a,
-    }
-}
-
-/// The running median of 3, with Tukey's end-point rule at the two ends (the median of the end
-/// reading, its smoothed neighbor and the line through the next two smoothed values carried to
-/// the end): one noisy end reading is not taken for a groove bottom.
-fn median3(v: &[f64]) -> Vec<f64> {
-    let n = v.len();
-    let mut out = v.to_vec();
-    let med = |a: f64, b: f64, c: f64| a.min(b).max(a.max(b).min(c));
-    for i in 1..n.saturating_sub(1) {
-        out[i] = med(v[i - 1], v[i], v[i + 1]);
-    }
-    if n >= 4 {
-        out[0] = med(v[0], out[1], 3.0 * out[1] - 2.0 * out[2]);
-        out[n - 1] = med(v[n - 1], out[n - 2], 3.0 * out[n - 2] - 2.0 * out[n - 3]);
-    }
-    out
-}
-
-/// The 5-reading moving mean; near the ends, the mean of the readings within ±2 there are (one
-/// noisy end reading alone is not a groove bottom).
-fn mean5(v: &[f64]) -> Vec<f64> {
-    let n = v.len();
-    (0..n)
-        .map(|i| {
-            let near = &v[i.saturating_sub(2)..(i + 3).min(n)];
-            near.iter().sum::<f64>() / near.len() as f64
-        })
-        .collect()
-}
-
-/// Readings kept by the spike test: a reading is a spike when the linear extrapolations from
-/// its two left and from its two right neighbors both miss it by more than `threshold`, on
-/// the same side. A V tip, a corner or a steep wall is predicted by at least one side; an
-/// isolated spike by neither. At the ends the one available side decides.
-fn spike_free(x: &[f64], z: &[f64], threshold: f64) -> Vec<bool> {
-    let n = x.len();
-    if n < 5 {
-        return vec![true; n];
-    }
-    let extrapolated = |i: usize, a: usize, b: usize| z[i] - (z[a] + (z[a] - z[b]) * (x[i] - x[a]) / (x[a] - x[b]));
-    (0..n)
-        .map(|i| {
-            let el = (i >= 2).then(|| extrapolated(i, i - 1, i - 2));
-            let er = (i + 2 < n).then(|| extrapolated(i, i + 1, i + 2));
-            let (l, r) = match (el, er) {
-                (Some(l), Some(r)) => (l, r),
-                (Some(l), None) => (l, l),
-                (None, Some(r)) => (r, r),
-                (None, None) => return true,
-            };
-            !(l.abs() > threshold && r.abs() > threshold && l.signum() == r.signum())
-        })
-        .collect()
-}
-
-/// A line through the surface of a grooved frame: least-trimmed-squares concentration steps
-/// (refit on the half of the readings nearest the line) from the line through the upper
-/// quartiles of the two halves of the frame (a groove is a dip, so upper quantiles lie on the
-/// surface; the least-squares line when the halves do not allow it). One step: the steps
-/// converge in two or three from this start, and more steps or a second start (least squares)
-/// changed no result in the accuracy tests while costing a third of the frame's time.
-const C_STEPS: usize = 1;
-fn robust_line(x: &[f64], z: &[f64], scratch: &mut Vec<i64>) -> Option<(f64, f64)> {
-    let n = x.len();
-    let h = (n / 2).max(2);
-    let m = n / 2;
-    let mut start = None;
-    if m >= 2 {
-        // Readings come in order along the line: the median x of a half is its middle one.
-        let sorted = x.windows(2).all(|w| w[0] <= w[1]);
-        let half_median = |h: &[f64]| {
-            if sorted {
-                let k = h.len() / 2;
-                if h.len() % 2 == 1 {
-                    h[k]
-                } else {
-                    0.5 * (h[k - 1] + h[k])
-                }
-            } else {
-                percentile(h, 50.0, &mut Vec::new())
-            }
-        };
-        let (xa, xb) = (half_median(&x[..m]), half_median(&x[m..]));
-        let (za, zb) = (percentile(&z[..m], 75.0, scratch), percentile(&z[m..], 75.0, scratch));
-        if xb > xa {
-            let k = (zb - za) / (xb - xa);
-            start = Some((k, za - k * xa));
-        }
-    }
-    let (mut k, mut b) = start.or_else(|| fit_line(x.iter().copied().zip(z.iter().copied())))?;
-    // The h-th smallest |residual| by selection, then the readings within it: no sort.
-    let mut res = Vec::with_capacity(n);
-    for _ in 0..C_STEPS {
-        res.clear();
-        res.extend(x.iter().zip(z).map(|(&x, &z)| (z - (k * x + b)).abs()));
-        scratch.clear();
-        scratch.extend(res.iter().map(|&r| key(r)));
-        let t = value(*scratch.select_nth_unstable(h - 1).1);
-        let nearest = (0..n).filter(|&i| res[i] <= t).map(|i| (x[i], z[i]));
-        let Some(line) = fit_line(nearest) else { break };
-        (k, b) = line;
-    }
-    Some((k, b))
-}
 
 /// From `i0`, the first reading in direction `step` with `v ≥ −thr`; None past the end.
 fn walk(v: &[f64], i0: usize, step: isize, thr: f64) -> Option<usize> {
@@ -1013,7 +841,7 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
         iterations: iterations as u32,
         n_used: us.len() as u32,
         status: if chosen.converged { GrooveStatus::Converged } else { GrooveStatus::MaxIterations },
-        model: super::fit::FitModel::Section(chosen.model),
+        model: super::options::FitModel::Section(chosen.model),
     };
     (fit, Detail::of(lv, Some((p, chosen.gamma))))
 }

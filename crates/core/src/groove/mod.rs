@@ -4,13 +4,15 @@
 //! The formulas: docs/grooves.md.
 mod fit;
 mod measure;
+mod options;
+mod robust;
 mod section;
+mod tanh;
 mod template;
 
-pub use fit::{
-    fit_frame, fit_frames, level_frame, view_frame, FitCriteria, FitModel, FrameView, GrooveFit, GrooveOptions,
-    GrooveStatus, LevelledFrame, TemplateKind, TANH_CRITERIA,
-};
+pub use fit::{fit_frame, fit_frames, view_frame, FrameView};
 pub use measure::SECTION_CRITERIA;
+pub use options::{FitCriteria, FitModel, GrooveFit, GrooveOptions, GrooveStatus, TemplateKind, TANH_CRITERIA};
 pub use section::{Beams, Pieces, SectionModel};
+pub use tanh::{level_frame, LevelledFrame};
 pub use template::TanhTemplate;

@@ -1,0 +1,285 @@
+//! The groove fit's options (one `Default` for every default), the per-frame result and its
+//! status codes.
+use super::measure::SECTION_CRITERIA;
+use super::section::SectionModel;
+use crate::error::{Error, Result};
+use crate::kinematics::ValidReadings;
+use crate::optim::LmOptions;
+
+/// What became of a frame. Codes are stable: they are what Python sees.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum GrooveStatus {
+    /// The fit converged (small step, small gradient, or the paper's cost test).
+    Converged = 0,
+    /// The iteration limit was hit; the parameters are the best found.
+    MaxIterations = 1,
+    /// No dip deeper than `min_depth` (and 5× the surface noise) in the window, or the fit left
+    /// the window or came out with a non-positive depth or width.
+    NoGroove = 2,
+    /// Fewer valid readings than `min_valid` in the window, or too few surface readings left.
+    TooFewValid = 3,
+    /// A second dip at least half as deep as the first lies in the window.
+    TwoGrooves = 4,
+    /// The groove touches the window edge: no surface on one side.
+    Clipped = 5,
+    /// The fit failed numerically, or ran away to a width outside ¼–4× the nominal width.
+    Failed = 6,
+}
+
+/// How a frame's groove is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TemplateKind {
+    /// The default: the four section models (trapezoid, V, round-bottomed V, U) fitted, the
+    /// best by AIC chosen per frame; width and depth are the section's geometry.
+    Auto,
+    /// One section model only.
+    Section(SectionModel),
+    /// Paper 000 eq (11): a difference of two tanh steps (α = 20 mm⁻¹ in the paper); width and
+    /// depth are the template's w and d. Fits rounded, U-like sections; on a straight-sided V
+    /// it is ~18 % off in width and depth.
+    Tanh,
+}
+
+impl TemplateKind {
+    pub const NAMES: [&'static str; 6] = ["auto", "trapezoid", "v", "round", "u", "tanh"];
+
+    pub fn parse(name: &str) -> Result<Self> {
+        Ok(match name {
+            "auto" => TemplateKind::Auto,
+            "tanh" => TemplateKind::Tanh,
+            other => match SectionModel::ALL.iter().find(|m| m.name() == other) {
+                Some(m) => TemplateKind::Section(*m),
+                None => {
+                    return Err(Error::invalid(
+                        "template",
+                        format!("expected one of {}, got {other:?}", Self::NAMES.map(|n| format!("{n:?}")).join(", ")),
+                    ))
+                }
+            },
+        })
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TemplateKind::Auto => "auto",
+            TemplateKind::Tanh => "tanh",
+            TemplateKind::Section(m) => m.name(),
+        }
+    }
+}
+
+/// What was fitted to a frame. Codes are stable: they are what Python sees.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FitModel {
+    /// Nothing (the frame was not measured).
+    None,
+    Tanh,
+    Section(SectionModel),
+}
+
+impl FitModel {
+    pub fn code(self) -> u8 {
+        match self {
+            FitModel::None => 0,
+            FitModel::Tanh => 1,
+            FitModel::Section(SectionModel::Trapezoid) => 2,
+            FitModel::Section(SectionModel::V) => 3,
+            FitModel::Section(SectionModel::Round) => 4,
+            FitModel::Section(SectionModel::U) => 5,
+        }
+    }
+}
+
+/// When the Levenberg–Marquardt fit of a frame stops; `None` takes the method's own default
+/// (the paper's template: 100 iterations, step 1e-8 relative, gradient 1e-13, cost test off;
+/// the section models: `measure::SECTION_CRITERIA`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FitCriteria {
+    /// Iterations per fit (the section models: per model, half of it for the trapezoid that
+    /// screens the frame first; a chosen model that has not converged gets three times as many
+    /// more).
+    pub max_iterations: Option<usize>,
+    /// The template: paper 000's `½ Σ f² / t < ε`; the section models: the relative cost
+    /// decrease of an accepted step below which the fit has converged.
+    pub cost_tolerance: Option<f64>,
+    /// The template: step relative to the parameters; the section models: the largest
+    /// parameter move.
+    pub step_tolerance: Option<f64>,
+    /// `‖Jᵀf‖∞` below which the fit has converged.
+    pub gradient_tolerance: Option<f64>,
+}
+
+/// The paper's template fit's defaults.
+pub const TANH_CRITERIA: LmOptions =
+    LmOptions { max_iterations: 100, cost_tolerance: 0.0, step_tolerance: 1e-8, gradient_tolerance: 1e-13, tau: 1e-6 };
+
+impl FitCriteria {
+    fn check(&self) -> Result<()> {
+        for (name, v) in [
+            ("step_tolerance", self.step_tolerance),
+            ("gradient_tolerance", self.gradient_tolerance),
+            ("cost_tolerance", self.cost_tolerance),
+        ] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(Error::invalid(name, format!("must be >= 0, got {v}")));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    pub fn tanh(&self) -> LmOptions {
+        let d = TANH_CRITERIA;
+        LmOptions {
+            max_iterations: self.max_iterations.unwrap_or(d.max_iterations),
+            cost_tolerance: self.cost_tolerance.unwrap_or(d.cost_tolerance),
+            step_tolerance: self.step_tolerance.unwrap_or(d.step_tolerance),
+            gradient_tolerance: self.gradient_tolerance.unwrap_or(d.gradient_tolerance),
+            tau: d.tau,
+        }
+    }
+
+    pub fn section(&self) -> crate::optim::BoundedLmOptions {
+        let d = SECTION_CRITERIA;
+        crate::optim::BoundedLmOptions {
+            max_iterations: self.max_iterations.unwrap_or(d.max_iterations),
+            cost_tolerance: self.cost_tolerance.unwrap_or(d.cost_tolerance),
+            step_tolerance: self.step_tolerance.unwrap_or(d.step_tolerance),
+            gradient_tolerance: self.gradient_tolerance.unwrap_or(d.gradient_tolerance),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GrooveOptions {
+    /// How the groove is measured.
+    pub template: TemplateKind,
+    /// The tanh template's shape coefficient α, mm⁻¹ (paper 000: 20, chosen by eye).
+    pub alpha: f64,
+    /// Fit α as a fifth parameter of the tanh template, starting from `alpha`.
+    pub fit_alpha: bool,
+    /// Nominal groove width l, mm, of the tanh template pipeline: the readings within l of the
+    /// bottom are left out of its surface refit. The section models find the groove's extent
+    /// from the data and do not use it.
+    pub nominal_width: f64,
+    /// Number t of readings kept around `window_center`; `None` keeps them all.
+    pub window: Option<usize>,
+    /// Reading index the window is centered on; `None` = N/2.
+    pub window_center: Option<usize>,
+    /// Drop a reading deviating more than this from the median of its 5-reading neighborhood
+    /// (mm); `None` disables the spike filter.
+    pub spike_threshold: Option<f64>,
+    /// Shallowest dip that counts as a groove, mm.
+    pub min_depth: f64,
+    /// Fewest valid readings in the window.
+    pub min_valid: usize,
+    /// When each fit stops.
+    pub criteria: FitCriteria,
+    /// Which readings are valid: the others (NaN, the vendor's no-reading code, outside the
+    /// measuring range) are left out, by the rule every function that takes frames applies.
+    pub valid: ValidReadings,
+}
+
+impl Default for GrooveOptions {
+    fn default() -> Self {
+        GrooveOptions {
+            template: TemplateKind::Auto,
+            alpha: 20.0,
+            fit_alpha: false,
+            nominal_width: 0.5,
+            window: None,
+            window_center: None,
+            spike_threshold: Some(0.1),
+            min_depth: 0.03,
+            min_valid: 12,
+            criteria: FitCriteria::default(),
+            valid: ValidReadings::default(),
+        }
+    }
+}
+
+impl GrooveOptions {
+    pub fn validate(&self) -> Result<()> {
+        let positive = |name: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(name, format!("must be a positive number, got {v}")))
+            }
+        };
+        positive("alpha", self.alpha)?;
+        positive("nominal_width", self.nominal_width)?;
+        if !(self.min_depth.is_finite() && self.min_depth >= 0.0) {
+            return Err(Error::invalid("min_depth", format!("must be >= 0 mm, got {}", self.min_depth)));
+        }
+        if let Some(s) = self.spike_threshold {
+            positive("spike_threshold", s)?;
+        }
+        if self.window == Some(0) {
+            return Err(Error::invalid("window", "must hold at least one reading"));
+        }
+        self.criteria.check()
+    }
+}
+
+/// The result for one frame. Positions are in the frame's own coordinates (the x, z given);
+/// for a frame that could not be fitted they are NaN and `status` says why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GrooveFit {
+    /// Groove center x0 and surface height z0 there, mm.
+    pub x0: f64,
+    pub z0: f64,
+    /// Depth and width, mm: the section's deepest point below the surface line and the
+    /// distance between its flanks at the surface line; the tanh template's d and w.
+    pub depth: f64,
+    pub width: f64,
+    /// The tanh template's α used or fitted, mm⁻¹ (NaN for the section models).
+    pub alpha: f64,
+    /// Residual RMS of the fit, mm.
+    pub rms: f64,
+    /// Standard errors of depth and width from `σ̂² (JᵀJ)⁻¹`, mm.
+    pub se_depth: f64,
+    pub se_width: f64,
+    /// Surface slope angle θ used for levelling, rad.
+    pub tilt: f64,
+    pub iterations: u32,
+    /// Readings used in the fit.
+    pub n_used: u32,
+    pub status: GrooveStatus,
+    /// What was fitted.
+    pub model: FitModel,
+}
+
+impl GrooveFit {
+    pub(super) fn failed(status: GrooveStatus, n_used: usize) -> Self {
+        GrooveFit {
+            x0: f64::NAN,
+            z0: f64::NAN,
+            depth: f64::NAN,
+            width: f64::NAN,
+            alpha: f64::NAN,
+            rms: f64::NAN,
+            se_depth: f64::NAN,
+            se_width: f64::NAN,
+            tilt: f64::NAN,
+            iterations: 0,
+            n_used: n_used as u32,
+            status,
+            model: FitModel::None,
+        }
+    }
+}
+
+/// The readings `[lo, hi)` of the window of `o.window` readings around `o.window_center`.
+pub(super) fn window_range(n: usize, o: &GrooveOptions) -> (usize, usize) {
+    match o.window {
+        None => (0, n),
+        Some(t) => {
+            let c = o.window_center.unwrap_or(n / 2).min(n);
+            let lo = c.saturating_sub(t / 2);
+            (lo, (lo + t).min(n))
+        }
+    }
+}
