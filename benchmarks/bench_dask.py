@@ -20,7 +20,7 @@ from timing import best_time
 
 import machscan
 import machscan.dask as md
-from machscan.synth.grooves import groove_frames
+from machscan.synth.frames import groove_frames
 
 
 def fits_of_scan(path: str) -> int:

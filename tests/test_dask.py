@@ -21,7 +21,7 @@ import machscan.dask as md
 from machscan import synth
 from machscan.cad import write_contours_csv
 from machscan.cli import main
-from machscan.synth.grooves import groove_frames
+from machscan.synth.frames import groove_frames
 
 # Functions of this module are sent to worker processes by value: the workers cannot import tests/.
 cloudpickle.register_pickle_by_value(sys.modules[__name__])

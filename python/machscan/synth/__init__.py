@@ -1,7 +1,8 @@
 """Synthetic scans and parts with exact ground truth, for tests, demos and benchmarks.
 
-* :mod:`machscan.synth.grooves`: paper 000 groove plate scans (:func:`groove_scan`) and groove frames
-  (:func:`groove_frames`), with their truth.
+* :mod:`machscan.synth.grooves`: paper 000 groove plate scans (:func:`groove_scan`) with their truth;
+  :mod:`machscan.synth.frames`: single groove frames (:func:`groove_frames`);
+  :mod:`machscan.synth.pocket`: a pocketed plate for the octree simplification (:func:`pocket_plate`).
 * :mod:`machscan.synth.blade`: paper 003 turbine blade (:class:`Blade`) and touch-probe simulator
   (:class:`TouchProbe`, :func:`misplacement`).
 * :mod:`machscan.synth.grinding`: allowance clouds for grinding paths (:class:`WavyPanel`, :func:`blade_allowance`).
@@ -12,25 +13,23 @@ it tests.
 """
 
 from machscan.synth.blade import Blade, TouchProbe, misplacement
+from machscan.synth.frames import GROOVE_SHAPES, GrooveFrames, groove_frames
 from machscan.synth.grinding import AllowanceCloud, WavyPanel, blade_allowance
 from machscan.synth.grooves import (
     DEFAULT_C2_OFFSET,
     DEFAULT_MOUNT,
-    GROOVE_SHAPES,
     PLATE,
     ContourShape,
     Deflection,
-    GrooveFrames,
     GrooveTruth,
     PeriodicProfile,
     SurfaceError,
     default_contours,
     flat_plate_scan,
-    groove_frames,
     groove_scan,
-    pocket_plate,
     surface_error,
 )
+from machscan.synth.pocket import pocket_plate
 from machscan.synth.skin import BentSkin
 
 __all__ = [
