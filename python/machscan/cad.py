@@ -20,7 +20,7 @@ __all__ = ["Polyline", "read_contours", "read_contours_apt", "read_contours_csv"
 Polyline = NDArray[np.float64]
 
 
-def read_contours_csv(path: str | os.PathLike[str], delimiter: str = ",") -> list[Polyline]:
+def read_contours_csv(path: str | os.PathLike[str], *, delimiter: str = ",") -> list[Polyline]:
     """Read contours from a CSV file.
 
     Layouts (a header line is optional; it decides whether the first column is a contour id):
@@ -63,7 +63,7 @@ def _split_by_id(ids: NDArray[np.float64], pts: NDArray[np.float64]) -> list[Pol
     return [pts[ids == ids[i]] for i in sorted(first)]
 
 
-def read_contours_apt(path: str | os.PathLike[str], split_distance: float = 5.0) -> list[Polyline]:
+def read_contours_apt(path: str | os.PathLike[str], *, split_distance: float = 5.0) -> list[Polyline]:
     """GOTO points of an APT/CL file as contours (the reader is :func:`machscan.io.read_toolpath`).
 
     A new contour starts after a ``RAPID`` statement or where consecutive GOTO points are more

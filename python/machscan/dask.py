@@ -102,7 +102,7 @@ def _frames_array(frames: Any, name: str = "frames") -> da.Array:
 def _groove_dtype(n_readings: int, options: _grooves.GrooveOptions) -> np.dtype:
     """The record of one frame's fit: the GrooveFits arrays' names and dtypes, from a call on no
     frames (one source for them: the in-memory result)."""
-    empty = _grooves.fit_grooves(np.arange(n_readings, dtype=np.float64), np.empty((0, n_readings)), options)
+    empty = _grooves.fit_grooves(np.arange(n_readings, dtype=np.float64), np.empty((0, n_readings)), options=options)
     return np.dtype([(f.name, getattr(empty, f.name).dtype) for f in fields(empty) if f.name != "template"])
 
 
@@ -116,7 +116,7 @@ def _fit_block(
     block: np.ndarray, x: np.ndarray, options: _grooves.GrooveOptions, dtype: np.dtype, threads: int | None
 ) -> np.ndarray:
     with thread_limit(threads):
-        fits = _grooves.fit_grooves(x, block, options)
+        fits = _grooves.fit_grooves(x, block, options=options)
     out = np.empty(len(fits), dtype=dtype)
     for name in dtype.names or ():
         out[name] = getattr(fits, name)
@@ -162,8 +162,8 @@ class DaskGrooveFits:
 def fit_grooves(
     x: Any,
     frames: Any = None,
-    options: _grooves.GrooveOptions | None = None,
     *,
+    options: _grooves.GrooveOptions | None = None,
     threads: int | None = TASK_THREADS,
     **changes: Any,
 ) -> DaskGrooveFits:

@@ -127,8 +127,8 @@ class GrooveOptions:
     Examples
     --------
     >>> options = machscan.GrooveOptions(window=200, template="tanh")
-    >>> fits = machscan.fit_grooves(x, z, options)
-    >>> fits = machscan.fit_grooves(x, z, options, window=150)   # one option changed for this call
+    >>> fits = machscan.fit_grooves(x, z, options=options)
+    >>> fits = machscan.fit_grooves(x, z, options=options, window=150)   # one option changed for this call
     """
 
     template: Template = DEFAULTS["template"]
@@ -302,8 +302,8 @@ class GrooveFits:
 def fit_grooves(
     x: ArrayLike,
     z: ArrayLike,
-    options: GrooveOptions | None = None,
     *,
+    options: GrooveOptions | None = None,
     progress: bool | None = False,
     **changes: Any,
 ) -> GrooveFits:
@@ -352,7 +352,7 @@ def fit_grooves(
         there).
     **changes
         Fields of :class:`GrooveOptions` changed for this call: ``fit_grooves(x, z, window=200)``
-        is ``fit_grooves(x, z, GrooveOptions(window=200))``.
+        is ``fit_grooves(x, z, options=GrooveOptions(window=200))``.
     progress : bool or None
         Show a progress bar (frames done, rate, time left) on stderr; None: when stderr is a
         terminal. The frames are then fitted in 50 blocks; the result is the same.
@@ -434,6 +434,7 @@ class LevelledFrame:
 def level_groove_frame(
     x: ArrayLike,
     z: ArrayLike,
+    *,
     options: GrooveOptions | None = None,
     **changes: Any,
 ) -> LevelledFrame:

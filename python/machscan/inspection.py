@@ -408,7 +408,7 @@ class InspectionOptions:
     Examples
     --------
     >>> options = machscan.InspectionOptions(cluster_radius=3.0, groove=machscan.GrooveOptions(window=150))
-    >>> report = machscan.inspect_grooves(scan, cad, options)
+    >>> report = machscan.inspect_grooves(scan, cad, options=options)
     """
 
     groove: GrooveOptions = INSPECTION_GROOVE
@@ -459,8 +459,8 @@ def _as_polylines(cad_contours: Sequence[ArrayLike] | NDArray[np.float64]) -> li
 def inspect_grooves(
     scan: Scan,
     cad_contours: Sequence[ArrayLike],
-    options: InspectionOptions | None = None,
     *,
+    options: InspectionOptions | None = None,
     progress: bool | None = False,
     **changes: Any,
 ) -> GrooveReport:
@@ -549,7 +549,7 @@ def inspect_grooves(
     prof = scan.profiler
     x = (np.arange(scan.n_readings) - prof.i0) * prof.pitch
     z = np.where(scan.valid_mask(), scan.frames, np.nan)
-    fits = fit_grooves(x, z, groove, progress=progress)
+    fits = fit_grooves(x, z, options=groove, progress=progress)
     if max_se_ratio is not None and not max_se_ratio > 0:
         raise ValueError(f"max_se_ratio: must be positive or None, got {max_se_ratio}")
     converged = fits.ok

@@ -503,8 +503,8 @@ def levelled_frame(
     z: ArrayLike,
     frame: int,
     fits: GrooveFits | GrooveReport | None = None,
-    options: GrooveOptions | None = None,
     *,
+    options: GrooveOptions | None = None,
     ax: Axes | None = None,
     **changes: Any,
 ) -> Figure:
@@ -565,7 +565,7 @@ def levelled_frame(
     if options is None:
         template = fits.template if fits is not None else INSPECTION_GROOVE.template
         options = replace(INSPECTION_GROOVE, template=template)  # type: ignore[arg-type]
-    lf = level_groove_frame(x, row, options, **changes)
+    lf = level_groove_frame(x, row, options=options, **changes)
     if fits is not None and not np.array_equal(lf.fit.width, fits.width[frame : frame + 1], equal_nan=True):
         raise ValueError("fits: the frame's fit differs from this figure's: pass the settings the fits were made with")
     if ax is None:

@@ -557,6 +557,7 @@ def read_scan_csv(
     profiler: Profiler,
     c2_offset,
     mount,
+    *,
     delimiter: str = ",",
     metadata: Mapping[str, Any] | None = None,
 ) -> Scan:

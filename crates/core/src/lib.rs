@@ -24,4 +24,6 @@ pub mod toolpath;
 pub use error::{Error, Result};
 
 #[cfg(test)]
+mod testing;
+#[cfg(test)]
 mod thread_independence;

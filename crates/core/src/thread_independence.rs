@@ -4,6 +4,7 @@
 use crate::cloud::{self, NeighborSpace, Neighborhood, OctreeOptions, Orientation};
 use crate::groove::{fit_frames, GrooveOptions, TanhTemplate};
 use crate::kinematics::{frames_to_points, KinematicChain, Profiler};
+use crate::testing::lcg;
 use rstest::rstest;
 use rstest_reuse::{apply, template};
 
@@ -18,11 +19,6 @@ fn threads(#[case] threads: usize) {}
 fn on_threads_and_one<T: Send>(threads: usize, f: impl Fn() -> T + Send + Sync) -> (T, T) {
     let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().expect("a thread pool");
     (pool(threads).install(&f), pool(1).install(&f))
-}
-
-fn lcg(seed: &mut u64) -> f64 {
-    *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-    ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
 }
 
 /// A wavy scanned surface with some outliers: enough points that every kernel splits its work.

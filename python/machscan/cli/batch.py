@@ -46,7 +46,7 @@ def inspect_groove_file(path: str, cad: list, options: InspectionOptions, out: s
         scan = open_scan(p).compute()
     else:
         scan = Scan.load(p)
-    report = inspect_grooves(scan, cad, options)
+    report = inspect_grooves(scan, cad, options=options)
     folder = Path(out) / p.stem
     report.to_csv(folder)
     problem = report.matching_problem() or (None if report.contours else "no contour was matched")

@@ -24,7 +24,7 @@ def run(args: argparse.Namespace) -> int:
     scan = _load_scan(args)
     _check_readings(scan)
     cad = read_contours(args.cad)
-    report = inspect_grooves(scan, cad, _groove_options(args), progress=args.progress)
+    report = inspect_grooves(scan, cad, options=_groove_options(args), progress=args.progress)
     print(report.summary())
     paths = report.to_csv(args.out)
     print(f"\nwritten   : {', '.join(str(p) for p in paths)}")

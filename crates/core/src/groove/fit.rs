@@ -172,6 +172,7 @@ mod tests {
     use super::*;
     use crate::groove::options::GrooveStatus;
     use crate::groove::tanh::median5;
+    use crate::testing::{gauss, lcg};
 
     /// The paper's template pipeline.
     fn tanh() -> GrooveOptions {
@@ -190,16 +191,6 @@ mod tests {
             v.sort_by(f64::total_cmp);
             assert_eq!(m, v[2], "{v:?}");
         }
-    }
-
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
-    }
-
-    fn gauss(seed: &mut u64) -> f64 {
-        let (u, v) = (lcg(seed).max(1e-300), lcg(seed));
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
     }
 
     fn frame(truth: &TanhTemplate, tilt: f64, noise: f64, seed: &mut u64) -> (Vec<f64>, Vec<f64>) {

@@ -850,16 +850,7 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
 mod tests {
     use super::*;
     use crate::groove::{fit_frame, GrooveOptions, GrooveStatus};
-
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
-    }
-
-    fn gauss(seed: &mut u64) -> f64 {
-        let (u, v) = (lcg(seed).max(1e-300), lcg(seed));
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
+    use crate::testing::{gauss, lcg};
 
     /// A frame of 200 readings across `section` (exact, levelled coordinates), rotated by
     /// `tilt`, with lips beside the edges and noise: every reading the topmost point of the

@@ -327,12 +327,8 @@ mod robustness {
     //! Truncated and corrupted files: the parsers answer with an error or a result, never a
     //! panic. (A deterministic mutation sweep; the cargo-fuzz targets go further.)
     use super::*;
+    use crate::testing::lcg_bits;
     use std::path::Path;
-
-    fn lcg(s: &mut u64) -> u64 {
-        *s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        *s >> 33
-    }
 
     fn sweep(valid: &[u8], parse: impl Fn(&[u8]) -> bool) {
         assert!(parse(valid), "the valid file must parse");
@@ -342,9 +338,9 @@ mod robustness {
         let mut s = 99u64;
         for _ in 0..3000 {
             let mut b = valid.to_vec();
-            for _ in 0..1 + lcg(&mut s) % 4 {
-                let i = (lcg(&mut s) as usize) % b.len();
-                b[i] = lcg(&mut s) as u8;
+            for _ in 0..1 + lcg_bits(&mut s) % 4 {
+                let i = (lcg_bits(&mut s) as usize) % b.len();
+                b[i] = lcg_bits(&mut s) as u8;
             }
             let _ = parse(&b);
         }

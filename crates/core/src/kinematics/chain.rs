@@ -414,6 +414,7 @@ pub fn ac_table_rotate(
 mod tests {
     use super::*;
     use crate::geom::{rot_x, rot_y, rot_z, transform_point};
+    use crate::testing::lcg;
 
     #[test]
     fn steps_parse_from_what_a_caller_spells_and_errors_name_the_step() {
@@ -453,12 +454,6 @@ mod tests {
             let e = parse(kind, &args).unwrap_err().to_string();
             assert!(e.starts_with("steps: step 2: ") && e.contains(why), "{kind}: {e}");
         }
-    }
-
-    /// Tiny deterministic generator so tests need no extra crate.
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
     }
 
     /// Paper 002 eq (6), printed closed form.

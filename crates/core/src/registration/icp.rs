@@ -530,11 +530,7 @@ fn rigid(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Matrix4<f64> {
 mod tests {
     use super::*;
     use crate::geom::mount_rotation;
-
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
-    }
+    use crate::testing::lcg;
 
     /// A smooth, asymmetric bump surface z = f(x, y) sampled on a jittered grid, with normals.
     fn surface(n: usize, seed: &mut u64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
