@@ -42,7 +42,7 @@ def main() -> None:
     n = len(cloud.allowance)
     t, paths = timed(
         args.repeat,
-        lambda: machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 10.0, 0.01, (0, 0, 1), MODEL),
+        lambda: machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 10.0, 0.01, (0, 0, 1), removal_model=MODEL),
     )
     tc, check = timed(1, lambda: machscan.simulate_removal(paths, cloud.points, cloud.normals, cloud.allowance))
     dev = check.deviation
@@ -56,7 +56,10 @@ def main() -> None:
     panel = WavyPanel(width=80.0, length=100.0)
     spacing = math.sqrt(panel.width * panel.length / args.points)
     pc = panel.sample(spacing, seed=0)
-    t, pp = timed(args.repeat, lambda: machscan.grinding_paths(pc.points, pc.normals, pc.allowance, 8.0, 0.01, (0, 1, 0), MODEL))
+    t, pp = timed(
+        args.repeat,
+        lambda: machscan.grinding_paths(pc.points, pc.normals, pc.allowance, 8.0, 0.01, (0, 1, 0), removal_model=MODEL),
+    )
     cusp = panel.cusp_heights(pp.points, pp.normals, pp.row, 8.0)
     err = np.abs(pp.allowance - panel.allowance_at(pp.points)).max()
     print(

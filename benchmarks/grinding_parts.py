@@ -49,7 +49,7 @@ def measure(blade: Blade, spacing: float, scallop: float, check) -> dict:
     row = dict(points_in=len(p))
     t0 = time.perf_counter()
     try:
-        paths = machscan.grinding_paths(p, n, a, 10.0, scallop, (0, 0, 1), MODEL)
+        paths = machscan.grinding_paths(p, n, a, 10.0, scallop, (0, 0, 1), removal_model=MODEL)
     except ValueError as e:
         row.update(time=time.perf_counter() - t0, refused=str(e))
         return row

@@ -147,8 +147,8 @@ def test_every_filter_takes_the_cloud_first_and_returns_indices_into_it():
 
 K_CALLS = {
     "remove_statistical_outliers": lambda p, k: machscan.remove_statistical_outliers(p, k, 2.0),
-    "estimate_normals": lambda p, k: machscan.estimate_normals(p, k),
-    "surface_variation": lambda p, k: machscan.surface_variation(p, k),
+    "estimate_normals": lambda p, k: machscan.estimate_normals(p, k=k),
+    "surface_variation": lambda p, k: machscan.surface_variation(p, k=k),
     "principal_curvatures": lambda p, k: machscan.principal_curvatures(p, k=k),
     "knn_graph": lambda p, k: machscan.knn_graph(p, k),
     "knn_graph hybrid": lambda p, k: machscan.knn_graph(p, k, radius=1.0),

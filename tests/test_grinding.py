@@ -20,7 +20,7 @@ MODEL = dict(C=0.05, exponents=(0.6, -0.7, 0.8), belt_speed=20.0, force=15.0, fe
 def panel_paths():
     panel = WavyPanel()
     cloud = panel.sample(0.5, seed=1)
-    paths = machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), MODEL)
+    paths = machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), removal_model=MODEL)
     return panel, cloud, paths
 
 
@@ -75,7 +75,9 @@ def _wanted_feed(allowance):
 
 def test_feeds_are_the_models_closed_form_clamped_to_the_limits(panel_paths):
     _, cloud, _ = panel_paths
-    every = machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), MODEL, feed_step=0.0)
+    every = machscan.grinding_paths(
+        cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), removal_model=MODEL, feed_step=0.0
+    )
     np.testing.assert_allclose(every.feed, _wanted_feed(every.allowance), rtol=1e-12)
     model = machscan.RemovalModel.of(MODEL)
     np.testing.assert_allclose(model.removal(every.feed), every.allowance, rtol=1e-12)
@@ -141,7 +143,9 @@ def test_apt_round_trip_to_a_tenth_of_a_micron(tmp_path, panel_paths):
 def test_the_simulated_pass_leaves_only_the_scallop_on_the_panel(panel_paths):
     _, cloud, held = panel_paths
     # Every feed programmed: what is left is the scallop.
-    paths = machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), MODEL, feed_step=0.0)
+    paths = machscan.grinding_paths(
+        cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), removal_model=MODEL, feed_step=0.0
+    )
     check = machscan.simulate_removal(paths, cloud.points, cloud.normals, cloud.allowance)
     inside = (cloud.points[:, 1] > paths.row_offsets[0]) & (cloud.points[:, 1] < paths.row_offsets[-1])
     assert check.deviation[inside].max() <= 1.1 * paths.scallop_height
@@ -254,7 +258,7 @@ def test_points_without_stock_are_left_out_and_counted_by_every_consumer(panel_p
     a = cloud.allowance.copy()
     hole = np.linalg.norm(cloud.points[:, :2] - [20.0, 40.0], axis=1) < 3.0
     a[hole] = np.nan
-    paths = machscan.grinding_paths(cloud.points, cloud.normals, a, 8.0, 0.01, (0, 1, 0), MODEL)
+    paths = machscan.grinding_paths(cloud.points, cloud.normals, a, 8.0, 0.01, (0, 1, 0), removal_model=MODEL)
     assert paths.without_stock == int(hole.sum()) > 0
     assert f"{paths.without_stock} cloud points without stock" in repr(paths)
     assert np.isfinite(paths.allowance).all() and np.isfinite(paths.feed).all()
@@ -345,7 +349,7 @@ def test_a_row_past_a_ragged_end_of_the_cloud_is_cut_or_refused_never_driven_int
 
     blade, p, n, a = _analytic(section(), spacing, drop=ragged)
     try:
-        paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+        paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), removal_model=MODEL)
     except ValueError as e:
         assert str(e).startswith("points: the cloud is too sparse")
         return
@@ -363,7 +367,7 @@ def test_rows_neither_split_nor_duplicate_as_the_cloud_coarsens(spacing):
     # Before: rows cut where two neighbouring fits disagreed — open sections at 0.75 mm, 83 pieces for 74 row
     # offsets at 1 mm. A row is one closed section of the blade at every spacing; the pass stays within the band.
     _, p, n, a = _analytic(_ellipse(), spacing)
-    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), removal_model=MODEL)
     assert len(np.unique(paths.row_offsets)) == len(paths.row_offsets)
     assert paths.row_closed.all() and np.all(np.diff(paths.row_offsets) > 0)
     _, cp, cn, ca = _analytic(_ellipse(), 0.25)  # a denser cloud of the same blank sees cuts between the points
@@ -378,11 +382,11 @@ def test_a_cloud_too_sparse_for_an_edge_is_refused_by_name_with_the_spacing_it_n
     # round them (the path before: 560 pieces for 86 rows, -0.28 mm cut into the part), at 1.5 mm no fit holds there.
     _, p, n, a = _analytic(_crescent(), spacing)
     with pytest.raises(ValueError, match=r"^points: the cloud is too sparse") as error:
-        machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+        machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), removal_model=MODEL)
     told = float(error.value.args[0].split("points every ")[1].split(" mm")[0])
     assert told <= needed  # at 0.3 mm the crescent's path holds (benchmarks/grinding_parts.py)
     _, p, n, a = _analytic(_crescent(), told)
-    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), removal_model=MODEL)
     assert len(np.unique(paths.row_offsets)) == len(paths.row_offsets) and paths.row_closed.all()
 
 
@@ -399,7 +403,7 @@ def test_the_issues_whole_blade_tip_with_its_trailing_edge_unmeasured_is_not_ove
     keep = ~((v == 1.0) & (np.abs(u - 0.5) < 0.03))
     p, n = blade.surface(u[keep], v[keep])
     a = 0.3 + 0.05 * np.sin(2 * np.pi * u[keep])
-    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), MODEL)
+    paths = machscan.grinding_paths(p, n, a, 10.0, 0.01, (0, 0, 1), removal_model=MODEL)
     check = machscan.simulate_removal(paths, p, n, a)
     # Measured: -7.8 … +17.7 µm.
     assert np.all(np.abs(check.deviation) <= 0.08)

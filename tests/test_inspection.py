@@ -46,7 +46,7 @@ def test_every_contour_found_and_matched(run):
 def test_contour_error_recovers_the_truth(run):
     _scan, truth, r = run
     for c in r.contours:
-        true_contour = machscan.resample_polyline(np.asarray(truth.engraved_polylines[c.cad_index]), 0.002, True)
+        true_contour = machscan.resample_polyline(np.asarray(truth.engraved_polylines[c.cad_index]), 0.002, closed=True)
         ref = machscan.contour_error(c.theoretical, true_contour)
         assert np.sqrt(np.mean((c.error.errors - ref.errors) ** 2)) <= 0.010, c.cad_index
         # The offset alone (bending taken out) against the applied offset.
@@ -157,7 +157,7 @@ def test_suspect_fits_are_left_out_when_asked(run):
 
 def test_cad_as_one_point_set_is_clustered_into_contours(run):
     scan, truth, r = run
-    cloud = np.vstack([machscan.resample_polyline(np.asarray(p), 0.005, True) for p in truth.nominal_polylines])
+    cloud = np.vstack([machscan.resample_polyline(np.asarray(p), 0.005, closed=True) for p in truth.nominal_polylines])
     r2 = inspect_grooves(scan, cloud[np.random.default_rng(0).permutation(len(cloud))])
     assert len(r2.contours) == 11 and r2.unmatched_cad == ()
     # Same contours (in clustering order), same errors as from the polylines.

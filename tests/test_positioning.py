@@ -76,8 +76,8 @@ def test_the_designed_pattern_fixes_the_pose_better_than_a_random_draw(blade):
     def predicted(idx):
         return np.sqrt(np.trace(np.linalg.inv(g[idx].T @ g[idx]) @ w))
 
-    designed = machscan.locating_points(points, 160, keep=0.5, normals=normals, pattern="optimal")
-    random = [predicted(machscan.locating_points(points, 160, keep=0.5, seed=s)) for s in range(5)]
+    designed = machscan.locating_points(points, m=160, keep=0.5, normals=normals, pattern="optimal")
+    random = [predicted(machscan.locating_points(points, m=160, keep=0.5, seed=s)) for s in range(5)]
     assert len(np.unique(designed)) == 160
     assert predicted(designed) < 0.7 * min(random)
     # From the flattest half, a spacing away from each other and from the blade's root and tip.

@@ -196,11 +196,11 @@ def test_locating_points_come_from_the_flat_regions_reproducibly():
     # Flat where x < 50, a wavy free form beyond.
     z = np.where(x < 50, 0.0, 2.0 * np.sin((x - 50) / 4) * np.cos(y / 5))
     pts = np.column_stack([x, y, z])
-    idx = machscan.locating_points(pts, 160, seed=1)
+    idx = machscan.locating_points(pts, m=160, seed=1)
     assert len(idx) == 160 and np.all(np.diff(idx) > 0)
     assert np.all(pts[idx, 0] < 52)
-    np.testing.assert_array_equal(idx, machscan.locating_points(pts, 160, seed=1))
-    assert not np.array_equal(idx, machscan.locating_points(pts, 160, seed=2))
+    np.testing.assert_array_equal(idx, machscan.locating_points(pts, m=160, seed=1))
+    assert not np.array_equal(idx, machscan.locating_points(pts, m=160, seed=2))
     with pytest.raises(ValueError, match="m"):
         machscan.locating_points(pts[:100], 160)
 
@@ -212,7 +212,7 @@ def test_locating_points_on_a_grid_use_the_u_line_curvature():
     xs = np.where(u < 0, u, 20 * np.sin(u / 20))
     zs = np.where(u < 0, 0.0, 20 * (1 - np.cos(u / 20)))
     grid = np.stack(np.broadcast_arrays(xs[:, None], v[None, :], zs[:, None]), axis=-1)
-    idx = machscan.locating_points(grid, 160, keep=0.4, seed=3)
+    idx = machscan.locating_points(grid, m=160, keep=0.4, seed=3)
     assert np.all(grid.reshape(-1, 3)[idx, 0] <= 0.25)
 
 

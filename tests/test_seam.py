@@ -52,7 +52,7 @@ P = np.random.default_rng(0).normal(0, 10, (2000, 3)).round(3)
     [
         lambda p: machscan.voxel_downsample(p, 2.0),
         lambda p: machscan.remove_statistical_outliers(p, 10, 2.0),
-        lambda p: machscan.estimate_normals(p, 10),
+        lambda p: machscan.estimate_normals(p, k=10),
         lambda p: machscan.knn_graph(p, 5)[0],
         lambda p: machscan.crop_box(p, (-5, -5, -5), (5, 5, 5)),
         lambda p: machscan.euclidean_clusters(p, 1.5),

@@ -80,6 +80,11 @@ __all__ = [
     "writable_formats",
     "write_cloud",
     "write_toolpath",
+    "fit_bending_surface",
+    "bending_surface_at",
+    "read_table",
+    "voxel_origin",
+    "voxel_keys",
 ]
 
 __version__: str
@@ -462,7 +467,7 @@ def ac_table_rotate(
     >>> p, n = machscan.ac_table_rotate([[1, 0, 0]], [[0, 0, 1]], 0.0, np.pi / 2, (0, 0, 0))
     """
 def interpolate_poses(
-    sample_times: ArrayLike, samples: ArrayLike, frame_times: ArrayLike, rotary: Sequence[int] = (3, 4, 5)
+    sample_times: ArrayLike, samples: ArrayLike, frame_times: ArrayLike, *, rotary: Sequence[int] = (3, 4, 5)
 ) -> _F64:
     """Axis positions at frame times from CNC samples on their own clock (SPEC K7).
 
@@ -669,7 +674,7 @@ def scallop_heights(tool_radius: ArrayLike, curvature_radius: ArrayLike, step: A
 def step_overs(tool_radius: ArrayLike, curvature_radius: ArrayLike, scallop_height: ArrayLike) -> _F64:
     """Step-overs (SPEC P3); ``machscan.step_over`` documents it."""
 
-def delaunay_xy(points: ArrayLike, max_edge: float | None = None) -> _I64:
+def delaunay_xy(points: ArrayLike, *, max_edge: float | None = None) -> _I64:
     """Delaunay triangulation of a surface seen from above (SPEC S1; paper 002 §3.1): the points'
     xy projection is triangulated (spade, exact predicates) and the triangles lifted back to 3D.
     For height-field surfaces such as a skin on the machine table.
@@ -903,7 +908,7 @@ def view_groove_frame(x: ArrayLike, z: ArrayLike, options: GrooveOptions) -> _Fr
 
 # ---- spatial and contours ---------------------------------------------------------------------
 
-def euclidean_clusters(points: ArrayLike, radius: float, k: int | None = None) -> _I64:
+def euclidean_clusters(points: ArrayLike, radius: float, *, k: int | None = None) -> _I64:
     """Euclidean clustering (SPEC C1, paper 000 §2.2): points closer than ``radius`` share a cluster.
 
     Clusters are the connected components of the neighbor graph: every neighbor within
@@ -950,7 +955,7 @@ def nearest_neighbors(points: ArrayLike, queries: ArrayLike) -> tuple[_I64, _F64
     --------
     >>> idx, dist = machscan.nearest_neighbors(model, measured)
     """
-def knn_graph(points: ArrayLike, k: int, radius: float | None = None) -> tuple[_I64, _F64]:
+def knn_graph(points: ArrayLike, k: int, *, radius: float | None = None) -> tuple[_I64, _F64]:
     """The k nearest points of every point of a cloud (its k-nearest graph), the point itself
     included and first unless an exact duplicate with a lower index precedes it; nearest first,
     ties by index. With ``radius`` only neighbors strictly closer than it (Open3D's hybrid
@@ -982,7 +987,7 @@ def contour_error(
     """Contour error of one contour (SPEC C3–C5); ``machscan.contour_error`` wraps the
     ``ContourErrorArrays`` this returns.
     """
-def resample_polyline(vertices: ArrayLike, spacing: float, closed: bool = True) -> _F64:
+def resample_polyline(vertices: ArrayLike, spacing: float, *, closed: bool = True) -> _F64:
     """Points along a polyline every ``spacing`` mm at most (equal steps over the whole polyline),
     ``(M, 3)``.
 
@@ -1000,7 +1005,7 @@ def resample_polyline(vertices: ArrayLike, spacing: float, closed: bool = True) 
     >>> pts = machscan.resample_polyline(cad_vertices, spacing=0.5, closed=True)
     """
 def match_contours(
-    actual_centroids: ArrayLike, theoretical_centroids: ArrayLike, max_distance: float | None = None
+    actual_centroids: ArrayLike, theoretical_centroids: ArrayLike, *, max_distance: float | None = None
 ) -> _I64:
     """Match actual contour centroids to theoretical ones one to one (minimal summed distance);
     ``(n_actual,)`` indices into the theoretical centroids, −1 where none lies within
@@ -1138,8 +1143,8 @@ def uniform_downsample(points: ArrayLike, every_k: int) -> _I64:
     """
 def estimate_normals(
     points: ArrayLike,
-    k: int = 20,
     *,
+    k: int = 20,
     radius: float | None = None,
     towards: ArrayLike | None = None,
     along: ArrayLike | None = None,
@@ -1159,12 +1164,12 @@ def estimate_normals(
     --------
     >>> n = machscan.estimate_normals(pts, k=20, towards=(0, 0, 500))
     """
-def surface_variation(points: ArrayLike, k: int = 20, *, radius: float | None = None) -> _F64:
+def surface_variation(points: ArrayLike, *, k: int = 20, radius: float | None = None) -> _F64:
     """Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighborhood covariance (0 on a
     plane, up to 1/3 for isotropic scatter); neighborhoods as in :func:`estimate_normals`.
     """
 def principal_curvatures(
-    points: ArrayLike, normals: ArrayLike | None = None, k: int = 20, *, radius: float | None = None
+    points: ArrayLike, normals: ArrayLike | None = None, *, k: int = 20, radius: float | None = None
 ) -> tuple[_F64, _F64]:
     """Principal curvatures and directions from a local quadric fit (SPEC F).
 

@@ -133,14 +133,14 @@ def contour_error(
     p = _points(theoretical, "theoretical")
     q = _points(actual, "actual")
     if cad_spacing is not None:
-        p = resample_cad(p, cad_spacing)
+        p = resample_cad(p, spacing=cad_spacing)
     if actual_spacing is not None:
         _check_spacing(actual_spacing, "actual_spacing")
-        q = join_centers(q, actual_spacing)
+        q = join_centers(q, spacing=actual_spacing)
     return ContourErrorResult(**_core.contour_error(p, q, delta1=delta1, delta2=delta2), theoretical=p, actual=q)
 
 
-def resample_cad(polyline: ArrayLike, spacing: float = CAD_SPACING) -> NDArray[np.float64]:
+def resample_cad(polyline: ArrayLike, *, spacing: float = CAD_SPACING) -> NDArray[np.float64]:
     """A closed CAD contour as the contour error measures it: resampled every ``spacing`` mm at equal arc-length
     steps where any of its segments is longer, as it is where it is already that dense (so resampling twice
     changes nothing). :func:`machscan.inspect_grooves` and :func:`contour_error` both use it.
@@ -156,7 +156,7 @@ def resample_cad(polyline: ArrayLike, spacing: float = CAD_SPACING) -> NDArray[n
     return p
 
 
-def join_centers(centers: ArrayLike, spacing: float = ACTUAL_SPACING) -> NDArray[np.float64]:
+def join_centers(centers: ArrayLike, *, spacing: float = ACTUAL_SPACING) -> NDArray[np.float64]:
     """Groove centers of one contour, in scan order, joined into a polyline and resampled every ``spacing`` mm.
 
     Frames lie far apart next to the CAD points (0.4 mm at a typical decimation). Gaps longer than 5× the median

@@ -536,7 +536,7 @@ def inspect_grooves(
             cad_points = np.column_stack([cad_points, np.zeros(len(cad_points))])
         if cad_points.shape[1] != 3 or len(cad_points) < 3 or not np.isfinite(cad_points).all():
             raise ValueError(f"cad_contours: expected finite (n, 3) points with n >= 3, got {cad_points.shape}")
-        cad_labels = euclidean_clusters(cad_points, cluster_radius, _cluster_k(cluster_k, len(cad_points)))
+        cad_labels = euclidean_clusters(cad_points, cluster_radius, k=_cluster_k(cluster_k, len(cad_points)))
         polylines = [cad_points[cad_labels == c] for c in range(int(cad_labels.max()) + 1)]
     else:
         polylines = _as_polylines(cad_contours)
@@ -569,7 +569,7 @@ def inspect_grooves(
     cluster = np.full(len(fits), -1, dtype=np.int64)
     idx_ok = np.nonzero(ok)[0]
     if len(idx_ok):
-        labels = euclidean_clusters(center[idx_ok], cluster_radius, _cluster_k(cluster_k, len(idx_ok)))
+        labels = euclidean_clusters(center[idx_ok], cluster_radius, k=_cluster_k(cluster_k, len(idx_ok)))
         sizes = np.bincount(labels)
         keep = sizes[labels] >= min_cluster_frames
         # Renumber the kept clusters 0.. in order of first frame.
@@ -578,7 +578,7 @@ def inspect_grooves(
         renum[kept_labels] = np.arange(len(kept_labels))
         cluster[idx_ok] = renum[labels]
     n_clusters = int(cluster.max()) + 1
-    theoretical = polylines if cad_cloud else [resample_cad(p, cad_spacing) for p in polylines]
+    theoretical = polylines if cad_cloud else [resample_cad(p, spacing=cad_spacing) for p in polylines]
     cad_centroids = np.array([p.mean(0) for p in theoretical])
     cl_centroids = np.array([center[cluster == c].mean(0) for c in range(n_clusters)]).reshape(-1, 3)
     match = match_contours(cl_centroids, cad_centroids, max_distance=max_match_distance)

@@ -103,8 +103,8 @@ def _empty(ax: Axes, text: str) -> None:
 
 def width_depth_along(
     report: GrooveReport,
-    contour: int | None = None,
     *,
+    contour: int | None = None,
     axes: Sequence[Axes] | None = None,
 ) -> Figure:
     """Groove width and depth along the contours (paper 000 table 1, per frame).
@@ -440,8 +440,8 @@ def error_decomposition(report: GrooveReport, *, ax: Axes | None = None) -> Figu
 
 def error_along(
     report: GrooveReport,
-    contour: int | None = None,
     *,
+    contour: int | None = None,
     ax: Axes | None = None,
     max_points: int = 5000,
 ) -> Figure:

@@ -292,8 +292,8 @@ ProbePattern = Literal["random", "optimal"]
 
 def locating_points(
     points: ArrayLike,
-    m: int = 160,
     *,
+    m: int = 160,
     keep: float = 0.25,
     k: int = 20,
     seed: int = 0,
@@ -338,7 +338,7 @@ def locating_points(
 
     Examples
     --------
-    >>> idx = machscan.locating_points(model_points, 160, seed=1)
+    >>> idx = machscan.locating_points(model_points, m=160, seed=1)
     >>> probe = model_points[idx]
     """
     a = np.asarray(points, dtype=np.float64)
@@ -579,7 +579,7 @@ def position_workpiece(
         raise ValueError(f"max_rounds: must be at least 1, got {max_rounds}")
     if not (np.isfinite(probe_radius) and probe_radius >= 0):
         raise ValueError(f"probe_radius: must be ≥ 0 mm, got {probe_radius}")
-    indices = locating_points(grid, n_points, keep=keep, seed=seed, normals=normals, pattern=pattern)
+    indices = locating_points(grid, m=n_points, keep=keep, seed=seed, normals=normals, pattern=pattern)
     pose = _pose(init, "init")
     points, normals = grid.reshape(-1, 3), normals.reshape(-1, 3)
     q, n = _targets(points, normals, indices)
@@ -803,8 +803,8 @@ def envelope_fit(
     model_points: ArrayLike,
     model_normals: ArrayLike,
     blank_points: ArrayLike,
-    min_allowance: float = 0.0,
     *,
+    min_allowance: float = 0.0,
     surface: BlankSurface = ALLOWANCE_SURFACE,
     k: int | None = None,
     spacing: float | None = None,
@@ -938,8 +938,8 @@ def align_blank(
     model_points: ArrayLike,
     model_normals: ArrayLike,
     blank_points: ArrayLike,
-    min_allowance: float = 0.0,
     *,
+    min_allowance: float = 0.0,
     surface: BlankSurface = ALLOWANCE_SURFACE,
     k: int | None = None,
     spacing: float | None = None,

@@ -279,9 +279,9 @@ class BeadChain:
 
 def bead_chain(
     points: ArrayLike,
+    *,
     start: ArrayLike | None = None,
     direction: ArrayLike | None = None,
-    *,
     method: ChainMethod = "tree",
 ) -> BeadChain:
     """Order the points of one section into a continuous polyline (SPEC P2; paper 004 §2.1, the "bead chain").
@@ -516,8 +516,8 @@ def grinding_paths(
     tool_radius: float,
     scallop_height: float,
     section_normal: ArrayLike,
-    removal_model: RemovalModel | Mapping[str, object] | None = None,
     *,
+    removal_model: RemovalModel | Mapping[str, object] | None = None,
     thickness: float | None = None,
     spacing: float | None = None,
     tolerance: float | None = None,

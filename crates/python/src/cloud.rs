@@ -221,7 +221,7 @@ fn uniform_downsample<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, every_k:
 /// --------
 /// >>> n = machscan.estimate_normals(pts, k=20, towards=(0, 0, 500))
 #[pyfunction]
-#[pyo3(signature = (points, k=20, *, radius=None, towards=None, along=None, consistent=false))]
+#[pyo3(signature = (points, *, k=20, radius=None, towards=None, along=None, consistent=false))]
 fn estimate_normals<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
@@ -245,7 +245,7 @@ fn estimate_normals<'py>(
 /// Surface variation λ0 / (λ0 + λ1 + λ2) of each point's neighborhood covariance (0 on a
 /// plane, up to 1/3 for isotropic scatter); neighborhoods as in :func:`estimate_normals`.
 #[pyfunction]
-#[pyo3(signature = (points, k=20, *, radius=None))]
+#[pyo3(signature = (points, *, k=20, radius=None))]
 fn surface_variation<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
@@ -280,7 +280,7 @@ fn surface_variation<'py>(
 /// --------
 /// >>> k, d = machscan.principal_curvatures(pts, k=30)
 #[pyfunction]
-#[pyo3(signature = (points, normals=None, k=20, *, radius=None))]
+#[pyo3(signature = (points, normals=None, *, k=20, radius=None))]
 fn principal_curvatures<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,

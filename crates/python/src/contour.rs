@@ -47,7 +47,7 @@ fn contour_error<'py>(
 /// --------
 /// >>> pts = machscan.resample_polyline(cad_vertices, spacing=0.5, closed=True)
 #[pyfunction]
-#[pyo3(signature = (vertices, spacing, closed=true))]
+#[pyo3(signature = (vertices, spacing, *, closed=true))]
 fn resample_polyline<'py>(
     py: Python<'py>,
     vertices: &Bound<'py, PyAny>,
@@ -68,7 +68,7 @@ fn resample_polyline<'py>(
 /// --------
 /// >>> idx = machscan.match_contours(actual_centroids, cad_centroids, max_distance=10.0)
 #[pyfunction]
-#[pyo3(signature = (actual_centroids, theoretical_centroids, max_distance=None))]
+#[pyo3(signature = (actual_centroids, theoretical_centroids, *, max_distance=None))]
 fn match_contours<'py>(
     py: Python<'py>,
     actual_centroids: &Bound<'py, PyAny>,

@@ -331,8 +331,8 @@ fn ac_table_rotate<'py>(
 /// array([[0.5]])
 #[pyfunction]
 #[pyo3(
-    signature = (sample_times, samples, frame_times, rotary=vec![3, 4, 5]),
-    text_signature = "(sample_times, samples, frame_times, rotary=(3, 4, 5))"
+    signature = (sample_times, samples, frame_times, *, rotary=vec![3, 4, 5]),
+    text_signature = "(sample_times, samples, frame_times, *, rotary=(3, 4, 5))"
 )]
 fn interpolate_poses<'py>(
     py: Python<'py>,

@@ -39,7 +39,7 @@ use pyo3::types::PyDict;
 /// >>> faces = machscan.delaunay_xy(scan, max_edge=5.0)
 /// >>> machscan.write_mesh("skin.ply", scan, faces)
 #[pyfunction]
-#[pyo3(signature = (points, max_edge=None))]
+#[pyo3(signature = (points, *, max_edge=None))]
 fn delaunay_xy<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, max_edge: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
     let arr = F64Array::points(points, "points")?;
     let pts = arr.rows::<3>()?;

@@ -28,7 +28,7 @@ use pyo3::prelude::*;
 /// --------
 /// >>> labels = machscan.euclidean_clusters(centers, radius=5.0, k=5)
 #[pyfunction]
-#[pyo3(signature = (points, radius, k=None))]
+#[pyo3(signature = (points, radius, *, k=None))]
 fn euclidean_clusters<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
@@ -99,7 +99,7 @@ fn nearest_neighbors<'py>(
 /// >>> idx, dist = machscan.knn_graph(pts, k=20)
 /// >>> spacing = np.median(dist[:, 1])
 #[pyfunction]
-#[pyo3(signature = (points, k, radius=None))]
+#[pyo3(signature = (points, k, *, radius=None))]
 fn knn_graph<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,

@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         args.tool_radius,
         args.scallop_height,
         section,
-        model,
+        removal_model=model,
         spacing=args.path_spacing,
         feed_step=args.feed_step,
         band=args.band,

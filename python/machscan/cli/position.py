@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     pose = np.loadtxt(args.pose).reshape(4, 4) if args.pose else np.eye(4)
     if args.measured is None:
         idx = registration.locating_points(
-            points, args.n_points, keep=args.keep, seed=args.seed, normals=normals, pattern=args.pattern
+            points, m=args.n_points, keep=args.keep, seed=args.seed, normals=normals, pattern=args.pattern
         )
         _write_plan(args.plan, points, normals, idx, pose)
         print(f"plan      : {len(idx)} probe points of {len(points):,} ({args.pattern}, flattest {args.keep:.0%})")
