@@ -432,7 +432,7 @@ def test_grind_writes_the_path_table_and_report_from_an_allowance_file(tmp_path,
     assert np.abs(path.points - table[:, :3]).max() < 1e-4
     np.testing.assert_allclose(path.feeds, table[:, 9], rtol=1e-6)
     expected = machscan.grinding_paths(
-        cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), machscan.RemovalModel.of(
+        cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), removal_model=machscan.RemovalModel.of(
             dict(C=0.05, exponents=(0.6, -0.7, 0.8), belt_speed=20.0, force=15.0, feed_limits=(0.5, 200.0))
         )
     )

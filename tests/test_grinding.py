@@ -164,7 +164,7 @@ def test_the_simulated_pass_leaves_only_the_scallop_on_the_panel(panel_paths):
 def test_clamped_feeds_leave_the_stock_the_model_could_not_remove(panel_paths):
     _, cloud, _ = panel_paths
     tight = dict(MODEL, feed_limits=(30.0, 40.0))  # a fast feed only: removes at most r(30 mm/s)
-    clamped = machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), tight)
+    clamped = machscan.grinding_paths(cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), removal_model=tight)
     removal = clamped.removal()
     assert (clamped.feed == 30.0).any()
     check = machscan.simulate_removal(clamped, cloud.points, cloud.normals, cloud.allowance)
@@ -294,7 +294,7 @@ def test_a_path_whose_simulated_pass_leaves_the_band_is_not_written(panel_paths,
     _, cloud, good = panel_paths
     assert good.check.within_band and good.check.problem() is None
     over = machscan.grinding_paths(
-        cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), dict(MODEL, feed_limits=(0.5, 0.6))
+        cloud.points, cloud.normals, cloud.allowance, 8.0, 0.01, (0, 1, 0), removal_model=dict(MODEL, feed_limits=(0.5, 0.6))
     )
     assert not over.check.within_band
     assert over.check.deviation[over.check.outside].max() < -3.0  # ~3.8 mm removed from ≤ 0.33 mm of stock

@@ -202,7 +202,7 @@ def test_locating_points_come_from_the_flat_regions_reproducibly():
     np.testing.assert_array_equal(idx, machscan.locating_points(pts, m=160, seed=1))
     assert not np.array_equal(idx, machscan.locating_points(pts, m=160, seed=2))
     with pytest.raises(ValueError, match="m"):
-        machscan.locating_points(pts[:100], 160)
+        machscan.locating_points(pts[:100], m=160)
 
 
 def test_locating_points_on_a_grid_use_the_u_line_curvature():
