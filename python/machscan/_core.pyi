@@ -838,6 +838,7 @@ def read_table(
     delimiter: str | None = None,
     widths: Sequence[int] | None = None,
     nan_columns: Sequence[int] | None = None,
+    max_rows: int | None = None,
 ) -> _TableArrays:
     """A numeric table (CSV, TSV, whitespace) by machscan's one set of rules (header, comments,
     encodings; see ``machscan.io.read_table``); the ``_TableArrays`` keys ``values`` (R, C),

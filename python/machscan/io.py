@@ -356,6 +356,7 @@ def read_table(
     delimiter: str | None = None,
     widths: tuple[int, ...] | None = None,
     nan_columns: tuple[int, ...] | None = None,
+    max_rows: int | None = None,
     name: str | None = None,
 ) -> Table:
     """Read a numeric table (CSV, TSV or whitespace-separated) by machscan's one set of rules.
@@ -378,6 +379,8 @@ def read_table(
     nan_columns : tuple of int, optional
         The columns (0-based) that may hold NaN or inf (missing values); by default every column.
         ``()`` requires every value to be finite.
+    max_rows : int, optional
+        Read at most this many data rows (the rest of the file is not read); default all.
     name : str, optional
         The argument the file is named by in messages (default ``"path"``).
 
@@ -406,6 +409,7 @@ def read_table(
         delimiter=delimiter,
         widths=None if widths is None else list(widths),
         nan_columns=None if nan_columns is None else list(nan_columns),
+        max_rows=max_rows,
     )
     header = arrays["header"]
     return Table(values=arrays["values"], lines=arrays["lines"], header=None if header is None else tuple(header))

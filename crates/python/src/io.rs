@@ -1,7 +1,7 @@
 //! Bindings of `machscan_core::io`: one reader and one writer for point and mesh files, and APT/CL
 //! toolpaths. The Python layer (`machscan.io`) turns the arrays into `CloudFile`,
 //! `TriangleMesh` and `Toolpath` objects.
-use super::convert::{count, enter, to_numpy, triangle_indices, Dim, F64Array};
+use super::convert::{count, count_opt, enter, to_numpy, triangle_indices, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::io::{
     read_table as read_table_core, CloudRef, Dtype, FileFormat, TableOptions, TextColumns, WriteOptions,
@@ -15,7 +15,7 @@ use std::path::PathBuf;
 /// encodings; see ``machscan.io.read_table``); the ``_TableArrays`` keys ``values`` (R, C),
 /// ``lines`` (R,) and ``header`` (list of str, or None).
 #[pyfunction]
-#[pyo3(signature = (path, *, name, delimiter=None, widths=None, nan_columns=None))]
+#[pyo3(signature = (path, *, name, delimiter=None, widths=None, nan_columns=None, max_rows=None))]
 fn read_table<'py>(
     py: Python<'py>,
     path: PathBuf,
@@ -23,12 +23,14 @@ fn read_table<'py>(
     delimiter: Option<char>,
     widths: Option<Vec<i64>>,
     nan_columns: Option<Vec<i64>>,
+    max_rows: Option<i64>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let max_rows = count_opt("max_rows", max_rows)?;
     let widths: Vec<usize> =
         widths.unwrap_or_default().into_iter().map(|w| count("widths", w)).collect::<PyResult<_>>()?;
     let nan: Option<Vec<usize>> =
         nan_columns.map(|c| c.into_iter().map(|j| count("nan_columns", j)).collect::<PyResult<_>>()).transpose()?;
-    let options = TableOptions { name, delimiter, widths: &widths, nan_columns: nan.as_deref() };
+    let options = TableOptions { name, delimiter, widths: &widths, nan_columns: nan.as_deref(), max_rows };
     let t = enter(py, || read_table_core(&path, &options))?;
     let (rows, columns) = (t.rows(), t.columns);
     let d = PyDict::new(py);

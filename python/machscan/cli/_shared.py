@@ -88,7 +88,8 @@ def _csv_readings(path: Path) -> int:
     time column when the header names one."""
     from machscan.io import read_table
 
-    table = read_table(path, delimiter=",", name="scan")
+    # The header and the first data row tell the width; the scan itself is read once, after.
+    table = read_table(path, delimiter=",", max_rows=1, name="scan")
     if table.values.shape[0] == 0:
         raise ValueError(f"scan: {path}: no frames")
     timed = table.header is not None and table.header[0].lower() in ("t", "time", "timestamp")

@@ -16,14 +16,16 @@ use crate::error::{Error, Result};
 use std::path::Path;
 
 /// How a table is read: the argument it is named by in messages, the delimiter (None: runs of
-/// whitespace and commas), the column counts taken (empty: any), and which columns may hold
-/// values that are not finite (None: every column).
+/// whitespace and commas), the column counts taken (empty: any), which columns may hold values
+/// that are not finite (None: every column), and the most data rows read (None: all; the rest
+/// of the file is not looked at).
 #[derive(Debug, Clone, Copy)]
 pub struct TableOptions<'a> {
     pub name: &'a str,
     pub delimiter: Option<char>,
     pub widths: &'a [usize],
     pub nan_columns: Option<&'a [usize]>,
+    pub max_rows: Option<usize>,
 }
 
 /// A numeric table: `values` row-major with `columns` per row, the 1-based line of the file each
@@ -89,6 +91,9 @@ pub fn parse_table(path: &Path, bytes: &[u8], options: &TableOptions) -> Result<
     let mut table = Table { values: Vec::new(), columns: 0, lines: Vec::new(), header: None };
     let mut first = true;
     for (k, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        if options.max_rows.is_some_and(|m| table.lines.len() >= m) {
+            break;
+        }
         let line = k + 1;
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
         let text = decode(raw);
@@ -142,7 +147,7 @@ mod tests {
     use super::*;
 
     fn read(text: &[u8], delimiter: Option<char>, widths: &[usize], nan: Option<&[usize]>) -> Result<Table> {
-        let options = TableOptions { name: "plan", delimiter, widths, nan_columns: nan };
+        let options = TableOptions { name: "plan", delimiter, widths, nan_columns: nan, max_rows: None };
         parse_table(Path::new("t.csv"), text, &options)
     }
 
@@ -162,6 +167,11 @@ mod tests {
         assert_eq!((none.rows(), none.header), (0, None));
         let nan = read(b"1,nan\n2,3\n", Some(','), &[], Some(&[1])).unwrap();
         assert!(nan.values[1].is_nan());
+        // The first row alone: a broken line after it is not read.
+        let options =
+            TableOptions { name: "plan", delimiter: Some(','), widths: &[], nan_columns: None, max_rows: Some(1) };
+        let first = parse_table(Path::new("t.csv"), b"t,a,b\n0,1,2\n0.1,x\n", &options).unwrap();
+        assert_eq!((first.values, first.header.map(|h| h.len())), (vec![0.0, 1.0, 2.0], Some(3)));
     }
 
     #[test]
@@ -185,7 +195,7 @@ mod tests {
         assert!(matches!(
             read_table(
                 Path::new("/nonexistent/t.csv"),
-                &TableOptions { name: "plan", delimiter: None, widths: &[], nan_columns: None }
+                &TableOptions { name: "plan", delimiter: None, widths: &[], nan_columns: None, max_rows: None }
             ),
             Err(Error::Io { .. })
         ));

@@ -217,6 +217,11 @@ impl HeatSolver {
     pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<Self> {
         check_finite_points("vertices", vertices)?;
         crate::mesh::check_faces(vertices.len(), faces)?;
+        Self::build(vertices, faces)
+    }
+
+    /// `new` on input its caller has checked (`check_input`).
+    pub(super) fn build(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<Self> {
         let n = vertices.len();
         let nh = 3 * faces.len();
         let mut len: Vec<f64> = (0..nh)
@@ -470,7 +475,7 @@ pub fn geodesic_heat(vertices: &[[f64; 3]], faces: &[[u32; 3]], sources: &[usize
     if sources.is_empty() {
         return Ok(Vec::new());
     }
-    HeatSolver::new(vertices, faces)?.distances_from(sources)
+    HeatSolver::build(vertices, faces)?.distances_from(sources)
 }
 
 #[cfg(test)]

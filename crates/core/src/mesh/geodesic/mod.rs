@@ -336,7 +336,7 @@ impl GeodesicSolver {
         let prepared = match method {
             GeodesicMethod::Exact => Prepared::Exact(Box::new(exact::ExactGeodesics::new(vertices, faces))),
             GeodesicMethod::Fmm => Prepared::Fmm(Marching::new(vertices, faces)),
-            GeodesicMethod::Heat => Prepared::Heat(Box::new(HeatSolver::new(vertices, faces)?)),
+            GeodesicMethod::Heat => Prepared::Heat(Box::new(HeatSolver::build(vertices, faces)?)),
         };
         Ok(GeodesicSolver { n: vertices.len(), method, prepared })
     }
