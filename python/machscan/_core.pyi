@@ -860,6 +860,7 @@ def write_cloud(
     binary: bool | None = None,
     compressed: bool = False,
     dtype: Literal["float32", "float64"] | None = None,
+    scale: float | None = None,
 ) -> None:
     """Write points, optional normals, named scalars and triangles by the file's extension (see
     ``machscan.io.write_points`` and ``machscan.io.write_mesh``). ``binary``, ``dtype``: None

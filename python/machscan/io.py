@@ -9,7 +9,12 @@ Formats, by extension (:data:`READ_FORMATS`, :data:`WRITE_FORMATS`):
 - ``.xyz``, ``.csv``, ``.txt``, ``.pts``, ``.asc`` — text, one point per line. A ``.txt`` whose
   first line is ``n_vertices n_faces`` is the mesh text format of the geodesic test meshes
   (pygeodesic): that many ``x y z`` lines, then that many lines of three 0-based vertex indices.
-- ``.las``, ``.laz`` — read through laspy (optional dependency).
+- ``.las``, ``.laz`` — LAS 1.0–1.4 and its LASzip compression: the coordinates as stored
+  (X·scale + offset), every point field as a scalar named as laspy names it, the extra bytes by
+  their names; written as LAS 1.4 (point format 6, or 7 with ``red``, ``green``, ``blue``).
+
+PLY, PCD and LAS/LAZ files are read by their signature whatever their extension (a LAZ file
+named ``.las`` reads as LAZ).
 
 Readers and writers are in Rust; this module is their Python face. Files machscan writes with
 the default options open in Open3D (legacy and tensor readers), PCL and trimesh: PLY, PCD and
@@ -187,37 +192,8 @@ def read(
     >>> cloud.points.shape
     (397, 3)
     """
-    if os.fspath(path).lower().endswith((".las", ".laz")):
-        return _read_las(path)
     cx, cy, cz = columns
     return CloudFile(**_core.read_cloud(path, delimiter=delimiter, columns=(cx, cy, cz)))
-
-
-def _read_las(path: str | os.PathLike[str]) -> CloudFile:
-    """LAS/LAZ through laspy (optional: ``pip install laspy``; LAZ also needs ``lazrs``).
-    Coordinates are the scaled ones (x·scale + offset); every other dimension is a scalar."""
-    try:
-        import laspy
-    except ImportError:
-        raise ImportError("reading LAS needs laspy: pip install laspy (and lazrs for .laz)") from None
-    p = os.fspath(path)
-    if not os.path.exists(p):
-        raise FileNotFoundError(2, "No such file or directory", p)
-    try:
-        las = laspy.read(p)
-    except Exception as e:  # laspy raises its own error types for bad files
-        err = FileFormatError(f"{p}: not a readable LAS file ({e})")
-        err.filename = p  # type: ignore[attr-defined]  # set on the instance, as the core does
-        raise err from None
-    pts = np.column_stack(
-        [np.asarray(las.x, dtype=np.float64), np.asarray(las.y, dtype=np.float64), np.asarray(las.z, dtype=np.float64)]
-    )
-    scalars = {}
-    for name in las.point_format.dimension_names:
-        if name.lower() in ("x", "y", "z"):
-            continue
-        scalars[name] = np.asarray(las[name], dtype=np.float64)
-    return CloudFile(points=pts, normals=None, scalars=scalars, triangles=np.zeros((0, 3), dtype=np.int64))
 
 
 def read_points(path: str | os.PathLike[str]) -> NDArray[np.float64]:
@@ -259,14 +235,15 @@ def write_points(
     binary: bool | None = None,
     compressed: bool = False,
     dtype: Dtype | None = None,
+    scale: float | None = None,
 ) -> None:
     """Write points (mm), optional normals and named scalars; the format follows the extension.
 
     Parameters
     ----------
     path : str or os.PathLike
-        ``.ply``, ``.pcd``, or a text format (``.xyz``, ``.csv``, ``.txt``, ``.pts``, ``.asc``:
-        x, y, z per line only).
+        ``.ply``, ``.pcd``, ``.las``, ``.laz``, or a text format (``.xyz``, ``.csv``, ``.txt``,
+        ``.pts``, ``.asc``: x, y, z per line only).
     points : array_like, shape (N, 3)
     normals : array_like, shape (N, 3), optional
     scalars : dict of str to array_like (N,), optional
@@ -274,21 +251,30 @@ def write_points(
         digits, _) other than the fields machscan writes itself (x, y, z, nx, ny, nz,
         normal_x, normal_y, normal_z).
     binary : bool, optional
-        PLY and PCD: binary little-endian (the default) or ASCII. Text formats refuse True.
+        PLY and PCD: binary little-endian (the default) or ASCII. Text formats refuse True,
+        LAS refuses False.
     compressed : bool
-        PCD only: ``binary_compressed`` (LZF). Refused for other formats and with
-        ``binary=False``.
+        PCD only: ``binary_compressed`` (LZF). Refused for other formats (LAS is compressed by
+        naming the file ``.laz``) and with ``binary=False``.
     dtype : {"float32", "float64"}, optional
         Number type of every field. Default float32 for PLY and PCD (what Open3D and PCL read
         everywhere; Open3D's legacy PCD reader reads 8-byte coordinates as zeros), full
-        float64 precision for text.
+        float64 precision for text; LAS/LAZ: the type of the extra bytes (default float64).
+    scale : float, optional
+        LAS/LAZ only: the step the coordinates are stored in, mm (default 0.0001, i.e. 0.1 µm;
+        the offset is the whole mm below the cloud). A cloud spanning more than 2³¹ steps is
+        refused. LAS point fields (``intensity``, ``classification``, ``gps_time``, ``red``,
+        ...) given as scalars fill those fields and must fit them; other scalars and the
+        normals (``normal_x/y/z``) become extra bytes.
 
     Examples
     --------
     >>> machscan.write_points("cloud.ply", pts, scalars={"allowance": a})
     >>> machscan.write_points("cloud.pcd", pts, compressed=True, dtype="float64")
     """
-    _core.write_cloud(path, points, normals=normals, scalars=scalars, binary=binary, compressed=compressed, dtype=dtype)
+    _core.write_cloud(
+        path, points, normals=normals, scalars=scalars, binary=binary, compressed=compressed, dtype=dtype, scale=scale
+    )
 
 
 def write_mesh(

@@ -80,7 +80,7 @@ fn read_cloud<'py>(
 /// ``machscan.io.write_points`` and ``machscan.io.write_mesh``). ``binary``, ``dtype``: None
 /// for the format's default.
 #[pyfunction]
-#[pyo3(signature = (path, points, *, normals=None, scalars=None, triangles=None, binary=None, compressed=false, dtype=None))]
+#[pyo3(signature = (path, points, *, normals=None, scalars=None, triangles=None, binary=None, compressed=false, dtype=None, scale=None))]
 #[allow(clippy::too_many_arguments)]
 fn write_cloud(
     py: Python<'_>,
@@ -92,6 +92,7 @@ fn write_cloud(
     binary: Option<bool>,
     compressed: bool,
     dtype: Option<&str>,
+    scale: Option<f64>,
 ) -> PyResult<()> {
     // The extension first: a wrong one is the first thing to say.
     FileFormat::of(&path, true).py()?;
@@ -118,7 +119,7 @@ fn write_cloud(
         scalars: &values,
         triangles: tri.as_deref(),
     };
-    let options = WriteOptions { binary, compressed, dtype };
+    let options = WriteOptions { binary, compressed, dtype, scale };
     enter(py, || machscan_core::io::write_file(&path, &data, options))
 }
 
@@ -131,7 +132,7 @@ fn readable_formats() -> Vec<&'static str> {
 /// The extensions ``machscan.io.write_points`` and ``write_mesh`` write.
 #[pyfunction]
 fn writable_formats() -> Vec<&'static str> {
-    FileFormat::ALL.iter().filter(|(_, f)| f.writable()).map(|(e, _)| *e).collect()
+    FileFormat::ALL.iter().map(|(e, _)| *e).collect()
 }
 
 /// Read an APT/CL toolpath: GOTO points, tool axes, feeds and segments (a new segment after every

@@ -3,6 +3,7 @@
 //! extensions are spelled.
 //! The formats: docs/clouds.md.
 mod apt;
+mod las;
 mod lzf;
 mod obj;
 mod pcd;
@@ -12,6 +13,7 @@ mod table;
 mod text;
 
 pub use apt::{parse_apt, read_apt, write_apt, Toolpath};
+pub use las::{parse_las, write_las, LAS_SCALE};
 pub use lzf::{lzf_decompress, lzf_store};
 pub use obj::parse_obj;
 pub use pcd::{parse_pcd, PcdEncoding};
@@ -59,8 +61,10 @@ pub enum FileFormat {
     },
     Stl,
     Obj,
-    /// LAS/LAZ: read by the Python layer through laspy; the core only names it.
-    Las,
+    /// LAS, and LAZ (`compressed`).
+    Las {
+        compressed: bool,
+    },
 }
 
 impl FileFormat {
@@ -75,27 +79,37 @@ impl FileFormat {
         ("asc", FileFormat::Text { comma: false }),
         ("stl", FileFormat::Stl),
         ("obj", FileFormat::Obj),
-        ("las", FileFormat::Las),
-        ("laz", FileFormat::Las),
+        ("las", FileFormat::Las { compressed: false }),
+        ("laz", FileFormat::Las { compressed: true }),
     ];
 
-    /// Extensions machscan writes (all it reads but LAS/LAZ).
-    pub fn writable(self) -> bool {
-        self != FileFormat::Las
+    /// The format a file's first bytes announce, for the formats that start with a signature
+    /// (LAS/LAZ, PLY, PCD): a file is read by what it holds, whatever its extension says.
+    pub fn sniff(head: &[u8]) -> Option<FileFormat> {
+        let starts = |magic: &[u8]| head.len() >= magic.len() && head[..magic.len()].eq_ignore_ascii_case(magic);
+        if head.starts_with(b"LASF") {
+            // Bit 7 (or 6) of the point format byte at 104 marks LAZ; the reader looks at it again.
+            let compressed = head.get(104).is_some_and(|b| b & 0xC0 != 0);
+            Some(FileFormat::Las { compressed })
+        } else if starts(b"ply\n") || starts(b"ply\r\n") {
+            Some(FileFormat::Ply)
+        } else if starts(b"# .PCD") || starts(b"VERSION") {
+            Some(FileFormat::Pcd)
+        } else {
+            None
+        }
     }
 
-    fn list(write: bool) -> String {
-        let ext: Vec<String> =
-            Self::ALL.iter().filter(|(_, f)| !write || f.writable()).map(|(e, _)| format!(".{e}")).collect();
+    fn list() -> String {
+        let ext: Vec<String> = Self::ALL.iter().map(|(e, _)| format!(".{e}")).collect();
         ext.join(", ")
     }
 
-    /// The format of `path` by its extension (any case); `write` for the message listing what
-    /// can be written.
+    /// The format of `path` by its extension (any case); `write` words the message.
     pub fn of(path: &Path, write: bool) -> Result<FileFormat> {
         let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
         match Self::ALL.iter().find(|(e, _)| *e == ext) {
-            Some((_, f)) if !write || f.writable() => Ok(*f),
+            Some((_, f)) => Ok(*f),
             _ => Err(Error::invalid(
                 "path",
                 format!(
@@ -103,7 +117,7 @@ impl FileFormat {
                     path.display(),
                     ext,
                     if write { "writes" } else { "reads" },
-                    Self::list(write)
+                    Self::list()
                 ),
             )),
         }
@@ -125,17 +139,28 @@ impl Default for TextColumns {
     }
 }
 
-/// Reads any file of `FileFormat::ALL` but LAS.
+/// Reads any file of `FileFormat::ALL`: by its signature where its format has one
+/// ([`FileFormat::sniff`]), else by its extension.
 pub fn read_file(path: &Path, text: TextColumns) -> Result<CloudFile> {
-    let format = FileFormat::of(path, false)?;
-    let bytes = || std::fs::read(path).map_err(|e| Error::io(path, "read", &e));
+    let by_name = FileFormat::of(path, false);
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        // An unknown extension is the first thing to say, even of a file that is not there.
+        Err(_) if by_name.is_err() => return Err(by_name.unwrap_err()),
+        Err(e) => return Err(Error::io(path, "read", &e)),
+    };
+    let format = match (FileFormat::sniff(&bytes), by_name) {
+        (Some(f), _) => f,
+        (None, by_name) => by_name?,
+    };
     match format {
-        FileFormat::Ply => parse_ply(path, &bytes()?),
-        FileFormat::Pcd => parse_pcd(path, &bytes()?),
-        FileFormat::Stl => parse_stl(path, &bytes()?),
-        FileFormat::Obj => parse_obj(path, &bytes()?),
+        FileFormat::Ply => parse_ply(path, &bytes),
+        FileFormat::Pcd => parse_pcd(path, &bytes),
+        FileFormat::Stl => parse_stl(path, &bytes),
+        FileFormat::Obj => parse_obj(path, &bytes),
+        FileFormat::Las { .. } => parse_las(path, bytes),
         FileFormat::Text { .. } => {
-            let b = bytes()?;
+            let b = bytes;
             let is_txt = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("txt"));
             if is_txt && text == TextColumns::default() {
                 if let Some(mesh) = parse_mesh_txt(path, &b)? {
@@ -144,10 +169,6 @@ pub fn read_file(path: &Path, text: TextColumns) -> Result<CloudFile> {
             }
             Ok(CloudFile { points: read_xyz(path, &b, text)?, ..CloudFile::default() })
         }
-        FileFormat::Las => Err(Error::invalid(
-            "path",
-            format!("{}: LAS/LAZ files are read by machscan.io.read (through laspy)", path.display()),
-        )),
     }
 }
 
@@ -187,7 +208,7 @@ impl Dtype {
 }
 
 /// How to write; `None` means the format's default.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct WriteOptions {
     /// Binary (PLY, PCD, STL default) or ASCII; text formats refuse `Some(true)`.
     pub binary: Option<bool>,
@@ -197,6 +218,8 @@ pub struct WriteOptions {
     /// everywhere (Open3D's legacy PCD reader reads 8-byte coordinates as zeros); text formats
     /// default to full precision.
     pub dtype: Option<Dtype>,
+    /// LAS/LAZ: the coordinate step, mm (default [`LAS_SCALE`]).
+    pub scale: Option<f64>,
 }
 
 /// Fields machscan writes itself: a scalar may not take their names.
@@ -263,6 +286,9 @@ pub fn write_file(path: &Path, data: &CloudRef<'_>, options: WriteOptions) -> Re
     if options.compressed && format != FileFormat::Pcd {
         return refuse("compressed", "only PCD files are compressed (binary_compressed)");
     }
+    if options.scale.is_some() && !matches!(format, FileFormat::Las { .. }) {
+        return refuse("scale", "only LAS/LAZ files store coordinates as integer steps");
+    }
     if options.compressed && options.binary == Some(false) {
         return refuse("compressed", "binary_compressed is a binary encoding: binary=False contradicts it");
     }
@@ -318,7 +344,18 @@ pub fn write_file(path: &Path, data: &CloudRef<'_>, options: WriteOptions) -> Re
             }
             text::write_xyz(path, data.points, if comma { ',' } else { ' ' }, options.dtype.unwrap_or(Dtype::F64))
         }
-        FileFormat::Las => refuse("path", "machscan does not write LAS/LAZ"),
+        FileFormat::Las { compressed } => {
+            if has_triangles {
+                return refuse("triangles", "a LAS file holds points only: write .ply, .stl or .obj for a mesh");
+            }
+            if options.binary == Some(false) {
+                return refuse("binary", "LAS is a binary format");
+            }
+            if options.compressed {
+                return refuse("compressed", "LAS is compressed by its extension: write .laz");
+            }
+            las::write_las(path, data, compressed, options.scale, options.dtype.unwrap_or(Dtype::F64))
+        }
     }
 }
 
@@ -331,6 +368,11 @@ mod robustness {
     use std::path::Path;
 
     fn sweep(valid: &[u8], parse: impl Fn(&[u8]) -> bool) {
+        sweep_bytes(valid, valid.len(), parse)
+    }
+
+    /// Every truncation, and 3000 mutations of up to 4 of the first `mutable` bytes.
+    fn sweep_bytes(valid: &[u8], mutable: usize, parse: impl Fn(&[u8]) -> bool) {
         assert!(parse(valid), "the valid file must parse");
         for cut in 0..valid.len() {
             let _ = parse(&valid[..cut]);
@@ -339,7 +381,7 @@ mod robustness {
         for _ in 0..3000 {
             let mut b = valid.to_vec();
             for _ in 0..1 + lcg_bits(&mut s) % 4 {
-                let i = (lcg_bits(&mut s) as usize) % b.len();
+                let i = (lcg_bits(&mut s) as usize) % mutable;
                 b[i] = lcg_bits(&mut s) as u8;
             }
             let _ = parse(&b);
@@ -375,6 +417,30 @@ mod robustness {
     fn ply_never_panics() {
         for binary in [true, false] {
             sweep(&sample_ply(binary), |b| parse_ply(Path::new("t.ply"), b).is_ok());
+        }
+    }
+
+    #[test]
+    fn las_and_laz_never_panic() {
+        let pts: Vec<f64> = (0..60).map(|i| i as f64 * 0.37).collect();
+        let s: Vec<f64> = (0..20).map(|i| i as f64).collect();
+        let scalars = [("intensity", s.as_slice()), ("a", s.as_slice())];
+        for name in ["t.las", "t.laz"] {
+            let path = std::env::temp_dir().join(format!("machscan-sweep-{}-{name}", std::process::id()));
+            let data = CloudRef { points: &pts, normals: Some(&pts), scalars: &scalars, triangles: None };
+            write_file(&path, &data, WriteOptions::default()).unwrap();
+            let b = std::fs::read(&path).unwrap();
+            std::fs::remove_file(&path).ok();
+            // LAZ: the header, the VLRs and the chunk table's offset, which machscan reads. What
+            // follows is the compressed stream, the `laz` crate's to decode: a corrupted layer
+            // size there makes it allocate that size (up to 4 GiB) before it meets the file's
+            // end, an error, but too slow a one for a debug-build sweep.
+            let mutable = if name.ends_with(".laz") {
+                u32::from_le_bytes(b[96..100].try_into().unwrap()) as usize + 8
+            } else {
+                b.len()
+            };
+            sweep_bytes(&b, mutable, |b| parse_las(Path::new(name), b.to_vec()).is_ok());
         }
     }
 
@@ -614,7 +680,7 @@ mod round_trips {
             (
                 "c.pcd",
                 CloudRef { points: &points, ..Default::default() },
-                WriteOptions { binary: Some(false), compressed: true, dtype: None },
+                WriteOptions { binary: Some(false), compressed: true, dtype: None, scale: None },
                 "compressed",
             ),
             (
@@ -666,7 +732,24 @@ mod round_trips {
                 WriteOptions { binary: Some(true), ..Default::default() },
                 "binary",
             ),
-            ("c.las", CloudRef { points: &points, ..Default::default() }, WriteOptions::default(), "path"),
+            (
+                "c.las",
+                CloudRef { points: &points, triangles: Some(&[[0, 1, 2]]), ..Default::default() },
+                WriteOptions::default(),
+                "triangles",
+            ),
+            (
+                "c.las",
+                CloudRef { points: &points, ..Default::default() },
+                WriteOptions { compressed: true, ..Default::default() },
+                "compressed",
+            ),
+            (
+                "c.ply",
+                CloudRef { points: &points, ..Default::default() },
+                WriteOptions { scale: Some(0.01), ..Default::default() },
+                "scale",
+            ),
             ("c.foo", CloudRef { points: &points, ..Default::default() }, WriteOptions::default(), "path"),
         ];
         for (name, data, options, arg) in cases {

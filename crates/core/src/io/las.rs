@@ -1,0 +1,520 @@
+//! LAS 1.0–1.4 and LAZ point clouds (ASPRS LAS specification; LAZ is LASzip's compression of
+//! the same records). The records, the header and the compression are the `las` crate's (with
+//! its `laz` feature); this module maps them to machscan's cloud: the coordinates as stored
+//! (X·scale + offset, the file's own units, taken as mm), every point field as a scalar named as
+//! laspy names it, the extra bytes the Extra Bytes VLR describes as scalars of their own names
+//! (scaled and offset where the descriptor says so), and extra bytes named `normal_x/y/z` (what
+//! machscan writes) as the normals.
+//!
+//! machscan writes LAS 1.4 with point format 6 (7 when red, green and blue are given): the
+//! point fields given as scalars by their LAS names, everything else as extra bytes (float64 by
+//! default, float32 with `dtype`), normals as `normal_x/y/z`. Coordinates are stored as integer
+//! steps of `scale` (default 0.1 µm) from an offset of whole mm below the cloud.
+use super::{CloudFile, CloudRef, Dtype};
+use crate::error::{Error, Result};
+use las::point::{Classification, Format, ScanDirection};
+use las::{Builder, Point, Reader, Transform, Vector, Version, Vlr, Writer};
+use std::io::{BufWriter, Cursor};
+use std::path::Path;
+
+/// The default coordinate step of written files, mm: far below any profiler's resolution, and
+/// ±214 m about the offset fits LAS's 32-bit integers.
+pub const LAS_SCALE: f64 = 1e-4;
+
+/// The Extra Bytes VLR (LAS 1.4 R15 §2.6.1): one 192-byte descriptor per extra dimension.
+const EXTRA_USER: &str = "LASF_Spec";
+const EXTRA_RECORD: u16 = 4;
+const DESCRIPTOR: usize = 192;
+
+/// The extended formats' scan angle is stored in steps of 0.006°.
+const SCAN_ANGLE_STEP: f64 = 0.006;
+
+/// Points decoded at a time: memory follows what the file holds, not what its header claims.
+const CHUNK: u64 = 1 << 16;
+
+/// The bytes are in memory, so a read error is the content's: cut short or not LAS.
+fn las_error(path: &Path, e: las::Error) -> Error {
+    match e {
+        las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            Error::format(path, "the point records are cut short (the header promises more points)")
+        }
+        other => Error::format(path, format!("not a readable LAS/LAZ file: {other}")),
+    }
+}
+
+/// One extra dimension of a point record.
+#[derive(Debug, Clone)]
+struct ExtraDim {
+    name: String,
+    /// Byte offset in the record's extra bytes and bytes per element.
+    offset: usize,
+    size: usize,
+    kind: u8,
+    count: usize,
+    scale: [f64; 3],
+    shift: [f64; 3],
+}
+
+impl ExtraDim {
+    fn value(&self, bytes: &[u8], k: usize) -> f64 {
+        let b = &bytes[self.offset + k * self.size..self.offset + (k + 1) * self.size];
+        macro_rules! le {
+            ($t:ty) => {
+                <$t>::from_le_bytes(b.try_into().expect("size follows the type")) as f64
+            };
+        }
+        let raw = match self.kind {
+            1 => b[0] as f64,
+            2 => b[0] as i8 as f64,
+            3 => le!(u16),
+            4 => le!(i16),
+            5 => le!(u32),
+            6 => le!(i32),
+            7 => le!(u64),
+            8 => le!(i64),
+            9 => le!(f32),
+            _ => le!(f64),
+        };
+        raw * self.scale[k] + self.shift[k]
+    }
+}
+
+fn f64_at(b: &[u8], at: usize) -> f64 {
+    f64::from_le_bytes(b[at..at + 8].try_into().expect("8 bytes"))
+}
+
+/// The extra dimensions a file's Extra Bytes VLR describes, within `record` extra bytes per
+/// point. Undocumented bytes (data type 0) are skipped; the deprecated two- and three-element
+/// types (11–30) give `name_0`, `name_1`, ...
+fn extra_dims(path: &Path, header: &las::Header, record: usize) -> Result<Vec<ExtraDim>> {
+    let Some(vlr) = header.all_vlrs().find(|v| v.user_id == EXTRA_USER && v.record_id == EXTRA_RECORD) else {
+        return Ok(Vec::new());
+    };
+    let mut dims = Vec::new();
+    let mut offset = 0;
+    for (i, d) in vlr.data.chunks(DESCRIPTOR).enumerate() {
+        if d.len() < DESCRIPTOR {
+            return Err(Error::format(path, format!("extra-bytes descriptor {i} is cut short ({} bytes)", d.len())));
+        }
+        let (kind, options) = (d[2], d[3]);
+        let name: String = String::from_utf8_lossy(&d[4..36]).trim_end_matches('\0').trim().to_string();
+        let (base, count) = match kind {
+            0 => {
+                offset += options as usize;
+                continue;
+            }
+            1..=30 => ((kind - 1) % 10 + 1, ((kind - 1) / 10 + 1) as usize),
+            _ => return Err(Error::format(path, format!("extra dimension {name:?} has unknown data type {kind}"))),
+        };
+        let size = [1, 1, 2, 2, 4, 4, 8, 8, 4, 8][base as usize - 1];
+        // Scale and offset are doubles for every type (the descriptor's `anytype` of 3 × 8 bytes).
+        let (mut scale, mut shift) = ([1.0; 3], [0.0; 3]);
+        for k in 0..count {
+            if options & 8 != 0 {
+                scale[k] = f64_at(d, 112 + 8 * k);
+            }
+            if options & 16 != 0 {
+                shift[k] = f64_at(d, 136 + 8 * k);
+            }
+        }
+        dims.push(ExtraDim { name, offset, size, kind: base, count, scale, shift });
+        offset += size * count;
+    }
+    if offset > record {
+        return Err(Error::format(
+            path,
+            format!("the extra-bytes descriptors describe {offset} bytes, but each point has {record}"),
+        ));
+    }
+    Ok(dims)
+}
+
+/// The LASzip chunk table's count of chunks, checked before the `laz` crate allocates a table of
+/// that many entries (a corrupted count would ask for gigabytes): each chunk starts with one
+/// uncompressed point record, so the file holds at most `len / record_len` of them. The table's
+/// offset is the first 8 bytes of the point data (−1: in the file's last 8 bytes), the count the
+/// second u32 there (LASzip's laszip_dll.cpp, `read_chunk_table`).
+fn check_chunk_table(path: &Path, bytes: &[u8]) -> Result<()> {
+    let u32_at = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")));
+    let i64_at = |at: usize| bytes.get(at..at + 8).map(|b| i64::from_le_bytes(b.try_into().expect("8 bytes")));
+    let (Some(start), Some(record)) = (u32_at(96), bytes.get(105..107)) else {
+        return Ok(()); // a header this short is the reader's to refuse
+    };
+    let record = u16::from_le_bytes([record[0], record[1]]).max(1) as usize;
+    let table = match i64_at(start as usize) {
+        Some(-1) => bytes.len().checked_sub(8).and_then(i64_at),
+        other => other,
+    };
+    let count = table.and_then(|t| usize::try_from(t).ok()).and_then(|t| u32_at(t + 4));
+    match count {
+        Some(c) if c as usize > bytes.len() / record => Err(Error::format(
+            path,
+            format!("the LAZ chunk table counts {c} chunks, more than a file of {} bytes holds", bytes.len()),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The LASzip VLR's items (laszip_dll.cpp: 32 bytes of settings, a u16 count, then type, size and
+/// version, u16 each) must make up the point record: the `laz` crate splits each record by their
+/// sizes and panics where they overrun it.
+fn check_laszip_items(path: &Path, header: &las::Header) -> Result<()> {
+    let Some(vlr) = header.all_vlrs().find(|v| v.user_id == "laszip encoded" && v.record_id == 22204) else {
+        return Err(Error::format(path, "compressed points without the LASzip VLR that says how"));
+    };
+    let d = &vlr.data;
+    let items = d.get(32..34).map(|b| u16::from_le_bytes([b[0], b[1]]) as usize);
+    let record = header.point_format().len() as usize;
+    let size = |i: usize| d.get(36 + 6 * i..38 + 6 * i).map(|b| u16::from_le_bytes([b[0], b[1]]) as usize);
+    match items.and_then(|k| (0..k).map(size).sum::<Option<usize>>()) {
+        Some(total) if total == record => Ok(()),
+        Some(total) => Err(Error::format(
+            path,
+            format!("the LASzip items make records of {total} bytes, the header's point format {record}"),
+        )),
+        None => Err(Error::format(path, "the LASzip VLR is cut short")),
+    }
+}
+
+/// Reads a LAS or LAZ file's bytes (module docs).
+pub fn parse_las(path: &Path, bytes: Vec<u8>) -> Result<CloudFile> {
+    if bytes.get(104).is_some_and(|b| b & 0xC0 != 0) {
+        check_chunk_table(path, &bytes)?;
+    }
+    let mut reader = Reader::new(Cursor::new(bytes)).map_err(|e| las_error(path, e))?;
+    let header = reader.header().clone();
+    let format = *header.point_format();
+    if format.is_compressed {
+        check_laszip_items(path, &header)?;
+    }
+    let dims = extra_dims(path, &header, format.extra_bytes as usize)?;
+    let mut remaining = header.number_of_points();
+    let mut points = Vec::new();
+    let mut fields = Fields::new(&format);
+    let mut extra: Vec<Vec<f64>> = dims.iter().flat_map(|d| (0..d.count).map(|_| Vec::new())).collect();
+    let mut data = las::PointDataBuilder::new().for_header(&header).build();
+    while remaining > 0 {
+        let got = reader.fill_points(remaining.min(CHUNK), &mut data).map_err(|e| las_error(path, e))?;
+        if got == 0 {
+            return Err(las_error(path, las::Error::Io(std::io::ErrorKind::UnexpectedEof.into())));
+        }
+        remaining -= got;
+        for p in data.points() {
+            let p = p.map_err(|e| las_error(path, e))?;
+            points.extend_from_slice(&[p.x, p.y, p.z]);
+            fields.push(&format, &p);
+            let mut column = 0;
+            for d in &dims {
+                for k in 0..d.count {
+                    extra[column].push(d.value(&p.extra_bytes, k));
+                    column += 1;
+                }
+            }
+        }
+    }
+    let mut scalars = fields.into_scalars();
+    let mut column = 0;
+    for d in &dims {
+        for k in 0..d.count {
+            let name = if d.count == 1 { d.name.clone() } else { format!("{}_{k}", d.name) };
+            scalars.push((name, std::mem::take(&mut extra[column])));
+            column += 1;
+        }
+    }
+    let normals = take_normals(&mut scalars);
+    Ok(CloudFile { points, normals, scalars, triangles: Vec::new() })
+}
+
+/// Moves `normal_x/y/z` (or `nx/ny/nz`) out of the scalars into `(N, 3)` normals.
+fn take_normals(scalars: &mut Vec<(String, Vec<f64>)>) -> Option<Vec<f64>> {
+    for names in [["normal_x", "normal_y", "normal_z"], ["nx", "ny", "nz"]] {
+        let at: Vec<Option<usize>> =
+            names.iter().map(|n| scalars.iter().position(|(s, _)| s.eq_ignore_ascii_case(n))).collect();
+        if let [Some(_), Some(_), Some(_)] = at[..] {
+            let columns: Vec<Vec<f64>> = names
+                .iter()
+                .map(|n| {
+                    let i = scalars.iter().position(|(s, _)| s.eq_ignore_ascii_case(n)).expect("found above");
+                    scalars.remove(i).1
+                })
+                .collect();
+            return Some((0..columns[0].len()).flat_map(|i| [columns[0][i], columns[1][i], columns[2][i]]).collect());
+        }
+    }
+    None
+}
+
+/// The point fields of a format, as columns named as laspy names them.
+struct Fields {
+    names: Vec<&'static str>,
+    columns: Vec<Vec<f64>>,
+}
+
+impl Fields {
+    fn names(format: &Format) -> Vec<&'static str> {
+        let mut names = vec!["intensity", "return_number", "number_of_returns", "scan_direction_flag"];
+        names.extend(["edge_of_flight_line", "classification", "synthetic", "key_point", "withheld"]);
+        if format.is_extended {
+            names.extend(["overlap", "scanner_channel", "scan_angle"]);
+        } else {
+            names.push("scan_angle_rank");
+        }
+        names.extend(["user_data", "point_source_id"]);
+        if format.has_gps_time {
+            names.push("gps_time");
+        }
+        if format.has_color {
+            names.extend(["red", "green", "blue"]);
+        }
+        if format.has_nir {
+            names.push("nir");
+        }
+        names
+    }
+
+    fn new(format: &Format) -> Fields {
+        let names = Self::names(format);
+        let columns = names.iter().map(|_| Vec::new()).collect();
+        Fields { names, columns }
+    }
+
+    fn push(&mut self, format: &Format, p: &Point) {
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        let mut values = vec![
+            p.intensity as f64,
+            p.return_number as f64,
+            p.number_of_returns as f64,
+            flag(p.scan_direction == ScanDirection::LeftToRight),
+            flag(p.is_edge_of_flight_line),
+            u8::from(p.classification) as f64,
+            flag(p.is_synthetic),
+            flag(p.is_key_point),
+            flag(p.is_withheld),
+        ];
+        if format.is_extended {
+            // Back to the stored steps of 0.006°, as laspy gives them.
+            values.extend([flag(p.is_overlap), p.scanner_channel as f64]);
+            values.push((p.scan_angle as f64 / SCAN_ANGLE_STEP).round());
+        } else {
+            values.push(p.scan_angle as f64);
+        }
+        values.extend([p.user_data as f64, p.point_source_id as f64]);
+        if let Some(t) = p.gps_time {
+            values.push(t);
+        }
+        if let Some(c) = p.color {
+            values.extend([c.red as f64, c.green as f64, c.blue as f64]);
+        }
+        if let Some(nir) = p.nir {
+            values.push(nir as f64);
+        }
+        for (column, v) in self.columns.iter_mut().zip(values) {
+            column.push(v);
+        }
+    }
+
+    fn into_scalars(self) -> Vec<(String, Vec<f64>)> {
+        self.names.into_iter().map(String::from).zip(self.columns).collect()
+    }
+}
+
+/// A point field of format 6/7 that a scalar of this name fills, with its range.
+fn standard_field(name: &str) -> Option<(f64, f64)> {
+    Some(match name {
+        "intensity" | "point_source_id" | "red" | "green" | "blue" => (0.0, u16::MAX as f64),
+        "classification" | "user_data" => (0.0, u8::MAX as f64),
+        "return_number" | "number_of_returns" => (0.0, 15.0),
+        "scanner_channel" => (0.0, 3.0),
+        "scan_angle" => (i16::MIN as f64, i16::MAX as f64),
+        "synthetic" | "key_point" | "withheld" | "overlap" | "scan_direction_flag" | "edge_of_flight_line" => {
+            (0.0, 1.0)
+        }
+        "gps_time" => (f64::MIN, f64::MAX),
+        _ => return None,
+    })
+}
+
+/// Writes `data` as LAS 1.4 (LAZ when `compressed`), module docs. `scale`: the coordinate
+/// step, mm (default [`LAS_SCALE`]); `dtype`: the extra bytes' type (default float64).
+pub fn write_las(path: &Path, data: &CloudRef<'_>, compressed: bool, scale: Option<f64>, dtype: Dtype) -> Result<()> {
+    let n = data.points.len() / 3;
+    let scale = scale.unwrap_or(LAS_SCALE);
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(Error::invalid("scale", format!("must be a positive step in mm, got {scale}")));
+    }
+    let mut transforms = [Transform { scale, offset: 0.0 }; 3];
+    for (axis, t) in transforms.iter_mut().enumerate() {
+        let (lo, hi) = (0..n)
+            .map(|i| data.points[3 * i + axis])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        t.offset = if n == 0 { 0.0 } else { lo.floor() };
+        if n > 0 && (hi - t.offset) / scale > i32::MAX as f64 {
+            return Err(Error::invalid(
+                "points",
+                format!(
+                    "they span {:.1} mm along {}, more than LAS's 32-bit steps hold at scale = {scale} mm; give a larger scale",
+                    hi - lo,
+                    ["x", "y", "z"][axis]
+                ),
+            ));
+        }
+    }
+    for (name, values) in data.scalars {
+        if let Some((lo, hi)) = standard_field(name) {
+            let integral = *name != "gps_time";
+            if let Some(v) = values.iter().find(|&&v| !(v >= lo && v <= hi && (!integral || v.fract() == 0.0))) {
+                return Err(Error::invalid(
+                    "scalars",
+                    format!("{name:?} is a LAS point field of whole numbers {lo}..{hi}; {v} does not fit"),
+                ));
+            }
+        }
+    }
+    let get = |name: &str| data.scalars.iter().find(|(s, _)| *s == name).map(|(_, v)| *v);
+    let colour = match (get("red"), get("green"), get("blue")) {
+        (Some(r), Some(g), Some(b)) => Some([r, g, b]),
+        (None, None, None) => None,
+        _ => return Err(Error::invalid("scalars", "red, green and blue are LAS colour: give all three or none")),
+    };
+    let mut extra: Vec<(&str, &[f64])> =
+        data.scalars.iter().filter(|(s, _)| standard_field(s).is_none()).copied().collect();
+    let normal_columns: Vec<Vec<f64>> =
+        data.normals.map(|nr| (0..3).map(|k| (0..n).map(|i| nr[3 * i + k]).collect()).collect()).unwrap_or_default();
+    let normal_names = ["normal_x", "normal_y", "normal_z"];
+    for (name, column) in normal_names.iter().zip(&normal_columns) {
+        extra.push((name, column));
+    }
+    for (name, _) in &extra {
+        if name.len() > 32 {
+            return Err(Error::invalid(
+                "scalars",
+                format!("{name:?}: LAS extra-dimension names hold 32 bytes at most"),
+            ));
+        }
+    }
+    let (kind, size) = match dtype {
+        Dtype::F32 => (9u8, 4usize),
+        Dtype::F64 => (10u8, 8usize),
+    };
+    let mut descriptors = Vec::with_capacity(extra.len() * DESCRIPTOR);
+    for (name, _) in &extra {
+        let mut d = [0u8; DESCRIPTOR];
+        d[2] = kind;
+        d[4..4 + name.len()].copy_from_slice(name.as_bytes());
+        descriptors.extend_from_slice(&d);
+    }
+
+    let mut builder = Builder::from(Version::new(1, 4));
+    let mut format = Format::new(if colour.is_some() { 7 } else { 6 }).expect("formats 6 and 7 exist");
+    format.extra_bytes = u16::try_from(extra.len() * size)
+        .map_err(|_| Error::invalid("scalars", format!("{} extra dimensions exceed a LAS record", extra.len())))?;
+    format.is_compressed = compressed;
+    builder.point_format = format;
+    builder.transforms = Vector { x: transforms[0], y: transforms[1], z: transforms[2] };
+    builder.generating_software = "machscan".into();
+    builder.system_identifier = "machscan".into();
+    if !extra.is_empty() {
+        builder.vlrs.push(Vlr {
+            user_id: EXTRA_USER.into(),
+            record_id: EXTRA_RECORD,
+            description: "machscan scalars".into(),
+            data: descriptors,
+        });
+    }
+    let header = builder.into_header().map_err(|e| Error::invalid("scalars", format!("LAS header: {e}")))?;
+    let file = std::fs::File::create(path).map_err(|e| Error::io(path, "write", &e))?;
+    let write_error = |e: las::Error| match e {
+        las::Error::Io(io) => Error::io(path, "write", &io),
+        other => Error::invalid("scalars", format!("{}: {other}", path.display())),
+    };
+    let mut writer = Writer::new(BufWriter::new(file), header).map_err(write_error)?;
+    let value = |name: &str, i: usize, default: f64| get(name).map_or(default, |v| v[i]);
+    for i in 0..n {
+        let mut bytes = Vec::with_capacity(extra.len() * size);
+        for (_, column) in &extra {
+            dtype.put_le(&mut bytes, column[i]);
+        }
+        let flag = |name: &str| value(name, i, 0.0) != 0.0;
+        let raw_angle = value("scan_angle", i, 0.0);
+        let point = Point {
+            x: data.points[3 * i],
+            y: data.points[3 * i + 1],
+            z: data.points[3 * i + 2],
+            intensity: value("intensity", i, 0.0) as u16,
+            return_number: value("return_number", i, 1.0) as u8,
+            number_of_returns: value("number_of_returns", i, 1.0) as u8,
+            scan_direction: if flag("scan_direction_flag") {
+                ScanDirection::LeftToRight
+            } else {
+                ScanDirection::RightToLeft
+            },
+            is_edge_of_flight_line: flag("edge_of_flight_line"),
+            classification: Classification::new(value("classification", i, 0.0) as u8)
+                .map_err(|e| Error::invalid("scalars", format!("classification of point {i}: {e}")))?,
+            is_synthetic: flag("synthetic"),
+            is_key_point: flag("key_point"),
+            is_withheld: flag("withheld"),
+            is_overlap: flag("overlap"),
+            scanner_channel: value("scanner_channel", i, 0.0) as u8,
+            // The crate truncates angle / 0.006 to the stored step: half a step away from zero
+            // lands on the integer given.
+            scan_angle: ((raw_angle + 0.5 * raw_angle.signum()) * SCAN_ANGLE_STEP) as f32,
+            user_data: value("user_data", i, 0.0) as u8,
+            point_source_id: value("point_source_id", i, 0.0) as u16,
+            gps_time: Some(value("gps_time", i, 0.0)),
+            color: colour.map(|[r, g, b]| las::Color::new(r[i] as u16, g[i] as u16, b[i] as u16)),
+            waveform: None,
+            nir: None,
+            extra_bytes: bytes,
+        };
+        writer.write_point(point).map_err(write_error)?;
+    }
+    writer.close().map_err(write_error)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        std::env::temp_dir().join(format!("machscan-las-{}-{name}", std::process::id()))
+    }
+
+    #[test]
+    fn writes_and_reads_back_points_fields_extra_bytes_and_normals() {
+        let pts: Vec<f64> = (0..30).map(|i| 100.0 + i as f64 * 0.3721).collect();
+        let normals: Vec<f64> = (0..30).map(|i| (i % 3) as f64).collect();
+        let intensity: Vec<f64> = (0..10).map(|i| i as f64 * 7.0).collect();
+        let allowance: Vec<f64> = (0..10).map(|i| 0.1 + i as f64 * 1e-3).collect();
+        let scalars = [("intensity", intensity.as_slice()), ("allowance", allowance.as_slice())];
+        let data = CloudRef { points: &pts, normals: Some(&normals), scalars: &scalars, triangles: None };
+        for (name, compressed) in [("a.las", false), ("a.laz", true)] {
+            let path = temp(name);
+            write_las(&path, &data, compressed, None, Dtype::F64).unwrap();
+            let back = parse_las(&path, std::fs::read(&path).unwrap()).unwrap();
+            std::fs::remove_file(&path).ok();
+            for (a, b) in back.points.iter().zip(&pts) {
+                assert!((a - b).abs() <= 0.5 * LAS_SCALE + 1e-12, "{a} {b}");
+            }
+            assert_eq!(back.normals.as_deref(), Some(normals.as_slice()));
+            let get = |n: &str| back.scalars.iter().find(|(s, _)| s == n).unwrap().1.clone();
+            assert_eq!(get("intensity"), intensity);
+            assert_eq!(get("allowance"), allowance);
+            assert_eq!(get("return_number"), vec![1.0; 10]);
+        }
+    }
+
+    #[test]
+    fn refuses_fields_out_of_range_and_spans_past_the_integers() {
+        let pts = [0.0, 0.0, 0.0, 1e6, 0.0, 0.0];
+        let data = CloudRef { points: &pts, ..CloudRef::default() };
+        let err = write_las(&temp("span.las"), &data, false, None, Dtype::F64).unwrap_err().to_string();
+        assert!(err.contains("scale"), "{err}");
+        let bad = [70_000.0, 1.0];
+        let scalars = [("intensity", bad.as_slice())];
+        let data = CloudRef { points: &pts, scalars: &scalars, ..CloudRef::default() };
+        let err = write_las(&temp("int.las"), &data, false, Some(1.0), Dtype::F64).unwrap_err().to_string();
+        assert!(err.contains("intensity"), "{err}");
+    }
+}
