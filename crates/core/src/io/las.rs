@@ -286,7 +286,9 @@ impl Fields {
             p.number_of_returns as f64,
             flag(p.scan_direction == ScanDirection::LeftToRight),
             flag(p.is_edge_of_flight_line),
-            u8::from(p.classification) as f64,
+            // The crate reads the old formats' class 12 (overlap) as an overlap flag, which
+            // those formats do not have: the class is given back as stored.
+            if !format.is_extended && p.is_overlap { 12.0 } else { u8::from(p.classification) as f64 },
             flag(p.is_synthetic),
             flag(p.is_key_point),
             flag(p.is_withheld),
