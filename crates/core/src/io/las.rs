@@ -199,10 +199,11 @@ pub fn parse_las(path: &Path, bytes: Vec<u8>) -> Result<CloudFile> {
             return Err(las_error(path, las::Error::Io(std::io::ErrorKind::UnexpectedEof.into())));
         }
         remaining -= got;
-        for p in data.points() {
+        let record_len = data.record_len();
+        for (p, record) in data.points().zip(data.raw_bytes().chunks_exact(record_len)) {
             let p = p.map_err(|e| las_error(path, e))?;
             points.extend_from_slice(&[p.x, p.y, p.z]);
-            fields.push(&format, &p);
+            fields.push(&format, &p, record);
             let mut column = 0;
             for d in &dims {
                 for k in 0..d.count {
@@ -278,7 +279,8 @@ impl Fields {
         Fields { names, columns }
     }
 
-    fn push(&mut self, format: &Format, p: &Point) {
+    /// `record`: the point's stored bytes (the record layouts of LAS 1.4 R15 tables 7–17).
+    fn push(&mut self, format: &Format, p: &Point, record: &[u8]) {
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         let mut values = vec![
             p.intensity as f64,
@@ -286,16 +288,16 @@ impl Fields {
             p.number_of_returns as f64,
             flag(p.scan_direction == ScanDirection::LeftToRight),
             flag(p.is_edge_of_flight_line),
-            // The crate reads the old formats' class 12 (overlap) as an overlap flag, which
-            // those formats do not have: the class is given back as stored.
-            if !format.is_extended && p.is_overlap { 12.0 } else { u8::from(p.classification) as f64 },
+            // The class and the overlap flag from the record itself: the crate turns class 12
+            // into class 1 plus an overlap flag (and, in the old formats, flags 28 too).
+            if format.is_extended { record[16] as f64 } else { (record[15] & 0x1F) as f64 },
             flag(p.is_synthetic),
             flag(p.is_key_point),
             flag(p.is_withheld),
         ];
         if format.is_extended {
             // Back to the stored steps of 0.006°, as laspy gives them.
-            values.extend([flag(p.is_overlap), p.scanner_channel as f64]);
+            values.extend([flag(record[15] & 8 != 0), p.scanner_channel as f64]);
             values.push((p.scan_angle as f64 / SCAN_ANGLE_STEP).round());
         } else {
             values.push(p.scan_angle as f64);
