@@ -7,7 +7,8 @@
 - peak memory of the voxel grid on 10 M points below 2× the input array (run with --memory).
 
 Also, without a target: the k-nearest graph of 200 k points against Open3D's tensor
-NearestNeighborSearch and scipy's cKDTree.
+NearestNeighborSearch and scipy's cKDTree; reading 1 M points of LAS and LAZ (point format 6,
+intensity and one float64 extra dimension) against laspy (+ lazrs), every field, not only xyz.
 
     python benchmarks/bench_cloud.py [--memory]
 """
@@ -81,6 +82,27 @@ def main() -> None:
             o3 = best_time(lambda path=path: open3d.io.read_point_cloud(str(path)))
             assert np.allclose(machscan.read_points(path), np.asarray(open3d.io.read_point_cloud(str(path)).points))
             row(name, ms, o3)
+        import laspy
+
+        header = laspy.LasHeader(point_format=6, version="1.4")
+        header.scales, header.offsets = [1e-4] * 3, [0.0, 0.0, -10.0]
+        header.add_extra_dims([laspy.ExtraBytesParams("allowance", "f8")])
+        las = laspy.LasData(header)
+        las.x, las.y, las.z = p1m[:, 0], p1m[:, 1], p1m[:, 2]
+        las.intensity = np.arange(len(p1m)) % 65536
+        las.allowance = p1m[:, 2] * 0.01
+        for suffix in (".las", ".laz"):
+            path = Path(d) / f"cloud{suffix}"
+            las.write(path)
+
+            def by_laspy(path=path):
+                f = laspy.read(path)
+                return np.column_stack([f.x, f.y, f.z]), {n: np.asarray(f[n]) for n in f.point_format.dimension_names}
+
+            c, (ref, _) = machscan.io.read(path), by_laspy()
+            assert np.array_equal(c.points, ref)
+            row(f"{suffix[1:].upper()} (every field)", best_time(lambda path=path: machscan.io.read(path)),
+                best_time(by_laspy), "laspy")
     pc1m = open3d.geometry.PointCloud(open3d.utility.Vector3dVector(p1m))
     print("filters:")
     row("voxel grid, 1 M points", best_time(lambda: machscan.voxel_downsample(p1m, 1.0)),

@@ -13,7 +13,7 @@
 use super::{CloudFile, CloudRef, Dtype};
 use crate::error::{Error, Result};
 use las::point::{Classification, Format, ScanDirection};
-use las::{Builder, Point, Reader, Transform, Vector, Version, Vlr, Writer};
+use las::{Builder, LazParallelism, Point, Reader, ReaderOptions, Transform, Vector, Version, Vlr, Writer};
 use std::io::{BufWriter, Cursor};
 use std::path::Path;
 
@@ -181,16 +181,22 @@ pub fn parse_las(path: &Path, bytes: Vec<u8>) -> Result<CloudFile> {
     if bytes.get(104).is_some_and(|b| b & 0xC0 != 0) {
         check_chunk_table(path, &bytes)?;
     }
-    let mut reader = Reader::new(Cursor::new(bytes)).map_err(|e| las_error(path, e))?;
+    // LAZ chunks are decoded on the rayon pool: each chunk's bytes depend on that chunk alone.
+    let options = ReaderOptions::default().with_laz_parallelism(LazParallelism::Yes);
+    let mut reader = Reader::with_options(Cursor::new(bytes), options).map_err(|e| las_error(path, e))?;
     let header = reader.header().clone();
     let format = *header.point_format();
     if format.is_compressed {
         check_laszip_items(path, &header)?;
     }
     let dims = extra_dims(path, &header, format.extra_bytes as usize)?;
+    let fields = point_fields(&format);
+    let record_len = format.len() as usize;
+    let extra_at = record_len - format.extra_bytes as usize;
+    let transforms = *header.transforms();
     let mut remaining = header.number_of_points();
     let mut points = Vec::new();
-    let mut fields = Fields::new(&format);
+    let mut columns: Vec<Vec<f64>> = fields.iter().map(|_| Vec::new()).collect();
     let mut extra: Vec<Vec<f64>> = dims.iter().flat_map(|d| (0..d.count).map(|_| Vec::new())).collect();
     let mut data = las::PointDataBuilder::new().for_header(&header).build();
     while remaining > 0 {
@@ -199,21 +205,27 @@ pub fn parse_las(path: &Path, bytes: Vec<u8>) -> Result<CloudFile> {
             return Err(las_error(path, las::Error::Io(std::io::ErrorKind::UnexpectedEof.into())));
         }
         remaining -= got;
-        let record_len = data.record_len();
-        for (p, record) in data.points().zip(data.raw_bytes().chunks_exact(record_len)) {
-            let p = p.map_err(|e| las_error(path, e))?;
-            points.extend_from_slice(&[p.x, p.y, p.z]);
-            fields.push(&format, &p, record);
+        for r in data.raw_bytes().chunks_exact(record_len) {
+            let int = |at: usize| i32::from_le_bytes([r[at], r[at + 1], r[at + 2], r[at + 3]]);
+            // X·scale + offset, the operations laspy and the crate do, so the same bits.
+            points.extend_from_slice(&[
+                transforms.x.scale * f64::from(int(0)) + transforms.x.offset,
+                transforms.y.scale * f64::from(int(4)) + transforms.y.offset,
+                transforms.z.scale * f64::from(int(8)) + transforms.z.offset,
+            ]);
+            for (column, (_, read)) in columns.iter_mut().zip(&fields) {
+                column.push(read.value(r));
+            }
             let mut column = 0;
             for d in &dims {
                 for k in 0..d.count {
-                    extra[column].push(d.value(&p.extra_bytes, k));
+                    extra[column].push(d.value(&r[extra_at..], k));
                     column += 1;
                 }
             }
         }
     }
-    let mut scalars = fields.into_scalars();
+    let mut scalars: Vec<(String, Vec<f64>)> = fields.iter().map(|(n, _)| n.to_string()).zip(columns).collect();
     let mut column = 0;
     for d in &dims {
         for k in 0..d.count {
@@ -245,81 +257,92 @@ fn take_normals(scalars: &mut Vec<(String, Vec<f64>)>) -> Option<Vec<f64>> {
     None
 }
 
-/// The point fields of a format, as columns named as laspy names them.
-struct Fields {
-    names: Vec<&'static str>,
-    columns: Vec<Vec<f64>>,
+/// One point field: its laspy name and how it is read from a stored record.
+#[derive(Clone, Copy)]
+enum Read {
+    U8(usize),
+    I8(usize),
+    U16(usize),
+    I16(usize),
+    F64(usize),
+    /// Bits `shift..shift + width` of the byte at `at`.
+    Bits {
+        at: usize,
+        shift: u8,
+        width: u8,
+    },
 }
 
-impl Fields {
-    fn names(format: &Format) -> Vec<&'static str> {
-        let mut names = vec!["intensity", "return_number", "number_of_returns", "scan_direction_flag"];
-        names.extend(["edge_of_flight_line", "classification", "synthetic", "key_point", "withheld"]);
-        if format.is_extended {
-            names.extend(["overlap", "scanner_channel", "scan_angle"]);
-        } else {
-            names.push("scan_angle_rank");
+impl Read {
+    #[inline]
+    fn value(self, r: &[u8]) -> f64 {
+        let two = |at: usize| [r[at], r[at + 1]];
+        match self {
+            Read::U8(at) => r[at] as f64,
+            Read::I8(at) => r[at] as i8 as f64,
+            Read::U16(at) => u16::from_le_bytes(two(at)) as f64,
+            Read::I16(at) => i16::from_le_bytes(two(at)) as f64,
+            Read::F64(at) => f64_at(r, at),
+            Read::Bits { at, shift, width } => ((r[at] >> shift) & ((1u8 << width) - 1)) as f64,
         }
-        names.extend(["user_data", "point_source_id"]);
+    }
+}
+
+/// The point fields of a format, named as laspy names them, read from the stored records (LAS
+/// 1.4 R15 tables 7–17) rather than through the crate's `Point`, which turns class 12 into an
+/// overlap flag and allocates per point.
+fn point_fields(format: &Format) -> Vec<(&'static str, Read)> {
+    let bits = |at, shift, width| Read::Bits { at, shift, width };
+    let mut f = vec![("intensity", Read::U16(12))];
+    // Where the colour starts: after the GPS time, if any.
+    let mut at;
+    if format.is_extended {
+        f.extend([
+            ("return_number", bits(14, 0, 4)),
+            ("number_of_returns", bits(14, 4, 4)),
+            ("synthetic", bits(15, 0, 1)),
+            ("key_point", bits(15, 1, 1)),
+            ("withheld", bits(15, 2, 1)),
+            ("overlap", bits(15, 3, 1)),
+            ("scanner_channel", bits(15, 4, 2)),
+            ("scan_direction_flag", bits(15, 6, 1)),
+            ("edge_of_flight_line", bits(15, 7, 1)),
+            ("classification", Read::U8(16)),
+            ("user_data", Read::U8(17)),
+            // In the stored steps of 0.006°, as laspy gives it.
+            ("scan_angle", Read::I16(18)),
+            ("point_source_id", Read::U16(20)),
+            ("gps_time", Read::F64(22)),
+        ]);
+        at = 30;
+    } else {
+        f.extend([
+            ("return_number", bits(14, 0, 3)),
+            ("number_of_returns", bits(14, 3, 3)),
+            ("scan_direction_flag", bits(14, 6, 1)),
+            ("edge_of_flight_line", bits(14, 7, 1)),
+            ("classification", bits(15, 0, 5)),
+            ("synthetic", bits(15, 5, 1)),
+            ("key_point", bits(15, 6, 1)),
+            ("withheld", bits(15, 7, 1)),
+            ("scan_angle_rank", Read::I8(16)),
+            ("user_data", Read::U8(17)),
+            ("point_source_id", Read::U16(18)),
+        ]);
+        at = 20;
         if format.has_gps_time {
-            names.push("gps_time");
-        }
-        if format.has_color {
-            names.extend(["red", "green", "blue"]);
-        }
-        if format.has_nir {
-            names.push("nir");
-        }
-        names
-    }
-
-    fn new(format: &Format) -> Fields {
-        let names = Self::names(format);
-        let columns = names.iter().map(|_| Vec::new()).collect();
-        Fields { names, columns }
-    }
-
-    /// `record`: the point's stored bytes (the record layouts of LAS 1.4 R15 tables 7–17).
-    fn push(&mut self, format: &Format, p: &Point, record: &[u8]) {
-        let flag = |b: bool| if b { 1.0 } else { 0.0 };
-        let mut values = vec![
-            p.intensity as f64,
-            p.return_number as f64,
-            p.number_of_returns as f64,
-            flag(p.scan_direction == ScanDirection::LeftToRight),
-            flag(p.is_edge_of_flight_line),
-            // The class and the overlap flag from the record itself: the crate turns class 12
-            // into class 1 plus an overlap flag (and, in the old formats, flags 28 too).
-            if format.is_extended { record[16] as f64 } else { (record[15] & 0x1F) as f64 },
-            flag(p.is_synthetic),
-            flag(p.is_key_point),
-            flag(p.is_withheld),
-        ];
-        if format.is_extended {
-            // Back to the stored steps of 0.006°, as laspy gives them.
-            values.extend([flag(record[15] & 8 != 0), p.scanner_channel as f64]);
-            values.push((p.scan_angle as f64 / SCAN_ANGLE_STEP).round());
-        } else {
-            values.push(p.scan_angle as f64);
-        }
-        values.extend([p.user_data as f64, p.point_source_id as f64]);
-        if let Some(t) = p.gps_time {
-            values.push(t);
-        }
-        if let Some(c) = p.color {
-            values.extend([c.red as f64, c.green as f64, c.blue as f64]);
-        }
-        if let Some(nir) = p.nir {
-            values.push(nir as f64);
-        }
-        for (column, v) in self.columns.iter_mut().zip(values) {
-            column.push(v);
+            f.push(("gps_time", Read::F64(20)));
+            at = 28;
         }
     }
-
-    fn into_scalars(self) -> Vec<(String, Vec<f64>)> {
-        self.names.into_iter().map(String::from).zip(self.columns).collect()
+    if format.has_color {
+        f.extend([("red", Read::U16(at)), ("green", Read::U16(at + 2)), ("blue", Read::U16(at + 4))]);
+        at += 6;
     }
+    if format.has_nir {
+        f.push(("nir", Read::U16(at)));
+    }
+    f
 }
 
 /// A point field of format 6/7 that a scalar of this name fills, with its range.
