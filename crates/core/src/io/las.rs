@@ -13,7 +13,7 @@
 use super::{CloudFile, CloudRef, Dtype};
 use crate::error::{Error, Result};
 use las::point::{Classification, Format, ScanDirection};
-use las::{Builder, LazParallelism, Point, Reader, ReaderOptions, Transform, Vector, Version, Vlr, Writer};
+use las::{Builder, Point, Reader, Transform, Vector, Version, Vlr, Writer};
 use std::io::{BufWriter, Cursor};
 use std::path::Path;
 
@@ -178,17 +178,15 @@ fn check_laszip_items(path: &Path, header: &las::Header) -> Result<()> {
 
 /// Reads a LAS or LAZ file's bytes (module docs).
 pub fn parse_las(path: &Path, bytes: Vec<u8>) -> Result<CloudFile> {
-    if bytes.get(104).is_some_and(|b| b & 0xC0 != 0) {
-        check_chunk_table(path, &bytes)?;
-    }
-    // LAZ chunks are decoded on the rayon pool: each chunk's bytes depend on that chunk alone.
-    let options = ReaderOptions::default().with_laz_parallelism(LazParallelism::Yes);
-    let mut reader = Reader::with_options(Cursor::new(bytes), options).map_err(|e| las_error(path, e))?;
-    let header = reader.header().clone();
+    let header = las::Header::new(Cursor::new(&bytes)).map_err(|e| las_error(path, e))?;
     let format = *header.point_format();
     if format.is_compressed {
         check_laszip_items(path, &header)?;
+        check_chunk_table(path, &bytes)?;
     }
+    // LAZ is decoded in turn: the crate's parallel decoder trusts the chunk table's byte and
+    // point counts (a corrupted one asks for any amount of memory, or asserts).
+    let mut reader = Reader::new(Cursor::new(bytes)).map_err(|e| las_error(path, e))?;
     let dims = extra_dims(path, &header, format.extra_bytes as usize)?;
     let fields = point_fields(&format);
     let record_len = format.len() as usize;
