@@ -214,6 +214,7 @@ class _CloudArrays(TypedDict):
     normals: _F64 | None
     scalars: dict[str, _F64]
     triangles: _I64
+    dropped: int
 
 class _ToolpathArrays(TypedDict):
     points: _F64
@@ -845,7 +846,11 @@ def read_table(
     ``lines`` (R,) and ``header`` (list of str, or None).
     """
 def read_cloud(
-    path: _Path, *, delimiter: str | None = None, columns: tuple[int, int, int] = (0, 1, 2)
+    path: _Path,
+    *,
+    delimiter: str | None = None,
+    columns: tuple[int, int, int] = (0, 1, 2),
+    apply_pose: bool = True,
 ) -> _CloudArrays:
     """Read a point or mesh file by its extension (see ``machscan.io.read``); returns the
     ``CloudArrays`` ``points``, ``normals`` (or None), ``scalars`` and ``triangles``.

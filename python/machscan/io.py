@@ -13,7 +13,10 @@ Formats, by extension (:data:`READ_FORMATS`, :data:`WRITE_FORMATS`):
   (X·scale + offset), every point field as a scalar named as laspy names it, the extra bytes by
   their names; written as LAS 1.4 (point format 6, or 7 with ``red``, ``green``, ``blue``).
 
-PLY, PCD and LAS/LAZ files are read by their signature whatever their extension (a LAZ file
+- ``.e57`` — ASTM E2807: every scan, poses applied, Cartesian or spherical, in mm (E57 stores
+  metres); invalid points dropped and counted (``CloudFile.dropped``); written as one scan.
+
+PLY, PCD, LAS/LAZ and E57 files are read by their signature whatever their extension (a LAZ file
 named ``.las`` reads as LAZ).
 
 Readers and writers are in Rust; this module is their Python face. Files machscan writes with
@@ -83,12 +86,15 @@ class CloudFile:
         Every other per-point property by name (curvature, intensity, allowance, ...).
     triangles : ndarray of int64 (T, 3)
         Faces, polygons fanned into triangles; empty for clouds.
+    dropped : int
+        Points the file marks invalid (E57), left out of ``points``.
     """
 
     points: NDArray[np.float64]
     normals: NDArray[np.float64] | None
     scalars: dict[str, NDArray[np.float64]]
     triangles: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+    dropped: int = 0
 
     def __len__(self) -> int:
         return len(self.points)
@@ -122,12 +128,14 @@ class CloudFile:
             normals=None if self.normals is None else self.normals[idx],
             scalars={k: v[idx] for k, v in self.scalars.items()},
             triangles=tri,
+            dropped=self.dropped,
         )
 
     def __repr__(self) -> str:
         extra = ", normals" if self.normals is not None else ""
         extra += f", scalars {sorted(self.scalars)}" if self.scalars else ""
         extra += f", {len(self.triangles)} triangles" if len(self.triangles) else ""
+        extra += f", {self.dropped} invalid dropped" if self.dropped else ""
         return f"CloudFile({len(self.points)} points{extra})"
 
 
@@ -159,8 +167,10 @@ def read(
     *,
     delimiter: str | None = None,
     columns: tuple[int, int, int] = (0, 1, 2),
+    apply_pose: bool = True,
 ) -> CloudFile:
-    """Read a point or mesh file, choosing the reader by the extension (see the module).
+    """Read a point or mesh file, choosing the reader by its signature or extension (see the
+    module).
 
     Parameters
     ----------
@@ -170,6 +180,9 @@ def read(
         first cell that is not a number) are skipped.
     columns : (int, int, int)
         Text files: the 0-based columns of x, y, z.
+    apply_pose : bool
+        E57: put every scan in the file's frame by its pose (default); False leaves each in its
+        own (the ``scan`` scalar tells them apart when there are several).
 
     Returns
     -------
@@ -193,7 +206,7 @@ def read(
     (397, 3)
     """
     cx, cy, cz = columns
-    return CloudFile(**_core.read_cloud(path, delimiter=delimiter, columns=(cx, cy, cz)))
+    return CloudFile(**_core.read_cloud(path, delimiter=delimiter, columns=(cx, cy, cz), apply_pose=apply_pose))
 
 
 def read_points(path: str | os.PathLike[str]) -> NDArray[np.float64]:
@@ -242,7 +255,7 @@ def write_points(
     Parameters
     ----------
     path : str or os.PathLike
-        ``.ply``, ``.pcd``, ``.las``, ``.laz``, or a text format (``.xyz``, ``.csv``, ``.txt``,
+        ``.ply``, ``.pcd``, ``.las``, ``.laz``, ``.e57``, or a text format (``.xyz``, ``.csv``, ``.txt``,
         ``.pts``, ``.asc``: x, y, z per line only).
     points : array_like, shape (N, 3)
     normals : array_like, shape (N, 3), optional

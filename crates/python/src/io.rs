@@ -44,17 +44,19 @@ fn read_table<'py>(
 /// ``CloudArrays`` ``points``, ``normals`` (or None), ``scalars`` and ``triangles``.
 #[pyfunction]
 #[pyo3(
-    signature = (path, *, delimiter=None, columns=(0, 1, 2)),
-    text_signature = "(path, *, delimiter=None, columns=(0, 1, 2))"
+    signature = (path, *, delimiter=None, columns=(0, 1, 2), apply_pose=true),
+    text_signature = "(path, *, delimiter=None, columns=(0, 1, 2), apply_pose=True)"
 )]
 fn read_cloud<'py>(
     py: Python<'py>,
     path: PathBuf,
     delimiter: Option<char>,
     columns: (i64, i64, i64),
+    apply_pose: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let columns = [count("columns", columns.0)?, count("columns", columns.1)?, count("columns", columns.2)?];
-    let file = enter(py, || machscan_core::io::read_file(&path, TextColumns { delimiter, columns }))?;
+    let text = TextColumns { delimiter, columns };
+    let file = enter(py, || machscan_core::io::read_file_with(&path, text, apply_pose))?;
     let n = file.points.len() / 3;
     let d = PyDict::new(py);
     d.set_item("points", to_numpy(py, file.points, &[n, 3])?)?;
@@ -73,6 +75,7 @@ fn read_cloud<'py>(
     let t = file.triangles.len();
     let tri: Vec<i64> = file.triangles.into_iter().flatten().map(i64::from).collect();
     d.set_item("triangles", to_numpy(py, tri, &[t, 3])?)?;
+    d.set_item("dropped", file.dropped)?;
     Ok(d)
 }
 

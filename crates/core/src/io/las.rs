@@ -233,7 +233,7 @@ pub fn parse_las(path: &Path, bytes: Vec<u8>) -> Result<CloudFile> {
         }
     }
     let normals = take_normals(&mut scalars);
-    Ok(CloudFile { points, normals, scalars, triangles: Vec::new() })
+    Ok(CloudFile { points, normals, scalars, triangles: Vec::new(), dropped: 0 })
 }
 
 /// Moves `normal_x/y/z` (or `nx/ny/nz`) out of the scalars into `(N, 3)` normals.

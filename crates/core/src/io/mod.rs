@@ -3,6 +3,7 @@
 //! extensions are spelled.
 //! The formats: docs/clouds.md.
 mod apt;
+mod e57;
 mod las;
 mod lzf;
 mod obj;
@@ -13,6 +14,7 @@ mod table;
 mod text;
 
 pub use apt::{parse_apt, read_apt, write_apt, Toolpath};
+pub use e57::{parse_e57, write_e57};
 pub use las::{parse_las, write_las, LAS_SCALE};
 pub use lzf::{lzf_decompress, lzf_store};
 pub use obj::parse_obj;
@@ -37,6 +39,8 @@ pub struct CloudFile {
     /// Faces as triangles of vertex indices (polygons fanned from their first vertex); empty for
     /// point clouds.
     pub triangles: Vec<[u32; 3]>,
+    /// Points the file marks invalid (E57), not returned.
+    pub dropped: u64,
 }
 
 /// What to write: borrowed, row-major.
@@ -65,11 +69,13 @@ pub enum FileFormat {
     Las {
         compressed: bool,
     },
+    /// ASTM E2807.
+    E57,
 }
 
 impl FileFormat {
     /// Every extension read, with its format.
-    pub const ALL: [(&'static str, FileFormat); 11] = [
+    pub const ALL: [(&'static str, FileFormat); 12] = [
         ("ply", FileFormat::Ply),
         ("pcd", FileFormat::Pcd),
         ("xyz", FileFormat::Text { comma: false }),
@@ -81,6 +87,7 @@ impl FileFormat {
         ("obj", FileFormat::Obj),
         ("las", FileFormat::Las { compressed: false }),
         ("laz", FileFormat::Las { compressed: true }),
+        ("e57", FileFormat::E57),
     ];
 
     /// The format a file's first bytes announce, for the formats that start with a signature
@@ -91,6 +98,8 @@ impl FileFormat {
             // Bit 7 (or 6) of the point format byte at 104 marks LAZ; the reader looks at it again.
             let compressed = head.get(104).is_some_and(|b| b & 0xC0 != 0);
             Some(FileFormat::Las { compressed })
+        } else if head.starts_with(b"ASTM-E57") {
+            Some(FileFormat::E57)
         } else if starts(b"ply\n") || starts(b"ply\r\n") {
             Some(FileFormat::Ply)
         } else if starts(b"# .PCD") || starts(b"VERSION") {
@@ -140,8 +149,14 @@ impl Default for TextColumns {
 }
 
 /// Reads any file of `FileFormat::ALL`: by its signature where its format has one
-/// ([`FileFormat::sniff`]), else by its extension.
+/// ([`FileFormat::sniff`]), else by its extension. E57 scans are put in the file's frame by
+/// their poses.
 pub fn read_file(path: &Path, text: TextColumns) -> Result<CloudFile> {
+    read_file_with(path, text, true)
+}
+
+/// [`read_file`], with E57 scans left in their own frames when `apply_pose` is false.
+pub fn read_file_with(path: &Path, text: TextColumns, apply_pose: bool) -> Result<CloudFile> {
     let by_name = FileFormat::of(path, false);
     let bytes = match std::fs::read(path) {
         Ok(b) => b,
@@ -159,6 +174,7 @@ pub fn read_file(path: &Path, text: TextColumns) -> Result<CloudFile> {
         FileFormat::Stl => parse_stl(path, &bytes),
         FileFormat::Obj => parse_obj(path, &bytes),
         FileFormat::Las { .. } => parse_las(path, bytes),
+        FileFormat::E57 => parse_e57(path, bytes, apply_pose),
         FileFormat::Text { .. } => {
             let b = bytes;
             let is_txt = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("txt"));
@@ -356,6 +372,15 @@ pub fn write_file(path: &Path, data: &CloudRef<'_>, options: WriteOptions) -> Re
             }
             las::write_las(path, data, compressed, options.scale, options.dtype.unwrap_or(Dtype::F64))
         }
+        FileFormat::E57 => {
+            if has_triangles {
+                return refuse("triangles", "an E57 file holds points only: write .ply, .stl or .obj for a mesh");
+            }
+            if options.binary == Some(false) || options.dtype.is_some() {
+                return refuse("dtype", "E57 stores coordinates as float64 and its fields in their own types");
+            }
+            e57::write_e57(path, data)
+        }
     }
 }
 
@@ -442,6 +467,19 @@ mod robustness {
             };
             sweep_bytes(&b, mutable, |b| parse_las(Path::new(name), b.to_vec()).is_ok());
         }
+    }
+
+    #[test]
+    fn e57_never_panics() {
+        let pts: Vec<f64> = (0..60).map(|i| i as f64 * 0.37).collect();
+        let s: Vec<f64> = (0..20).map(|i| i as f64).collect();
+        let scalars = [("intensity", s.as_slice())];
+        let path = std::env::temp_dir().join(format!("machscan-sweep-{}.e57", std::process::id()));
+        let data = CloudRef { points: &pts, normals: None, scalars: &scalars, triangles: None };
+        write_file(&path, &data, WriteOptions::default()).unwrap();
+        let b = std::fs::read(&path).unwrap();
+        std::fs::remove_file(&path).ok();
+        sweep(&b, |b| parse_e57(Path::new("t.e57"), b.to_vec(), true).is_ok());
     }
 
     #[test]

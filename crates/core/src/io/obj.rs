@@ -59,7 +59,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<CloudFile> {
         }
     }
     let normals = (!normals.is_empty() && normals.len() == points.len()).then_some(normals);
-    Ok(CloudFile { points, normals, scalars: Vec::new(), triangles })
+    Ok(CloudFile { points, normals, scalars: Vec::new(), triangles, dropped: 0 })
 }
 
 /// Writes `data` (checked by `write_file`): `v` lines, `vn` lines when there are normals, and

@@ -302,7 +302,7 @@ pub fn parse_pcd(path: &Path, bytes: &[u8]) -> Result<CloudFile> {
             scalars.push((name, table[first[fi] + c].clone()));
         }
     }
-    Ok(CloudFile { points, normals, scalars, triangles: Vec::new() })
+    Ok(CloudFile { points, normals, scalars, triangles: Vec::new(), dropped: 0 })
 }
 
 /// PCL writes nan as "nan" and sometimes "-nan"; Rust's parser takes "NaN"/"nan" but not "-nan".

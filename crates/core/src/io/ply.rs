@@ -231,7 +231,7 @@ fn assemble(cols: &VertexColumns, n: usize, table: Vec<Vec<f64>>, triangles: Vec
         .filter(|(c, _)| !used.contains(c))
         .map(|(c, v)| (cols.names[c].clone(), v))
         .collect();
-    CloudFile { points, normals, scalars, triangles }
+    CloudFile { points, normals, scalars, triangles, dropped: 0 }
 }
 
 fn fan(poly: &[u32], out: &mut Vec<[u32; 3]>) {
@@ -463,7 +463,7 @@ fn assemble_rows(cols: &VertexColumns, n: usize, w: usize, flat: &[f64], triangl
         .filter(|c| !used.contains(c))
         .map(|c| (cols.names[c].clone(), flat.iter().skip(c).step_by(w).copied().collect()))
         .collect();
-    CloudFile { points, normals, scalars, triangles }
+    CloudFile { points, normals, scalars, triangles, dropped: 0 }
 }
 
 /// Writes `data` (checked by `write_file`): vertices with normals and scalars as `dtype`, and a

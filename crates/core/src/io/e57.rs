@@ -1,0 +1,282 @@
+//! E57 files (ASTM E2807), through the `e57` crate. E57 stores metres; machscan's unit is the mm,
+//! so coordinates and ranges are multiplied by 1000 on reading and divided on writing.
+//!
+//! Read: every scan of the file, its pose applied (by default) so the scans share the file's
+//! frame, one after another; a point whose Cartesian coordinates are marked invalid (or only a
+//! direction) is dropped and counted (`CloudFile::dropped`); spherical scans are converted to
+//! Cartesian. Scalars, named as the standard names them: `intensity`, `colorRed/Green/Blue`,
+//! `rowIndex`, `columnIndex` (as stored, not normalised), `sphericalRange` (mm),
+//! `sphericalAzimuth`, `sphericalElevation` (rad), and `scan` (the scan's index) when the file
+//! holds more than one. Normals of the E57 surface-normals extension (`nor:normalX/Y/Z`) are the
+//! normals.
+//!
+//! Written: one scan without a pose, Cartesian float64 coordinates; the scalars `intensity`
+//! (float32), `colorRed/Green/Blue` and `rowIndex`/`columnIndex` (integers) in the standard's
+//! fields, the normals in the surface-normals extension, every other scalar as a float64 field
+//! of a `machscan` extension (readers that do not know it skip it, as the standard requires).
+use super::{CloudFile, CloudRef};
+use crate::error::{Error, Result};
+use e57::{
+    CartesianCoordinate, E57Reader, E57Writer, Extension, Record, RecordDataType, RecordName, RecordValue,
+    SphericalCoordinate,
+};
+use std::io::Cursor;
+use std::path::Path;
+
+/// Millimetres per metre.
+const MM: f64 = 1000.0;
+const NORMALS: (&str, &str) = ("nor", "http://www.libe57.org/E57_NOR_surface_normals.txt");
+const MACHSCAN: (&str, &str) = ("machscan", "https://github.com/machscan/machscan/blob/main/docs/clouds.md#e57");
+
+fn e57_error(path: &Path, e: e57::Error) -> Error {
+    Error::format(path, format!("not a readable E57 file: {e}"))
+}
+
+/// Reads an E57 file's bytes (module docs); `apply_pose: false` keeps each scan in its own frame.
+pub fn parse_e57(path: &Path, bytes: Vec<u8>, apply_pose: bool) -> Result<CloudFile> {
+    let mut reader = E57Reader::new(Cursor::new(bytes)).map_err(|e| e57_error(path, e))?;
+    let scans = reader.pointclouds();
+    let mut out = CloudFile::default();
+    let mut columns: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut normals: Vec<f64> = Vec::new();
+    let has = |pc: &e57::PointCloud, name: &RecordName| pc.prototype.iter().any(|r| &r.name == name);
+    let normal_name = |axis: &str| RecordName::Unknown { namespace: NORMALS.0.into(), name: format!("normal{axis}") };
+    let all_normals = scans.iter().all(|pc| ["X", "Y", "Z"].iter().all(|a| has(pc, &normal_name(a))));
+    for (index, pc) in scans.iter().enumerate() {
+        let spherical = pc.has_spherical();
+        let (colour, intensity, grid) = (pc.has_color(), pc.has_intensity(), pc.has_row_column());
+        let normal_at: Option<Vec<usize>> = all_normals.then(|| {
+            ["X", "Y", "Z"]
+                .iter()
+                .map(|a| pc.prototype.iter().position(|r| r.name == normal_name(a)).expect("checked"))
+                .collect()
+        });
+        let mut read = reader.pointcloud_simple(pc).map_err(|e| e57_error(path, e))?;
+        read.apply_pose(apply_pose);
+        read.normalize_color(false);
+        read.normalize_intensity(false);
+        read.intensity_to_color(false);
+        let mut scan_columns: Vec<(&str, Vec<f64>)> = Vec::new();
+        let mut push = |name: &'static str, v: f64| match scan_columns.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, c)) => c.push(v),
+            None => scan_columns.push((name, vec![v])),
+        };
+        for p in read.by_ref() {
+            let p = p.map_err(|e| e57_error(path, e))?;
+            let CartesianCoordinate::Valid { x, y, z } = p.cartesian else {
+                out.dropped += 1;
+                continue;
+            };
+            out.points.extend_from_slice(&[x * MM, y * MM, z * MM]);
+            if intensity {
+                push("intensity", p.intensity.map_or(f64::NAN, f64::from));
+            }
+            if colour {
+                let c = p.color.as_ref();
+                push("colorRed", c.map_or(f64::NAN, |c| c.red as f64));
+                push("colorGreen", c.map_or(f64::NAN, |c| c.green as f64));
+                push("colorBlue", c.map_or(f64::NAN, |c| c.blue as f64));
+            }
+            if grid {
+                push("rowIndex", p.row as f64);
+                push("columnIndex", p.column as f64);
+            }
+            if spherical {
+                let (r, a, e) = match p.spherical {
+                    SphericalCoordinate::Valid { range, azimuth, elevation } => (range * MM, azimuth, elevation),
+                    _ => (f64::NAN, f64::NAN, f64::NAN),
+                };
+                push("sphericalRange", r);
+                push("sphericalAzimuth", a);
+                push("sphericalElevation", e);
+            }
+            if scans.len() > 1 {
+                push("scan", index as f64);
+            }
+        }
+        if let Some(at) = normal_at {
+            // The simple reader has no extension fields: the normals come from a raw pass.
+            let mut raw = reader.pointcloud_raw(pc).map_err(|e| e57_error(path, e))?;
+            let cartesian_invalid = pc.prototype.iter().position(|r| r.name == RecordName::CartesianInvalidState);
+            for values in raw.by_ref() {
+                let values = values.map_err(|e| e57_error(path, e))?;
+                if cartesian_invalid.is_some_and(|i| values[i].to_i64(&pc.prototype[i].data_type).unwrap_or(0) != 0) {
+                    continue;
+                }
+                for &i in &at {
+                    normals.push(values[i].to_f64(&pc.prototype[i].data_type).map_err(|e| e57_error(path, e))?);
+                }
+            }
+        }
+        // A scan without a field another scan has gets NaN there: the rule for missing values.
+        let before = out.points.len() / 3 - scan_columns.first().map_or(0, |(_, c)| c.len());
+        for (name, values) in scan_columns {
+            match columns.iter_mut().find(|(n, _)| n == name) {
+                Some((_, c)) => c.extend(values),
+                None => {
+                    let mut c = vec![f64::NAN; before];
+                    c.extend(values);
+                    columns.push((name.to_string(), c));
+                }
+            }
+        }
+        let n = out.points.len() / 3;
+        columns.iter_mut().for_each(|(_, c)| c.resize(n, f64::NAN));
+    }
+    if all_normals && !scans.is_empty() {
+        if normals.len() != out.points.len() {
+            return Err(Error::format(path, "the normals do not match the valid points"));
+        }
+        out.normals = Some(normals);
+    }
+    out.scalars = columns;
+    Ok(out)
+}
+
+/// Writes `data` as one E57 scan (module docs).
+pub fn write_e57(path: &Path, data: &CloudRef<'_>) -> Result<()> {
+    let n = data.points.len() / 3;
+    let get = |name: &str| data.scalars.iter().find(|(s, _)| *s == name).map(|(_, v)| *v);
+    let integers = |name: &str, lo: f64, hi: f64| -> Result<Option<(i64, i64)>> {
+        let Some(v) = get(name) else { return Ok(None) };
+        if let Some(x) = v.iter().find(|&&x| !(x >= lo && x <= hi && x.fract() == 0.0)) {
+            return Err(Error::invalid(
+                "scalars",
+                format!("{name:?} is an E57 integer field ({lo}..{hi}); {x} does not fit"),
+            ));
+        }
+        let (min, max) = v.iter().fold((hi, lo), |(a, b), &x| (a.min(x), b.max(x)));
+        Ok(Some((min.min(max) as i64, max.max(min) as i64)))
+    };
+    let colour = ["colorRed", "colorGreen", "colorBlue"];
+    match colour.iter().filter(|c| get(c).is_some()).count() {
+        0 | 3 => {}
+        _ => {
+            return Err(Error::invalid(
+                "scalars",
+                "colorRed, colorGreen and colorBlue are E57 colour: give all three or none",
+            ))
+        }
+    }
+    let mut prototype = vec![Record::CARTESIAN_X_F64, Record::CARTESIAN_Y_F64, Record::CARTESIAN_Z_F64];
+    // The columns in prototype order after x, y, z, with how each is stored.
+    let mut fields: Vec<(&[f64], Stored)> = Vec::new();
+    let mut standard = vec![];
+    if let Some(v) = get("intensity") {
+        prototype.push(Record { name: RecordName::Intensity, data_type: RecordDataType::F32 });
+        fields.push((v, Stored::F32));
+        standard.push("intensity");
+    }
+    for (name, record) in colour.iter().zip([RecordName::ColorRed, RecordName::ColorGreen, RecordName::ColorBlue]) {
+        if let Some((_, max)) = integers(name, 0.0, u16::MAX as f64)? {
+            // 8-bit colour where it fits: what scanners and pye57 write.
+            let data_type = if max <= 255 { RecordDataType::U8 } else { RecordDataType::U16 };
+            prototype.push(Record { name: record, data_type });
+            fields.push((get(name).expect("present"), Stored::Integer));
+            standard.push(name);
+        }
+    }
+    for (name, record) in [("rowIndex", RecordName::RowIndex), ("columnIndex", RecordName::ColumnIndex)] {
+        if let Some((min, max)) = integers(name, 0.0, i32::MAX as f64)? {
+            prototype.push(Record { name: record, data_type: RecordDataType::Integer { min, max } });
+            fields.push((get(name).expect("present"), Stored::Integer));
+            standard.push(name);
+        }
+    }
+    let normal_columns: Vec<Vec<f64>> =
+        data.normals.map(|nr| (0..3).map(|k| (0..n).map(|i| nr[3 * i + k]).collect()).collect()).unwrap_or_default();
+    for (axis, column) in ["X", "Y", "Z"].iter().zip(&normal_columns) {
+        prototype.push(Record {
+            name: RecordName::Unknown { namespace: NORMALS.0.into(), name: format!("normal{axis}") },
+            data_type: RecordDataType::Single { min: Some(-1.0), max: Some(1.0) },
+        });
+        fields.push((column, Stored::F32));
+    }
+    let others: Vec<(&str, &[f64])> = data.scalars.iter().filter(|(s, _)| !standard.contains(s)).copied().collect();
+    for (name, values) in &others {
+        prototype.push(Record {
+            name: RecordName::Unknown { namespace: MACHSCAN.0.into(), name: name.to_string() },
+            data_type: RecordDataType::F64,
+        });
+        fields.push((values, Stored::F64));
+    }
+    let write_error = |e: e57::Error| Error::invalid("path", format!("{}: {e}", path.display()));
+    let guid = format!("machscan-{:016x}", fingerprint(data.points));
+    let mut writer = E57Writer::from_file(path, &guid).map_err(write_error)?;
+    if !normal_columns.is_empty() {
+        writer
+            .register_extension(Extension { namespace: NORMALS.0.into(), url: NORMALS.1.into() })
+            .map_err(write_error)?;
+    }
+    if !others.is_empty() {
+        writer
+            .register_extension(Extension { namespace: MACHSCAN.0.into(), url: MACHSCAN.1.into() })
+            .map_err(write_error)?;
+    }
+    let mut scan = writer.add_pointcloud(&format!("{guid}-scan"), prototype).map_err(write_error)?;
+    for i in 0..n {
+        let mut values: Vec<RecordValue> = (0..3).map(|k| RecordValue::Double(data.points[3 * i + k] / MM)).collect();
+        for (column, stored) in &fields {
+            let v = column[i];
+            values.push(match stored {
+                Stored::Integer => RecordValue::Integer(v as i64),
+                Stored::F32 => RecordValue::Single(v as f32),
+                Stored::F64 => RecordValue::Double(v),
+            });
+        }
+        scan.add_point(values).map_err(write_error)?;
+    }
+    scan.finalize().map_err(write_error)?;
+    writer.finalize().map_err(write_error)?;
+    Ok(())
+}
+
+#[derive(Clone, Copy)]
+enum Stored {
+    Integer,
+    F32,
+    F64,
+}
+
+/// A file's GUID must be unique; one from its content keeps the written bytes a function of
+/// the data (FNV-1a of the coordinates' bits).
+fn fingerprint(points: &[f64]) -> u64 {
+    points.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, v| (h ^ v.to_bits()).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_and_reads_back_in_mm_with_fields_normals_and_others() {
+        let pts: Vec<f64> = (0..30).map(|i| -50.0 + i as f64 * 3.7).collect();
+        let normals: Vec<f64> = (0..30).map(|i| [0.0, 0.6, 0.8][i % 3]).collect();
+        let intensity: Vec<f64> = (0..10).map(|i| i as f64 * 0.5).collect();
+        let red: Vec<f64> = (0..10).map(|i| i as f64 * 20.0).collect();
+        let allowance: Vec<f64> = (0..10).map(|i| 0.1 + i as f64 * 1e-3).collect();
+        let scalars = [
+            ("intensity", intensity.as_slice()),
+            ("colorRed", red.as_slice()),
+            ("colorGreen", red.as_slice()),
+            ("colorBlue", red.as_slice()),
+            ("allowance", allowance.as_slice()),
+        ];
+        let data = CloudRef { points: &pts, normals: Some(&normals), scalars: &scalars, triangles: None };
+        let path = std::env::temp_dir().join(format!("machscan-e57-{}.e57", std::process::id()));
+        write_e57(&path, &data).unwrap();
+        let back = parse_e57(&path, std::fs::read(&path).unwrap(), true).unwrap();
+        std::fs::remove_file(&path).ok();
+        for (a, b) in back.points.iter().zip(&pts) {
+            assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} {b}");
+        }
+        assert_eq!(back.points.len(), pts.len());
+        let get = |n: &str| back.scalars.iter().find(|(s, _)| s == n).map(|(_, v)| v.clone()).expect(n);
+        assert_eq!(get("intensity"), intensity);
+        assert_eq!(get("colorRed"), red);
+        let stored: Vec<f64> = normals.iter().map(|&v| v as f32 as f64).collect(); // float32 in the file
+        assert_eq!(back.normals, Some(stored));
+        assert_eq!(back.dropped, 0);
+        assert!(back.scalars.iter().all(|(s, _)| s != "allowance"), "an extension field the reader does not know");
+    }
+}
