@@ -246,11 +246,11 @@ def test_each_failure_raises_its_exception_naming_the_file(tmp_path):
 
 def test_unknown_extensions_list_every_format():
     with pytest.raises(ValueError) as e:
-        io.read("cloud.e57")
+        io.read("cloud.foo")
     assert all(f".{ext}" in str(e.value) for ext in io.READ_FORMATS)
-    assert {"ply", "pcd", "stl", "obj", "xyz", "csv", "txt", "pts", "asc", "las", "laz"} == set(io.READ_FORMATS)
+    assert {"ply", "pcd", "stl", "obj", "xyz", "csv", "txt", "pts", "asc", "las", "laz", "e57"} == set(io.READ_FORMATS)
     with pytest.raises(ValueError) as e:
-        machscan.write_points("cloud.e57", np.zeros((1, 3)))
+        machscan.write_points("cloud.foo", np.zeros((1, 3)))
     listed = str(e.value).split("writes")[1]
     assert all(f".{ext}" in listed for ext in io.WRITE_FORMATS) and set(io.WRITE_FORMATS) == set(io.READ_FORMATS)
 

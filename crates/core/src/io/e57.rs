@@ -279,4 +279,43 @@ mod tests {
         assert_eq!(back.dropped, 0);
         assert!(back.scalars.iter().all(|(s, _)| s != "allowance"), "an extension field the reader does not know");
     }
+
+    #[test]
+    fn spherical_scans_become_cartesian_mm_and_invalid_points_are_counted() {
+        let path = std::env::temp_dir().join(format!("machscan-e57-sph-{}.e57", std::process::id()));
+        let mut w = E57Writer::from_file(&path, "sph").unwrap();
+        let proto = vec![
+            Record { name: RecordName::SphericalRange, data_type: RecordDataType::F64 },
+            Record { name: RecordName::SphericalAzimuth, data_type: RecordDataType::F64 },
+            Record { name: RecordName::SphericalElevation, data_type: RecordDataType::F64 },
+            Record { name: RecordName::SphericalInvalidState, data_type: RecordDataType::Integer { min: 0, max: 2 } },
+        ];
+        let mut scan = w.add_pointcloud("sph-scan", proto).unwrap();
+        let mut rows = vec![(2.0, 0.3, -0.2, 0), (1.5, -2.0, 0.7, 0), (3.0, 1.0, 0.1, 2)];
+        rows.extend((0..997).map(|i| (1.0 + i as f64 * 1e-3, -3.0 + i as f64 * 6e-3, -1.5 + i as f64 * 3e-3, 0)));
+        for &(r, a, e, invalid) in &rows {
+            let values = vec![
+                RecordValue::Double(r),
+                RecordValue::Double(a),
+                RecordValue::Double(e),
+                RecordValue::Integer(invalid),
+            ];
+            scan.add_point(values).unwrap();
+        }
+        scan.finalize().unwrap();
+        w.finalize().unwrap();
+        let back = parse_e57(&path, std::fs::read(&path).unwrap(), true).unwrap();
+        std::fs::remove_file(&path).ok();
+        assert_eq!(back.dropped, 1, "the point marked invalid");
+        let valid: Vec<_> = rows.iter().filter(|row| row.3 == 0).collect();
+        assert_eq!(back.points.len(), 3 * valid.len());
+        for (k, &&(r, a, e, _)) in valid.iter().enumerate() {
+            let want = [r * e.cos() * a.cos(), r * e.cos() * a.sin(), r * e.sin()].map(|v| v * MM);
+            for (got, want) in back.points[3 * k..3 * k + 3].iter().zip(want) {
+                assert!((got - want).abs() < 1e-9, "{got} {want}");
+            }
+        }
+        let range = &back.scalars.iter().find(|(n, _)| n == "sphericalRange").unwrap().1;
+        assert_eq!(range[..2], [2000.0, 1500.0]);
+    }
 }
