@@ -57,7 +57,7 @@ def test_reads_what_pye57_writes_scans_poses_and_invalid_points(tmp_path):
     assert c.dropped == 7
     expected, keep = [], []
     stored = pye57.E57(str(path))
-    for i, (s, (rot, t)) in enumerate(zip(scans, poses)):
+    for i, (rot, t) in enumerate(poses):
         raw = stored.read_scan_raw(i)  # as stored (pye57 keeps coordinates in float32)
         ok = raw["cartesianInvalidState"] == 0
         xyz = np.column_stack([raw["cartesianX"], raw["cartesianY"], raw["cartesianZ"]]).astype(np.float64)[ok]
