@@ -16,10 +16,7 @@
 //! of a `machscan` extension (readers that do not know it skip it, as the standard requires).
 use super::{CloudFile, CloudRef};
 use crate::error::{Error, Result};
-use e57::{
-    CartesianCoordinate, E57Reader, E57Writer, Extension, Record, RecordDataType, RecordName, RecordValue,
-    SphericalCoordinate,
-};
+use e57::{E57Reader, E57Writer, Extension, Record, RecordDataType, RecordName, RecordValue};
 use std::io::Cursor;
 use std::path::Path;
 
@@ -32,83 +29,163 @@ fn e57_error(path: &Path, e: e57::Error) -> Error {
     Error::format(path, format!("not a readable E57 file: {e}"))
 }
 
+/// Where each field of a scan's records is, by the standard's names.
+struct Layout {
+    at: Vec<(RecordName, usize)>,
+}
+
+impl Layout {
+    fn new(pc: &e57::PointCloud) -> Layout {
+        Layout { at: pc.prototype.iter().enumerate().map(|(i, r)| (r.name.clone(), i)).collect() }
+    }
+
+    fn find(&self, name: &RecordName) -> Option<usize> {
+        self.at.iter().find(|(n, _)| n == name).map(|&(_, i)| i)
+    }
+}
+
+/// The scalars a scan gives, in order: the standard's names and where their values are.
+const STANDARD: [(&str, RecordName); 6] = [
+    ("intensity", RecordName::Intensity),
+    ("colorRed", RecordName::ColorRed),
+    ("colorGreen", RecordName::ColorGreen),
+    ("colorBlue", RecordName::ColorBlue),
+    ("rowIndex", RecordName::RowIndex),
+    ("columnIndex", RecordName::ColumnIndex),
+];
+
 /// Reads an E57 file's bytes (module docs); `apply_pose: false` keeps each scan in its own frame.
+///
+/// Through the crate's raw records rather than its simple reader, which gives up on a scan whose
+/// first data packet holds no whole point (a scan of two or three points with bit-packed fields,
+/// as machscan writes them, read by pye57 without trouble).
 pub fn parse_e57(path: &Path, bytes: Vec<u8>, apply_pose: bool) -> Result<CloudFile> {
     let mut reader = E57Reader::new(Cursor::new(bytes)).map_err(|e| e57_error(path, e))?;
     let scans = reader.pointclouds();
     let mut out = CloudFile::default();
     let mut columns: Vec<(String, Vec<f64>)> = Vec::new();
-    let mut normals: Vec<f64> = Vec::new();
-    let has = |pc: &e57::PointCloud, name: &RecordName| pc.prototype.iter().any(|r| &r.name == name);
     let normal_name = |axis: &str| RecordName::Unknown { namespace: NORMALS.0.into(), name: format!("normal{axis}") };
-    let all_normals = scans.iter().all(|pc| ["X", "Y", "Z"].iter().all(|a| has(pc, &normal_name(a))));
+    let all_normals = !scans.is_empty()
+        && scans.iter().all(|pc| ["X", "Y", "Z"].iter().all(|a| Layout::new(pc).find(&normal_name(a)).is_some()));
+    let mut normals = Vec::new();
     for (index, pc) in scans.iter().enumerate() {
-        let spherical = pc.has_spherical();
-        let (colour, intensity, grid) = (pc.has_color(), pc.has_intensity(), pc.has_row_column());
-        let normal_at: Option<Vec<usize>> = all_normals.then(|| {
-            ["X", "Y", "Z"]
-                .iter()
-                .map(|a| pc.prototype.iter().position(|r| r.name == normal_name(a)).expect("checked"))
-                .collect()
-        });
-        let mut read = reader.pointcloud_simple(pc).map_err(|e| e57_error(path, e))?;
-        read.apply_pose(apply_pose);
-        read.normalize_color(false);
-        read.normalize_intensity(false);
-        read.intensity_to_color(false);
-        let mut scan_columns: Vec<(&str, Vec<f64>)> = Vec::new();
-        let mut push = |name: &'static str, v: f64| match scan_columns.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, c)) => c.push(v),
-            None => scan_columns.push((name, vec![v])),
+        let layout = Layout::new(pc);
+        let find = |name: RecordName| layout.find(&name);
+        let cartesian = match (find(RecordName::CartesianX), find(RecordName::CartesianY), find(RecordName::CartesianZ))
+        {
+            (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+            _ => None,
         };
-        for p in read.by_ref() {
-            let p = p.map_err(|e| e57_error(path, e))?;
-            let CartesianCoordinate::Valid { x, y, z } = p.cartesian else {
+        let spherical = match (
+            find(RecordName::SphericalRange),
+            find(RecordName::SphericalAzimuth),
+            find(RecordName::SphericalElevation),
+        ) {
+            (Some(r), Some(a), Some(e)) => Some([r, a, e]),
+            _ => None,
+        };
+        let (cartesian_invalid, spherical_invalid) =
+            (find(RecordName::CartesianInvalidState), find(RecordName::SphericalInvalidState));
+        let (intensity_invalid, colour_invalid) =
+            (find(RecordName::IsIntensityInvalid), find(RecordName::IsColorInvalid));
+        let normal_at: Option<Vec<usize>> =
+            all_normals.then(|| ["X", "Y", "Z"].iter().filter_map(|a| layout.find(&normal_name(a))).collect());
+        let pose = pc.transform.as_ref().filter(|_| apply_pose).map(|t| {
+            let q = &t.rotation;
+            let rotation = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q.w, q.x, q.y, q.z));
+            (rotation, nalgebra::Vector3::new(t.translation.x, t.translation.y, t.translation.z))
+        });
+        let mut scan_columns: Vec<(&str, Vec<f64>)> = Vec::new();
+        let wanted: Vec<(&str, usize, Option<usize>)> = STANDARD
+            .iter()
+            .filter_map(|(name, record)| {
+                let invalid = match record {
+                    RecordName::Intensity => intensity_invalid,
+                    RecordName::ColorRed | RecordName::ColorGreen | RecordName::ColorBlue => colour_invalid,
+                    _ => None,
+                };
+                layout.find(record).map(|i| (*name, i, invalid))
+            })
+            .collect();
+        for (name, _, _) in &wanted {
+            scan_columns.push((name, Vec::new()));
+        }
+        if spherical.is_some() {
+            for name in ["sphericalRange", "sphericalAzimuth", "sphericalElevation"] {
+                scan_columns.push((name, Vec::new()));
+            }
+        }
+        if scans.len() > 1 {
+            scan_columns.push(("scan", Vec::new()));
+        }
+        let prototype = &pc.prototype;
+        let value = |values: &[RecordValue], i: usize| values[i].to_f64(&prototype[i].data_type);
+        let state =
+            |values: &[RecordValue], i: Option<usize>| i.map_or(Ok(0), |i| values[i].to_i64(&prototype[i].data_type));
+        let raw = reader.pointcloud_raw(pc).map_err(|e| e57_error(path, e))?;
+        for values in raw {
+            let values = values.map_err(|e| e57_error(path, e))?;
+            let fail = |e| e57_error(path, e);
+            let sph = match spherical {
+                Some([r, a, e]) if state(&values, spherical_invalid).map_err(fail)? == 0 => Some([
+                    value(&values, r).map_err(fail)?,
+                    value(&values, a).map_err(fail)?,
+                    value(&values, e).map_err(fail)?,
+                ]),
+                _ => None,
+            };
+            // Cartesian where valid (state 0; 1 is a direction only, 2 nothing), else from the
+            // spherical coordinates where those are valid.
+            let xyz = match cartesian {
+                Some([x, y, z]) if state(&values, cartesian_invalid).map_err(fail)? == 0 => Some([
+                    value(&values, x).map_err(fail)?,
+                    value(&values, y).map_err(fail)?,
+                    value(&values, z).map_err(fail)?,
+                ]),
+                Some(_) => None,
+                None => sph.map(|[r, a, e]| [r * e.cos() * a.cos(), r * e.cos() * a.sin(), r * e.sin()]),
+            };
+            let Some(xyz) = xyz else {
                 out.dropped += 1;
                 continue;
             };
-            out.points.extend_from_slice(&[x * MM, y * MM, z * MM]);
-            if intensity {
-                push("intensity", p.intensity.map_or(f64::NAN, f64::from));
+            let mut p = nalgebra::Vector3::from(xyz);
+            if let Some((rotation, translation)) = &pose {
+                p = rotation * p + translation;
             }
-            if colour {
-                let c = p.color.as_ref();
-                push("colorRed", c.map_or(f64::NAN, |c| c.red as f64));
-                push("colorGreen", c.map_or(f64::NAN, |c| c.green as f64));
-                push("colorBlue", c.map_or(f64::NAN, |c| c.blue as f64));
-            }
-            if grid {
-                push("rowIndex", p.row as f64);
-                push("columnIndex", p.column as f64);
-            }
-            if spherical {
-                let (r, a, e) = match p.spherical {
-                    SphericalCoordinate::Valid { range, azimuth, elevation } => (range * MM, azimuth, elevation),
-                    _ => (f64::NAN, f64::NAN, f64::NAN),
+            out.points.extend_from_slice(&[p.x * MM, p.y * MM, p.z * MM]);
+            let mut k = 0;
+            for &(_, i, invalid) in &wanted {
+                let v = if state(&values, invalid).map_err(fail)? == 0 {
+                    value(&values, i).map_err(fail)?
+                } else {
+                    f64::NAN
                 };
-                push("sphericalRange", r);
-                push("sphericalAzimuth", a);
-                push("sphericalElevation", e);
+                scan_columns[k].1.push(v);
+                k += 1;
+            }
+            if spherical.is_some() {
+                let [r, a, e] = sph.unwrap_or([f64::NAN; 3]);
+                for v in [r * MM, a, e] {
+                    scan_columns[k].1.push(v);
+                    k += 1;
+                }
             }
             if scans.len() > 1 {
-                push("scan", index as f64);
+                scan_columns[k].1.push(index as f64);
+            }
+            if let Some(at) = &normal_at {
+                let mut n = nalgebra::Vector3::zeros();
+                for (c, &i) in at.iter().enumerate() {
+                    n[c] = value(&values, i).map_err(fail)?;
+                }
+                if let Some((rotation, _)) = &pose {
+                    n = rotation * n;
+                }
+                normals.extend_from_slice(&[n.x, n.y, n.z]);
             }
         }
-        if let Some(at) = normal_at {
-            // The simple reader has no extension fields: the normals come from a raw pass.
-            let mut raw = reader.pointcloud_raw(pc).map_err(|e| e57_error(path, e))?;
-            let cartesian_invalid = pc.prototype.iter().position(|r| r.name == RecordName::CartesianInvalidState);
-            for values in raw.by_ref() {
-                let values = values.map_err(|e| e57_error(path, e))?;
-                if cartesian_invalid.is_some_and(|i| values[i].to_i64(&pc.prototype[i].data_type).unwrap_or(0) != 0) {
-                    continue;
-                }
-                for &i in &at {
-                    normals.push(values[i].to_f64(&pc.prototype[i].data_type).map_err(|e| e57_error(path, e))?);
-                }
-            }
-        }
-        // A scan without a field another scan has gets NaN there: the rule for missing values.
+        // A field one scan lacks is NaN for its points: the rule for missing values.
         let before = out.points.len() / 3 - scan_columns.first().map_or(0, |(_, c)| c.len());
         for (name, values) in scan_columns {
             match columns.iter_mut().find(|(n, _)| n == name) {
@@ -123,10 +200,7 @@ pub fn parse_e57(path: &Path, bytes: Vec<u8>, apply_pose: bool) -> Result<CloudF
         let n = out.points.len() / 3;
         columns.iter_mut().for_each(|(_, c)| c.resize(n, f64::NAN));
     }
-    if all_normals && !scans.is_empty() {
-        if normals.len() != out.points.len() {
-            return Err(Error::format(path, "the normals do not match the valid points"));
-        }
+    if all_normals {
         out.normals = Some(normals);
     }
     out.scalars = columns;
@@ -317,5 +391,21 @@ mod tests {
         }
         let range = &back.scalars.iter().find(|(n, _)| n == "sphericalRange").unwrap().1;
         assert_eq!(range[..2], [2000.0, 1500.0]);
+    }
+
+    #[test]
+    fn scans_of_a_few_points_with_packed_fields_read_back() {
+        for n in 1..6 {
+            let pts: Vec<f64> = (0..3 * n).map(|i| i as f64 * 0.25).collect();
+            let row: Vec<f64> = (0..n).map(|i| (i % 3) as f64).collect();
+            let scalars = [("rowIndex", row.as_slice())];
+            let data = CloudRef { points: &pts, normals: None, scalars: &scalars, triangles: None };
+            let path = std::env::temp_dir().join(format!("machscan-e57-few-{}-{n}.e57", std::process::id()));
+            write_e57(&path, &data).unwrap();
+            let back = parse_e57(&path, std::fs::read(&path).unwrap(), true).unwrap();
+            std::fs::remove_file(&path).ok();
+            assert_eq!(back.points.len(), 3 * n, "{n} points");
+            assert_eq!(back.scalars[0].1, row);
+        }
     }
 }
