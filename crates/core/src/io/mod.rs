@@ -387,7 +387,7 @@ pub fn write_file(path: &Path, data: &CloudRef<'_>, options: WriteOptions) -> Re
 #[cfg(test)]
 mod robustness {
     //! Truncated and corrupted files: the parsers answer with an error or a result, never a
-    //! panic. (A deterministic mutation sweep; the cargo-fuzz targets go further.)
+    //! panic. (A deterministic mutation sweep; the proptest fuzzing in `fuzz` goes further.)
     use super::*;
     use crate::testing::lcg_bits;
     use std::path::Path;
@@ -583,6 +583,13 @@ mod fuzz {
             let mut with_header = b"ply\nformat binary_little_endian 1.0\n".to_vec();
             with_header.extend_from_slice(&bytes);
             let _ = parse_ply(Path::new("f.ply"), &with_header);
+            // Behind the LAS and E57 signatures, so the crates' own header parsers see them.
+            for magic in [&b"LASF"[..], b"ASTM-E57"] {
+                let mut signed = magic.to_vec();
+                signed.extend_from_slice(&bytes);
+                let _ = parse_las(Path::new("f.las"), signed.clone());
+                let _ = parse_e57(Path::new("f.e57"), signed, true);
+            }
         }
 
         #[test]
