@@ -400,6 +400,9 @@ def test_ctrl_c_stops_a_long_exact_geodesic_call():
         v = np.column_stack([i.ravel() * 0.5, j.ravel() * 0.5, 0.2 * np.sin(1.3 * i.ravel()) * np.cos(1.1 * j.ravel())])
         a = (i[:-1, :-1] * n + j[:-1, :-1]).ravel()
         f = np.vstack([np.column_stack([a, a + n, a + n + 1]), np.column_stack([a, a + n + 1, a + 1])])
+        # Python leaves SIGINT ignored when it starts ignored (a background job of a
+        # non-interactive shell, as CI may run us): the handler Ctrl-C meets at a terminal.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
         try:
             machscan.geodesic_distances(v, f, list(range(0, n * n, n * n // 400))[:400], method="exact")
