@@ -10,7 +10,7 @@ import pytest
 
 import machscan
 
-SUBMODULES = ["io", "cloud", "kinematics", "scan", "grooves", "contours", "inspection", "cad", "synth", "plot"]
+SUBMODULES = ["io", "interop", "cloud", "kinematics", "scan", "grooves", "contours", "inspection", "cad", "synth", "plot"]
 
 # Names the README and the issues use at the top level: they stay importable there.
 TOP_LEVEL = [

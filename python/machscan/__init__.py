@@ -8,6 +8,7 @@ transforms ``(4, 4)`` homogeneous float64 matrices.
 The API is organised by domain, and the everyday names are also here at the top level:
 
 - :mod:`machscan.io` — point, mesh and toolpath files;
+- :mod:`machscan.interop` — Open3D and trimesh geometry to and from machscan's;
 - :mod:`machscan.cloud` — filters, neighbors, normals, curvature, simplification, clustering;
 - :mod:`machscan.kinematics` — frames and poses to points, machine chains, mount calibration;
 - :mod:`machscan.scan` — the raw scan container and its files;
@@ -33,6 +34,7 @@ from machscan import (
     contours,
     grooves,
     inspection,
+    interop,
     io,
     kinematics,
     matching,
@@ -188,6 +190,7 @@ __all__ = [
     "insert_points",
     "inspect_grooves",
     "inspection",
+    "interop",
     "interpolate_poses",
     "io",
     "isometric_match",

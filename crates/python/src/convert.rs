@@ -89,6 +89,33 @@ where
     out.py()
 }
 
+/// What to pass instead of an Open3D or trimesh object given where an array is taken: NumPy
+/// turns those into an object array, which says nothing of the conversion the user needs.
+fn foreign_geometry(obj: &Bound<'_, PyAny>) -> PyResult<Option<String>> {
+    let t = obj.get_type();
+    let module: String = t.getattr("__module__")?.extract().unwrap_or_default();
+    let name: String = t.getattr("__name__")?.extract().unwrap_or_default();
+    let tensor = module.contains(".t.") || module.ends_with(".t");
+    let hint = match (module.split('.').next().unwrap_or(""), name.as_str()) {
+        ("open3d", "PointCloud") if tensor => {
+            "an Open3D tensor PointCloud: pass cloud.point.positions.numpy(), or machscan.interop.from_open3d(cloud)"
+        }
+        ("open3d", "PointCloud") => {
+            "an Open3D PointCloud: pass np.asarray(cloud.points), or machscan.interop.from_open3d(cloud)"
+        }
+        ("open3d", "TriangleMesh") => {
+            "an Open3D TriangleMesh: pass np.asarray(mesh.vertices) and np.asarray(mesh.triangles), or machscan.interop.from_open3d(mesh)"
+        }
+        ("trimesh", "Trimesh") => {
+            "a trimesh Trimesh: pass mesh.vertices and mesh.faces, or machscan.interop.from_trimesh(mesh)"
+        }
+        ("trimesh", "PointCloud") => "a trimesh PointCloud: pass cloud.vertices",
+        ("open3d" | "trimesh", _) => return Ok(Some(format!("a {module}.{name}, not an array"))),
+        _ => return Ok(None),
+    };
+    Ok(Some(hint.to_string()))
+}
+
 /// The largest thread limit taken: far beyond any machine's cores, short of a typo's millions.
 const MAX_THREADS: usize = 1024;
 
@@ -205,6 +232,9 @@ impl<'py> F64Array<'py> {
         let expected = if what.is_empty() { spec_str(spec) } else { format!("{} {}", spec_str(spec), what) };
         if obj.is_none() {
             return Err(PyValueError::new_err(format!("{name}: expected an array of shape {expected}, got None")));
+        }
+        if let Some(hint) = foreign_geometry(obj)? {
+            return Err(PyValueError::new_err(format!("{name}: expected an array of shape {expected}, got {hint}")));
         }
         let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
             PyValueError::new_err(format!(
