@@ -51,6 +51,7 @@ def test_open3d_round_trips_legacy_and_tensor():
 def test_trimesh_round_trips():
     m = tetrahedron()
     tm = interop.to_trimesh(m)
+    assert all(a.flags.writeable for a in (m.vertices, m.triangles, m.normals))  # the caller's arrays untouched
     assert tm.is_watertight and tm.volume == pytest.approx(1000 / 6, rel=1e-12)
     back = interop.from_trimesh(tm)
     np.testing.assert_array_equal(back.vertices, m.vertices)

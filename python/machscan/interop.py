@@ -31,6 +31,12 @@ from machscan.io import CloudFile, TriangleMesh
 __all__ = ["from_open3d", "from_trimesh", "to_open3d", "to_trimesh"]
 
 
+def _copy(values: ArrayLike, dtype: Any) -> np.ndarray:
+    """A C-ordered copy: Open3D refuses read-only buffers, and trimesh marks what it is given
+    read-only, which must not happen to the caller's arrays."""
+    return np.array(values, dtype=dtype, order="C", copy=True)
+
+
 def _import(name: str) -> Any:
     try:
         return __import__(name)
@@ -121,29 +127,29 @@ def to_open3d(data: CloudFile | TriangleMesh | ArrayLike, *, tensor: bool = Fals
     if isinstance(data, TriangleMesh):
         if tensor:
             mesh = o3d.t.geometry.TriangleMesh()
-            mesh.vertex["positions"] = o3d.core.Tensor(np.ascontiguousarray(data.vertices, dtype=np.float64))
-            mesh.triangle["indices"] = o3d.core.Tensor(np.ascontiguousarray(data.triangles, dtype=np.int64))
+            mesh.vertex["positions"] = o3d.core.Tensor(_copy(data.vertices, dtype=np.float64))
+            mesh.triangle["indices"] = o3d.core.Tensor(_copy(data.triangles, dtype=np.int64))
             if data.normals is not None:
-                mesh.vertex["normals"] = o3d.core.Tensor(np.ascontiguousarray(data.normals, dtype=np.float64))
+                mesh.vertex["normals"] = o3d.core.Tensor(_copy(data.normals, dtype=np.float64))
             return mesh
         mesh = o3d.geometry.TriangleMesh(
-            o3d.utility.Vector3dVector(np.ascontiguousarray(data.vertices, dtype=np.float64)),
-            o3d.utility.Vector3iVector(np.ascontiguousarray(data.triangles, dtype=np.int32)),
+            o3d.utility.Vector3dVector(_copy(data.vertices, dtype=np.float64)),
+            o3d.utility.Vector3iVector(_copy(data.triangles, dtype=np.int32)),
         )
         if data.normals is not None:
-            mesh.vertex_normals = o3d.utility.Vector3dVector(np.ascontiguousarray(data.normals, dtype=np.float64))
+            mesh.vertex_normals = o3d.utility.Vector3dVector(_copy(data.normals, dtype=np.float64))
         return mesh
     points, normals, scalars = _points_of(data)
     if tensor:
-        cloud = o3d.t.geometry.PointCloud(o3d.core.Tensor(np.ascontiguousarray(points, dtype=np.float64)))
+        cloud = o3d.t.geometry.PointCloud(o3d.core.Tensor(_copy(points, dtype=np.float64)))
         if normals is not None:
-            cloud.point["normals"] = o3d.core.Tensor(np.ascontiguousarray(normals, dtype=np.float64))
+            cloud.point["normals"] = o3d.core.Tensor(_copy(normals, dtype=np.float64))
         for name, values in scalars.items():
-            cloud.point[name] = o3d.core.Tensor(np.ascontiguousarray(values, dtype=np.float64).reshape(-1, 1))
+            cloud.point[name] = o3d.core.Tensor(_copy(values, dtype=np.float64).reshape(-1, 1))
         return cloud
-    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.ascontiguousarray(points, dtype=np.float64)))
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(_copy(points, dtype=np.float64)))
     if normals is not None:
-        cloud.normals = o3d.utility.Vector3dVector(np.ascontiguousarray(normals, dtype=np.float64))
+        cloud.normals = o3d.utility.Vector3dVector(_copy(normals, dtype=np.float64))
     return cloud
 
 
@@ -185,12 +191,12 @@ def to_trimesh(data: CloudFile | TriangleMesh | ArrayLike) -> Any:
     if isinstance(data, TriangleMesh):
         kwargs: dict[str, Any] = {}
         if data.normals is not None:
-            kwargs["vertex_normals"] = np.asarray(data.normals, dtype=np.float64)
+            kwargs["vertex_normals"] = _copy(data.normals, dtype=np.float64)
         return trimesh.Trimesh(
-            vertices=np.asarray(data.vertices, dtype=np.float64),
-            faces=np.asarray(data.triangles, dtype=np.int64),
+            vertices=_copy(data.vertices, dtype=np.float64),
+            faces=_copy(data.triangles, dtype=np.int64),
             process=False,
             **kwargs,
         )
     points, _, _ = _points_of(data)
-    return trimesh.PointCloud(points)
+    return trimesh.PointCloud(_copy(points, dtype=np.float64))
