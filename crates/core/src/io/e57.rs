@@ -62,14 +62,15 @@ const STANDARD: [(&str, RecordName); 6] = [
 pub fn parse_e57(path: &Path, bytes: Vec<u8>, apply_pose: bool) -> Result<CloudFile> {
     let mut reader = E57Reader::new(Cursor::new(bytes)).map_err(|e| e57_error(path, e))?;
     let scans = reader.pointclouds();
+    let layouts: Vec<Layout> = scans.iter().map(Layout::new).collect();
     let mut out = CloudFile::default();
     let mut columns: Vec<(String, Vec<f64>)> = Vec::new();
     let normal_name = |axis: &str| RecordName::Unknown { namespace: NORMALS.0.into(), name: format!("normal{axis}") };
     let all_normals = !scans.is_empty()
-        && scans.iter().all(|pc| ["X", "Y", "Z"].iter().all(|a| Layout::new(pc).find(&normal_name(a)).is_some()));
+        && layouts.iter().all(|layout| ["X", "Y", "Z"].iter().all(|a| layout.find(&normal_name(a)).is_some()));
     let mut normals = Vec::new();
     for (index, pc) in scans.iter().enumerate() {
-        let layout = Layout::new(pc);
+        let layout = &layouts[index];
         let find = |name: RecordName| layout.find(&name);
         let cartesian = match (find(RecordName::CartesianX), find(RecordName::CartesianY), find(RecordName::CartesianZ))
         {
@@ -219,8 +220,13 @@ pub fn write_e57(path: &Path, data: &CloudRef<'_>) -> Result<()> {
                 format!("{name:?} is an E57 integer field ({lo}..{hi}); {x} does not fit"),
             ));
         }
-        let (min, max) = v.iter().fold((hi, lo), |(a, b), &x| (a.min(x), b.max(x)));
-        Ok(Some((min.min(max) as i64, max.max(min) as i64)))
+        // The values' range, or the field's where there are none (the standard needs one).
+        let (min, max) = if v.is_empty() {
+            (lo, hi)
+        } else {
+            v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
+        };
+        Ok(Some((min as i64, max as i64)))
     };
     let colour = ["colorRed", "colorGreen", "colorBlue"];
     match colour.iter().filter(|c| get(c).is_some()).count() {
@@ -257,8 +263,7 @@ pub fn write_e57(path: &Path, data: &CloudRef<'_>) -> Result<()> {
             standard.push(name);
         }
     }
-    let normal_columns: Vec<Vec<f64>> =
-        data.normals.map(|nr| (0..3).map(|k| (0..n).map(|i| nr[3 * i + k]).collect()).collect()).unwrap_or_default();
+    let normal_columns = data.normals.map(super::xyz_columns).unwrap_or_default();
     for (axis, column) in ["X", "Y", "Z"].iter().zip(&normal_columns) {
         prototype.push(Record {
             name: RecordName::Unknown { namespace: NORMALS.0.into(), name: format!("normal{axis}") },

@@ -178,6 +178,8 @@ fn check_laszip_items(path: &Path, header: &las::Header) -> Result<()> {
 
 /// Reads a LAS or LAZ file's bytes (module docs).
 pub fn parse_las(path: &Path, bytes: Vec<u8>) -> Result<CloudFile> {
+    // The header is read here and again by the reader: the LAZ checks must come before the
+    // reader, whose constructor already trusts the chunk table.
     let header = las::Header::new(Cursor::new(&bytes)).map_err(|e| las_error(path, e))?;
     let format = *header.point_format();
     if format.is_compressed {
@@ -238,21 +240,12 @@ pub fn parse_las(path: &Path, bytes: Vec<u8>) -> Result<CloudFile> {
 
 /// Moves `normal_x/y/z` (or `nx/ny/nz`) out of the scalars into `(N, 3)` normals.
 fn take_normals(scalars: &mut Vec<(String, Vec<f64>)>) -> Option<Vec<f64>> {
-    for names in [["normal_x", "normal_y", "normal_z"], ["nx", "ny", "nz"]] {
-        let at: Vec<Option<usize>> =
-            names.iter().map(|n| scalars.iter().position(|(s, _)| s.eq_ignore_ascii_case(n))).collect();
-        if let [Some(_), Some(_), Some(_)] = at[..] {
-            let columns: Vec<Vec<f64>> = names
-                .iter()
-                .map(|n| {
-                    let i = scalars.iter().position(|(s, _)| s.eq_ignore_ascii_case(n)).expect("found above");
-                    scalars.remove(i).1
-                })
-                .collect();
-            return Some((0..columns[0].len()).flat_map(|i| [columns[0][i], columns[1][i], columns[2][i]]).collect());
-        }
-    }
-    None
+    let find = |scalars: &[(String, Vec<f64>)], n: &str| scalars.iter().position(|(s, _)| s.eq_ignore_ascii_case(n));
+    let names = [["normal_x", "normal_y", "normal_z"], ["nx", "ny", "nz"]]
+        .into_iter()
+        .find(|names| names.iter().all(|n| find(scalars, n).is_some()))?;
+    let [x, y, z] = names.map(|n| scalars.remove(find(scalars, n).expect("all three present")).1);
+    Some((0..x.len()).flat_map(|i| [x[i], y[i], z[i]]).collect())
 }
 
 /// One point field: its laspy name and how it is read from a stored record.
@@ -403,8 +396,7 @@ pub fn write_las(path: &Path, data: &CloudRef<'_>, compressed: bool, scale: Opti
     };
     let mut extra: Vec<(&str, &[f64])> =
         data.scalars.iter().filter(|(s, _)| standard_field(s).is_none()).copied().collect();
-    let normal_columns: Vec<Vec<f64>> =
-        data.normals.map(|nr| (0..3).map(|k| (0..n).map(|i| nr[3 * i + k]).collect()).collect()).unwrap_or_default();
+    let normal_columns = data.normals.map(super::xyz_columns).unwrap_or_default();
     let normal_names = ["normal_x", "normal_y", "normal_z"];
     for (name, column) in normal_names.iter().zip(&normal_columns) {
         extra.push((name, column));
@@ -453,40 +445,58 @@ pub fn write_las(path: &Path, data: &CloudRef<'_>, compressed: bool, scale: Opti
         other => Error::invalid("scalars", format!("{}: {other}", path.display())),
     };
     let mut writer = Writer::new(BufWriter::new(file), header).map_err(write_error)?;
-    let value = |name: &str, i: usize, default: f64| get(name).map_or(default, |v| v[i]);
+    // Each point field's column, looked up once rather than per point.
+    let [intensity, return_number, number_of_returns, scan_direction, edge, classification] = [
+        "intensity",
+        "return_number",
+        "number_of_returns",
+        "scan_direction_flag",
+        "edge_of_flight_line",
+        "classification",
+    ]
+    .map(get);
+    let [synthetic, key_point, withheld, overlap, channel, scan_angle, user_data, source, gps_time] = [
+        "synthetic",
+        "key_point",
+        "withheld",
+        "overlap",
+        "scanner_channel",
+        "scan_angle",
+        "user_data",
+        "point_source_id",
+        "gps_time",
+    ]
+    .map(get);
     for i in 0..n {
+        let value = |column: Option<&[f64]>, default: f64| column.map_or(default, |v| v[i]);
+        let flag = |column: Option<&[f64]>| value(column, 0.0) != 0.0;
         let mut bytes = Vec::with_capacity(extra.len() * size);
         for (_, column) in &extra {
             dtype.put_le(&mut bytes, column[i]);
         }
-        let flag = |name: &str| value(name, i, 0.0) != 0.0;
-        let raw_angle = value("scan_angle", i, 0.0);
+        let raw_angle = value(scan_angle, 0.0);
         let point = Point {
             x: data.points[3 * i],
             y: data.points[3 * i + 1],
             z: data.points[3 * i + 2],
-            intensity: value("intensity", i, 0.0) as u16,
-            return_number: value("return_number", i, 1.0) as u8,
-            number_of_returns: value("number_of_returns", i, 1.0) as u8,
-            scan_direction: if flag("scan_direction_flag") {
-                ScanDirection::LeftToRight
-            } else {
-                ScanDirection::RightToLeft
-            },
-            is_edge_of_flight_line: flag("edge_of_flight_line"),
-            classification: Classification::new(value("classification", i, 0.0) as u8)
+            intensity: value(intensity, 0.0) as u16,
+            return_number: value(return_number, 1.0) as u8,
+            number_of_returns: value(number_of_returns, 1.0) as u8,
+            scan_direction: if flag(scan_direction) { ScanDirection::LeftToRight } else { ScanDirection::RightToLeft },
+            is_edge_of_flight_line: flag(edge),
+            classification: Classification::new(value(classification, 0.0) as u8)
                 .map_err(|e| Error::invalid("scalars", format!("classification of point {i}: {e}")))?,
-            is_synthetic: flag("synthetic"),
-            is_key_point: flag("key_point"),
-            is_withheld: flag("withheld"),
-            is_overlap: flag("overlap"),
-            scanner_channel: value("scanner_channel", i, 0.0) as u8,
+            is_synthetic: flag(synthetic),
+            is_key_point: flag(key_point),
+            is_withheld: flag(withheld),
+            is_overlap: flag(overlap),
+            scanner_channel: value(channel, 0.0) as u8,
             // The crate truncates angle / 0.006 to the stored step: half a step away from zero
             // lands on the integer given.
             scan_angle: ((raw_angle + 0.5 * raw_angle.signum()) * SCAN_ANGLE_STEP) as f32,
-            user_data: value("user_data", i, 0.0) as u8,
-            point_source_id: value("point_source_id", i, 0.0) as u16,
-            gps_time: Some(value("gps_time", i, 0.0)),
+            user_data: value(user_data, 0.0) as u8,
+            point_source_id: value(source, 0.0) as u16,
+            gps_time: Some(value(gps_time, 0.0)),
             color: colour.map(|[r, g, b]| las::Color::new(r[i] as u16, g[i] as u16, b[i] as u16)),
             waveform: None,
             nir: None,

@@ -238,6 +238,11 @@ pub struct WriteOptions {
     pub scale: Option<f64>,
 }
 
+/// `(N, 3)` row-major values as their x, y and z columns (formats that store fields apart).
+pub(crate) fn xyz_columns(rows: &[f64]) -> Vec<Vec<f64>> {
+    (0..3).map(|k| rows.iter().skip(k).step_by(3).copied().collect()).collect()
+}
+
 /// Fields machscan writes itself: a scalar may not take their names.
 const RESERVED: [&str; 9] = ["x", "y", "z", "nx", "ny", "nz", "normal_x", "normal_y", "normal_z"];
 
