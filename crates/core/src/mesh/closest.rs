@@ -25,18 +25,26 @@ pub struct Closest {
 
 /// A node of the hierarchy: its box and either two children or a range of triangles.
 struct Node {
-    lo: Vector3<f64>,
-    hi: Vector3<f64>,
-    /// Leaf: `(start, count)` in `order`; inner: `(left child, 0)` (right = left + 1).
-    first: usize,
-    count: usize,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    /// Leaf: `(start, count)` in `corners`; inner: `(left child, 0)` (right = left + 1).
+    first: u32,
+    count: u32,
 }
 
-/// The mesh and its hierarchy.
+/// Deepest stack a search needs: median splits give a depth of log2(triangles / LEAF) + 1,
+/// and each level leaves at most one node waiting.
+const STACK: usize = 64;
+
+/// The mesh and its hierarchy. The triangles' corners are copied in leaf order, so that a leaf
+/// is read from one run of memory rather than through the face and vertex tables.
 pub struct TriangleBvh<'a> {
     vertices: &'a [[f64; 3]],
     faces: &'a [[u32; 3]],
+    /// The triangle index of each leaf slot.
     order: Vec<u32>,
+    /// The three corners of each leaf slot's triangle.
+    corners: Vec<[Vector3<f64>; 3]>,
     nodes: Vec<Node>,
 }
 
@@ -49,90 +57,229 @@ impl<'a> TriangleBvh<'a> {
         if faces.is_empty() {
             return Err(Error::invalid("faces", "must hold at least one triangle"));
         }
+        if faces.len() > (u32::MAX / 2) as usize {
+            return Err(Error::invalid("faces", format!("{} triangles is beyond 2^31", faces.len())));
+        }
         let corner = |t: u32, k: usize| Vector3::from(vertices[faces[t as usize][k] as usize]);
         let centroid: Vec<Vector3<f64>> =
             (0..faces.len() as u32).map(|t| (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0).collect();
-        let mut bvh = TriangleBvh { vertices, faces, order: (0..faces.len() as u32).collect(), nodes: Vec::new() };
-        bvh.nodes.push(Node { lo: Vector3::zeros(), hi: Vector3::zeros(), first: 0, count: faces.len() });
+        let mut order: Vec<u32> = (0..faces.len() as u32).collect();
+        let mut nodes = vec![Node { lo: [0.0; 3], hi: [0.0; 3], first: 0, count: faces.len() as u32 }];
         let mut stack = vec![0usize];
         while let Some(n) = stack.pop() {
-            let (first, count) = (bvh.nodes[n].first, bvh.nodes[n].count);
+            let (first, count) = (nodes[n].first as usize, nodes[n].count as usize);
             let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
-            for &t in &bvh.order[first..first + count] {
+            for &t in &order[first..first + count] {
                 for k in 0..3 {
                     let c = corner(t, k);
                     lo = lo.inf(&c);
                     hi = hi.sup(&c);
                 }
             }
-            bvh.nodes[n].lo = lo;
-            bvh.nodes[n].hi = hi;
+            nodes[n].lo = lo.into();
+            nodes[n].hi = hi.into();
             if count <= LEAF {
                 continue;
             }
             let axis = (hi - lo).imax();
             let mid = count / 2;
-            bvh.order[first..first + count].select_nth_unstable_by(mid, |&a, &b| {
+            order[first..first + count].select_nth_unstable_by(mid, |&a, &b| {
                 centroid[a as usize][axis].total_cmp(&centroid[b as usize][axis]).then(a.cmp(&b))
             });
-            let left = bvh.nodes.len();
-            bvh.nodes.push(Node { lo, hi, first, count: mid });
-            bvh.nodes.push(Node { lo, hi, first: first + mid, count: count - mid });
-            bvh.nodes[n].first = left;
-            bvh.nodes[n].count = 0;
+            let left = nodes.len();
+            nodes.push(Node { lo: lo.into(), hi: hi.into(), first: first as u32, count: mid as u32 });
+            nodes.push(Node { lo: lo.into(), hi: hi.into(), first: (first + mid) as u32, count: (count - mid) as u32 });
+            nodes[n].first = left as u32;
+            nodes[n].count = 0;
             stack.push(left);
             stack.push(left + 1);
         }
-        Ok(bvh)
+        let corners = order.iter().map(|&t| [corner(t, 0), corner(t, 1), corner(t, 2)]).collect();
+        Ok(TriangleBvh { vertices, faces, order, corners, nodes })
+    }
+
+    /// The mesh's vertices.
+    pub fn vertices(&self) -> &'a [[f64; 3]] {
+        self.vertices
+    }
+
+    /// The mesh's triangles.
+    pub fn faces(&self) -> &'a [[u32; 3]] {
+        self.faces
     }
 
     /// The closest point of the mesh to `q`.
     pub fn closest(&self, q: &[f64; 3]) -> Closest {
-        let q = Vector3::from(*q);
+        self.closest_from(q, None)
+    }
+
+    /// The closest point of the mesh to `q`, the search bounded from the start by the distance
+    /// to triangle `hint` (a neighbouring query's answer). The answer does not depend on the
+    /// hint: the least distance, ties to the lowest triangle index, is found either way, since
+    /// only boxes strictly farther than the best so far are skipped.
+    pub fn closest_from(&self, q: &[f64; 3], hint: Option<usize>) -> Closest {
+        let qv = Vector3::from(*q);
         let mut best =
             Closest { point: [f64::NAN; 3], distance: f64::INFINITY, triangle: usize::MAX, barycentric: [0.0; 3] };
         let mut best_d2 = f64::INFINITY;
-        let mut stack = vec![0usize];
-        while let Some(n) = stack.pop() {
+        if let Some(t) = hint {
+            let [a, b, c] = self.faces[t].map(|v| Vector3::from(self.vertices[v as usize]));
+            let (p, w) = closest_on_triangle(&qv, &a, &b, &c);
+            best_d2 = (p - qv).norm_squared();
+            best = Closest { point: p.into(), distance: 0.0, triangle: t, barycentric: w };
+        }
+        let mut stack = [0u32; STACK];
+        let mut top = 0usize;
+        let mut n = 0usize;
+        loop {
             let node = &self.nodes[n];
-            if box_distance2(&node.lo, &node.hi, &q) > best_d2 {
-                continue;
-            }
             if node.count > 0 {
-                for &t in &self.order[node.first..node.first + node.count] {
-                    let f = self.faces[t as usize];
-                    let [a, b, c] = f.map(|v| Vector3::from(self.vertices[v as usize]));
-                    let (p, w) = closest_on_triangle(&q, &a, &b, &c);
-                    let d2 = (p - q).norm_squared();
-                    if d2 < best_d2 || (d2 == best_d2 && (t as usize) < best.triangle) {
+                let (first, count) = (node.first as usize, node.count as usize);
+                for (slot, [a, b, c]) in self.corners[first..first + count].iter().enumerate() {
+                    let t = self.order[first + slot] as usize;
+                    let (p, w) = closest_on_triangle(&qv, a, b, c);
+                    let d2 = (p - qv).norm_squared();
+                    if d2 < best_d2 || (d2 == best_d2 && t < best.triangle) {
                         best_d2 = d2;
-                        best = Closest { point: p.into(), distance: 0.0, triangle: t as usize, barycentric: w };
+                        best = Closest { point: p.into(), distance: 0.0, triangle: t, barycentric: w };
                     }
                 }
             } else {
-                // The nearer child last, so that it is searched first.
-                let (l, r) = (node.first, node.first + 1);
-                let (dl, dr) = (
-                    box_distance2(&self.nodes[l].lo, &self.nodes[l].hi, &q),
-                    box_distance2(&self.nodes[r].lo, &self.nodes[r].hi, &q),
-                );
-                if dl <= dr {
-                    stack.push(r);
-                    stack.push(l);
-                } else {
-                    stack.push(l);
-                    stack.push(r);
+                // Into the nearer child; the other waits on the stack if it can still hold a
+                // closer triangle.
+                let (l, r) = (node.first as usize, node.first as usize + 1);
+                let (dl, dr) = (self.box_distance2(l, q), self.box_distance2(r, q));
+                let (near, far, dn, df) = if dl <= dr { (l, r, dl, dr) } else { (r, l, dr, dl) };
+                if dn <= best_d2 {
+                    if df <= best_d2 && top < STACK {
+                        stack[top] = far as u32;
+                        top += 1;
+                    } else if df <= best_d2 {
+                        // Deeper than any median-split tree gets; searched at once instead.
+                        let sub = self.closest_below(far, &qv, best_d2, best);
+                        if (sub.distance, sub.triangle) < (best_d2, best.triangle) {
+                            best_d2 = sub.distance;
+                            best = sub;
+                        }
+                    }
+                    n = near;
+                    continue;
+                }
+            }
+            // Next waiting node still worth a look.
+            loop {
+                if top == 0 {
+                    best.distance = best_d2.sqrt();
+                    return best;
+                }
+                top -= 1;
+                n = stack[top] as usize;
+                if self.box_distance2(n, q) <= best_d2 {
+                    break;
                 }
             }
         }
-        best.distance = best_d2.sqrt();
+    }
+
+    /// The search below node `root` alone (a fallback for a stack overflow that median splits
+    /// never cause); the returned `distance` is squared.
+    fn closest_below(&self, root: usize, q: &Vector3<f64>, bound: f64, seed: Closest) -> Closest {
+        let mut best = seed;
+        let mut best_d2 = bound;
+        let mut stack = vec![root];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n];
+            if self.box_distance2(n, &[q.x, q.y, q.z]) > best_d2 {
+                continue;
+            }
+            if node.count > 0 {
+                let (first, count) = (node.first as usize, node.count as usize);
+                for (slot, [a, b, c]) in self.corners[first..first + count].iter().enumerate() {
+                    let t = self.order[first + slot] as usize;
+                    let (p, w) = closest_on_triangle(q, a, b, c);
+                    let d2 = (p - q).norm_squared();
+                    if d2 < best_d2 || (d2 == best_d2 && t < best.triangle) {
+                        best_d2 = d2;
+                        best = Closest { point: p.into(), distance: 0.0, triangle: t, barycentric: w };
+                    }
+                }
+            } else {
+                stack.push(node.first as usize);
+                stack.push(node.first as usize + 1);
+            }
+        }
+        best.distance = best_d2;
         best
+    }
+
+    /// Squared distance from `q` to node `n`'s box (0 inside).
+    #[inline]
+    fn box_distance2(&self, n: usize, q: &[f64; 3]) -> f64 {
+        let (lo, hi) = (&self.nodes[n].lo, &self.nodes[n].hi);
+        let d = |k: usize| (lo[k] - q[k]).max(0.0).max(q[k] - hi[k]);
+        let (x, y, z) = (d(0), d(1), d(2));
+        x * x + y * y + z * z
+    }
+
+    /// The closest point to each query, in parallel. The queries are visited in Morton order of
+    /// their position, in runs of fixed length, each query's search bounded by its predecessor's
+    /// triangle: neighbouring queries mostly share a closest triangle, and the bound prunes most
+    /// of the tree from the first step. Results are those of `closest` for each query.
+    pub fn closest_many(&self, queries: &[[f64; 3]]) -> Vec<Closest> {
+        const RUN: usize = 256;
+        let order = morton_order(queries);
+        let found: Vec<(u32, Closest)> = order
+            .par_chunks(RUN)
+            .flat_map_iter(|run| {
+                let mut hint = None;
+                run.iter().map(move |&i| {
+                    let c = self.closest_from(&queries[i as usize], hint);
+                    hint = Some(c.triangle);
+                    (i, c)
+                })
+            })
+            .collect();
+        let mut out =
+            vec![
+                Closest { point: [f64::NAN; 3], distance: f64::NAN, triangle: usize::MAX, barycentric: [0.0; 3] };
+                queries.len()
+            ];
+        for (i, c) in found {
+            out[i as usize] = c;
+        }
+        out
     }
 }
 
-/// Squared distance from `q` to the box `[lo, hi]` (0 inside).
-fn box_distance2(lo: &Vector3<f64>, hi: &Vector3<f64>, q: &Vector3<f64>) -> f64 {
-    (0..3).map(|k| (lo[k] - q[k]).max(0.0).max(q[k] - hi[k]).powi(2)).sum()
+/// Indices of `points` sorted along a Morton (Z-order) curve through their bounding box, so
+/// that points near in the order are near in space.
+fn morton_order(points: &[[f64; 3]]) -> Vec<u32> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let scale: [f64; 3] = std::array::from_fn(|k| if hi[k] > lo[k] { 1023.999 / (hi[k] - lo[k]) } else { 0.0 });
+    // Ten bits per axis: fine enough that a run of queries stays within a few triangles.
+    let spread = |v: u32| {
+        let mut x = v as u64 & 0x3ff;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    };
+    let mut keyed: Vec<(u64, u32)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let cell = |k: usize| ((p[k] - lo[k]) * scale[k]) as u32;
+            (spread(cell(0)) | (spread(cell(1)) << 1) | (spread(cell(2)) << 2), i as u32)
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
 }
 
 /// The closest point of triangle `abc` to `p` and its barycentric weights, by the Voronoi
@@ -192,8 +339,11 @@ pub(super) fn closest_on_triangle(
 /// The closest point of the mesh `(vertices, faces)` to each query, in parallel.
 pub fn closest_points(vertices: &[[f64; 3]], faces: &[[u32; 3]], queries: &[[f64; 3]]) -> Result<Vec<Closest>> {
     check_finite_points("queries", queries)?;
+    if queries.len() > u32::MAX as usize {
+        return Err(Error::invalid("queries", format!("{} queries is beyond 2^32", queries.len())));
+    }
     let bvh = TriangleBvh::new(vertices, faces)?;
-    Ok(queries.par_iter().map(|q| bvh.closest(q)).collect())
+    Ok(bvh.closest_many(queries))
 }
 
 #[cfg(test)]
