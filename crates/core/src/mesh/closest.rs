@@ -7,6 +7,7 @@
 //! f32-only API, and the search is short. Exact ties (a point equally close to two triangles,
 //! on their shared edge) go to the lower triangle index, so results do not depend on threads.
 use crate::error::{check_finite_points, Error, Result};
+use crate::geom::morton_order;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -249,37 +250,6 @@ impl<'a> TriangleBvh<'a> {
         }
         out
     }
-}
-
-/// Indices of `points` sorted along a Morton (Z-order) curve through their bounding box, so
-/// that points near in the order are near in space.
-fn morton_order(points: &[[f64; 3]]) -> Vec<u32> {
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in points {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let scale: [f64; 3] = std::array::from_fn(|k| if hi[k] > lo[k] { 1023.999 / (hi[k] - lo[k]) } else { 0.0 });
-    // Ten bits per axis: fine enough that a run of queries stays within a few triangles.
-    let spread = |v: u32| {
-        let mut x = v as u64 & 0x3ff;
-        x = (x | (x << 16)) & 0x0300_00ff;
-        x = (x | (x << 8)) & 0x0300_f00f;
-        x = (x | (x << 4)) & 0x030c_30c3;
-        (x | (x << 2)) & 0x0924_9249
-    };
-    let mut keyed: Vec<(u64, u32)> = points
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let cell = |k: usize| ((p[k] - lo[k]) * scale[k]) as u32;
-            (spread(cell(0)) | (spread(cell(1)) << 1) | (spread(cell(2)) << 2), i as u32)
-        })
-        .collect();
-    keyed.par_sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
 }
 
 /// The closest point of triangle `abc` to `p` and its barycentric weights, by the Voronoi

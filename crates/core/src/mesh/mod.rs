@@ -7,6 +7,7 @@ pub mod delaunay;
 pub mod geodesic;
 pub mod insert;
 pub mod locate;
+pub mod signed;
 pub mod thin;
 
 pub use closest::{closest_points, Closest, TriangleBvh};
@@ -15,6 +16,7 @@ pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod, GeodesicSol
 pub use geodesic::{geodesic_exact, geodesic_heat, HeatSolver};
 pub use insert::{insert_points, Inserted, Landing};
 pub use locate::{XyLanding, XyLocator};
+pub use signed::{face_statistics, signed_distances, FaceStatistics, PseudoNormals, SignedClosest, SignedMesh};
 pub use thin::{thin_xy, xy_area};
 
 use crate::error::{Error, Result};

@@ -15,13 +15,13 @@
 //! the thread count (correspondences are searched in parallel, every sum runs in source order).
 use crate::cloud::{estimate_normals, Neighborhood};
 use crate::error::{check_finite_points, Error, Result};
-use crate::geom::{rot_x, rot_y, rot_z, transform_point};
+use crate::geom::{morton_order, rot_x, rot_y, rot_z, transform_point};
 use crate::spatial::PointIndex;
 use nalgebra::{Matrix3, Matrix4, Matrix6, Vector3, Vector6};
 use rayon::prelude::*;
 
 /// Changes of the rmse below this share of `max_distance` are rounding.
-const ROUNDING: f64 = 1e-9;
+pub(super) const ROUNDING: f64 = 1e-9;
 
 /// Neighbours of the target normals point-to-plane estimates when none are given (Open3D's
 /// usual `KDTreeSearchParamKNN`): enough for a stable plane through scanner noise.
@@ -223,32 +223,6 @@ fn correspondences(index: &PointIndex, moved: &[[f64; 3]], max_d2: f64) -> Vec<P
             (d2 < max_d2).then_some(Pair { source: i as u32, target: j as u32, d2 })
         })
         .collect()
-}
-
-/// The indices of `points` sorted along the Morton curve of their bounding box (21 bits per
-/// axis; ties by index, so the order is fixed).
-fn morton_order(points: &[[f64; 3]]) -> Vec<u32> {
-    let (lo, hi) = crate::geom::bounds(points);
-    let scale: [f64; 3] = std::array::from_fn(|k| if hi[k] > lo[k] { 2_097_151.0 / (hi[k] - lo[k]) } else { 0.0 });
-    // Spreads the 21 low bits of v to every third bit.
-    let spread = |v: u64| {
-        let mut x = v & 0x1f_ffff;
-        x = (x | x << 32) & 0x001f_0000_0000_ffff;
-        x = (x | x << 16) & 0x001f_0000_ff00_00ff;
-        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
-        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
-        (x | x << 2) & 0x1249_2492_4924_9249
-    };
-    let mut keyed: Vec<(u64, u32)> = points
-        .par_iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let q: [u64; 3] = std::array::from_fn(|k| ((p[k] - lo[k]) * scale[k]) as u64);
-            (spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2, i as u32)
-        })
-        .collect();
-    keyed.par_sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
 }
 
 /// Σ f(pair, weight) over the pairs of positive weight, in fixed chunks summed in order:

@@ -7,6 +7,7 @@ pub mod coarse;
 pub mod envelope;
 pub mod icp;
 pub mod locating;
+pub mod mesh_fit;
 pub mod positioning;
 
 pub use allowance::{allowance, BlankOptions, BlankSurface};
@@ -17,6 +18,7 @@ pub use icp::{icp, IcpMethod, IcpOptions, IcpResult, IcpStep, Robust, RobustKern
 pub use locating::{
     cloud_locating_points, grid_locating_points, line_curvature, locating_points, probe_pattern, ProbePattern,
 };
+pub use mesh_fit::{fit_to_mesh, Dof, MeshFit, MeshFitOptions, RotaryAxis};
 pub use positioning::{positioning_errors, probe_fit, ProbeFit};
 
 use crate::error::{check_finite_points, Error, Result};
