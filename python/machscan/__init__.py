@@ -16,6 +16,7 @@ The API is organised by domain, and the everyday names are also here at the top 
 - :mod:`machscan.contours` — CAD polylines, contour matching and the contour error;
 - :mod:`machscan.inspection` — the groove inspection workflow of paper 000;
 - :mod:`machscan.registration` — ICP, coarse alignment, locating points, positioning, allowance;
+- :mod:`machscan.deviation` — signed distances to the CAD mesh and their statistics per CAD face;
 - :mod:`machscan.mesh` — surface meshes (Delaunay of a height field, closest points, insertion, geodesics);
 - :mod:`machscan.matching` — isometric matching of a bent skin (mirror milling);
 - :mod:`machscan.toolpath` — toolpath compensation onto the bent skin;
@@ -32,6 +33,7 @@ import warnings as _warnings
 from machscan import (
     cloud,
     contours,
+    deviation,
     grooves,
     inspection,
     interop,
@@ -61,6 +63,7 @@ from machscan.cloud import (
     voxel_downsample,
 )
 from machscan.contours import ContourErrorResult, contour_error, match_contours, resample_polyline
+from machscan.deviation import FaceStatistics, SignedDistances, signed_distances
 from machscan.grooves import (
     FitCriteria,
     GrooveFits,
@@ -100,12 +103,14 @@ from machscan.registration import (
     EnvelopeFit,
     IcpCriteria,
     IcpResult,
+    MeshFit,
     PositioningErrors,
     PositioningResult,
     align_blank,
     allowance,
     coarse_align,
     envelope_fit,
+    fit_to_mesh,
     icp,
     locating_points,
     position_workpiece,
@@ -138,6 +143,7 @@ __all__ = [
     "ContourResult",
     "Decomposition",
     "EnvelopeFit",
+    "FaceStatistics",
     "FileFormatError",
     "FitCriteria",
     "GeodesicSolver",
@@ -154,6 +160,7 @@ __all__ = [
     "IsometricMatch",
     "KinematicChain",
     "LevelledFrame",
+    "MeshFit",
     "MountCalibration",
     "PositioningErrors",
     "PositioningResult",
@@ -161,6 +168,7 @@ __all__ = [
     "RemovalCheck",
     "RemovalModel",
     "Scan",
+    "SignedDistances",
     "TriangleMesh",
     "__version__",
     "ab_mirror_support_points",
@@ -179,10 +187,12 @@ __all__ = [
     "contours",
     "crop_box",
     "delaunay_xy",
+    "deviation",
     "envelope_fit",
     "estimate_normals",
     "euclidean_clusters",
     "fit_grooves",
+    "fit_to_mesh",
     "geodesic_distances",
     "grinding_paths",
     "grooves",
@@ -220,6 +230,7 @@ __all__ = [
     "scallop_height",
     "scan",
     "scan_to_wcs",
+    "signed_distances",
     "simulate_removal",
     "step_over",
     "surface_variation",

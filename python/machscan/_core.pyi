@@ -116,6 +116,10 @@ class _IcpArrays(TypedDict):
     history_fitness: _F64
     history_rmse: _F64
 
+class _MeshFitArrays(_IcpArrays):
+    motion: list[float]
+    undetermined: str
+
 class _ProbeFitArrays(TypedDict):
     transformation: _F64
     residuals: _F64
@@ -144,6 +148,20 @@ class _ClosestArrays(TypedDict):
     distances: _F64
     triangles: _I64
     barycentric: _F64
+
+class _SignedArrays(TypedDict):
+    distances: _F64
+    points: _F64
+    triangles: _I64
+
+class _FaceStatisticsArrays(TypedDict):
+    face: _I64
+    count: _I64
+    min: _F64
+    max: _F64
+    mean: _F64
+    std: _F64
+    out_of_tolerance: _F64
 
 class _InsertedArrays(TypedDict):
     vertices: _F64
@@ -561,6 +579,18 @@ def closest_points(vertices: ArrayLike, faces: ArrayLike, queries: ArrayLike) ->
     wraps the ``_ClosestArrays`` this returns.
     """
 
+def signed_distances(points: ArrayLike, vertices: ArrayLike, triangles: ArrayLike) -> _SignedArrays:
+    """Signed distances to a triangle mesh; ``machscan.signed_distances`` documents it and wraps
+    the arrays this returns.
+    """
+
+def face_statistics(
+    distances: ArrayLike, faces: ArrayLike, *, count: int, lower: float, upper: float
+) -> _FaceStatisticsArrays:
+    """Per-face statistics of signed distances; ``machscan.SignedDistances.statistics`` documents
+    it.
+    """
+
 def insert_points(vertices: ArrayLike, faces: ArrayLike, points: ArrayLike, *, tolerance: float) -> _InsertedArrays:
     """Points inserted into a mesh as vertices (SPEC S2); ``machscan.insert_points`` documents it
     and wraps the ``_InsertedArrays`` this returns.
@@ -764,6 +794,24 @@ def icp(
 ) -> _IcpArrays:
     """Iterative closest point (SPEC R2) with Open3D's definitions; ``machscan.icp`` documents it
     and wraps the ``_IcpArrays`` this returns.
+    """
+
+def fit_to_mesh(
+    points: ArrayLike,
+    vertices: ArrayLike,
+    triangles: ArrayLike,
+    max_distance: float,
+    *,
+    init: ArrayLike | None,
+    dof: str,
+    axis_point: ArrayLike | None,
+    axis_direction: ArrayLike | None,
+    max_iterations: int,
+    relative_fitness: float,
+    relative_rmse: float,
+) -> _MeshFitArrays:
+    """The fit of a scan to a mesh in chosen motions; ``machscan.fit_to_mesh`` documents it and
+    wraps the arrays this returns.
     """
 
 def calibrate_mount(

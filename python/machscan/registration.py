@@ -37,6 +37,7 @@ __all__ = [
     "IcpHistory",
     "IcpMethod",
     "IcpResult",
+    "MeshFit",
     "PositioningErrors",
     "PositioningResult",
     "ProbePattern",
@@ -46,6 +47,7 @@ __all__ = [
     "allowance",
     "coarse_align",
     "envelope_fit",
+    "fit_to_mesh",
     "icp",
     "locating_points",
     "position_workpiece",
@@ -283,6 +285,123 @@ def icp(
         iterations=out["iterations"],
         converged=out["converged"],
         history=history,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class MeshFit(IcpResult):
+    """Result of :func:`fit_to_mesh`: the fields of :class:`IcpResult` (``rmse`` over the
+    distances to the triangles), and the motions found.
+
+    Attributes
+    ----------
+    motion : dict of str to float
+        ``x``, ``y``, ``z`` (mm) and ``a``, ``b``, ``c`` (degrees) of the fit, after ``init``; exactly
+        0 for every held motion.
+    dof : str
+        The free motions, in the machine's letters.
+    undetermined : str
+        Free motions the points do not fix (a flat face leaves its own shifts and turn, a
+        cylinder its turn about its axis): held at 0 rather than left to drift.
+    """
+
+    motion: dict[str, float]
+    dof: str
+    undetermined: str
+
+
+def fit_to_mesh(
+    points: ArrayLike,
+    vertices: ArrayLike,
+    triangles: ArrayLike,
+    max_distance: float,
+    init: ArrayLike | None = None,
+    *,
+    dof: str = "xyzabc",
+    axis: tuple[ArrayLike, ArrayLike] | None = None,
+    criteria: IcpCriteria | None = None,
+    **changes: Any,
+) -> MeshFit:
+    """The best fit of a scan to the CAD mesh itself, in the motions the set-up allows.
+
+    Each iteration pairs every point with its closest point on the triangles (not on the mesh's
+    vertices, which a CAD tessellation has few of) and minimises the squared distances to the
+    paired triangles' planes (point to plane) by a Gauss–Newton step in the free motions alone.
+    The pose is rebuilt from the six numbers every iteration,
+    ``T = Shift(x, y, z) · Rz(c) Ry(b) Rx(a) (about the pivot) · init``, so a held motion is
+    exactly zero — not the residue composed updates leave. Correspondences, fitness, rmse and
+    the stop rule are :func:`icp`'s (Open3D's). The GIL is released; results do not depend on the
+    thread count.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        The scan, mm.
+    vertices, triangles : array_like, shape (V, 3), (M, 3)
+        The CAD mesh, mm (e.g. :func:`machscan.io.read_cad`).
+    max_distance : float
+        Largest correspondence distance, mm.
+    init : array_like, shape (4, 4), optional
+        Start pose of the scan (default identity): the motions are found after it.
+    dof : str
+        The free motions in the machine's letters: ``x y z`` shifts, ``a b c`` rotations about
+        lines parallel to X, Y, Z through the origin (default all six). ``"xyc"`` holds Z, A and B.
+    axis : (point, direction), optional
+        A rotary table: C turns about this line (and A, B about lines through its point, square
+        to it) instead.
+    criteria : IcpCriteria, optional
+        When it stops (default ``IcpCriteria()``; ``mse_threshold`` is not used).
+    **changes
+        Fields of :class:`IcpCriteria` changed for this call.
+
+    Returns
+    -------
+    MeshFit
+        ``.transformation`` (scan → CAD), ``.fitness``, ``.rmse``, ``.converged``, ``.motion``,
+        ``.undetermined``.
+
+    Examples
+    --------
+    >>> fit = machscan.fit_to_mesh(scan, cad.vertices, cad.triangles, 1.0, dof="xyc",
+    ...                            axis=((0, 0, 0), (0, 0, 1)))
+    >>> fit.motion["c"]  # degrees the part sits turned on the table
+    """
+    c = changed(IcpCriteria() if criteria is None else criteria, changes, "fit_to_mesh")
+    if not isinstance(c, IcpCriteria):
+        raise ValueError(f"criteria: expected a machscan.IcpCriteria, got {type(c).__name__}")
+    if not isinstance(dof, str):
+        raise ValueError(f"dof: expected letters of x y z a b c, got {type(dof).__name__}")
+    axis_point = axis_direction = None
+    if axis is not None:
+        if not isinstance(axis, tuple | list) or len(axis) != 2:
+            raise ValueError("axis: expected (point, direction)")
+        axis_point, axis_direction = axis
+    out = _core.fit_to_mesh(
+        points,
+        vertices,
+        triangles,
+        max_distance,
+        init=init,
+        dof=dof,
+        axis_point=axis_point,
+        axis_direction=axis_direction,
+        max_iterations=c.max_iterations,
+        relative_fitness=c.relative_fitness,
+        relative_rmse=c.relative_rmse,
+    )
+    m = out["motion"]
+    motion = {"x": m[0], "y": m[1], "z": m[2], "a": np.degrees(m[3]), "b": np.degrees(m[4]), "c": np.degrees(m[5])}
+    return MeshFit(
+        transformation=out["transformation"],
+        fitness=out["fitness"],
+        rmse=out["rmse"],
+        correspondences=out["correspondences"],
+        iterations=out["iterations"],
+        converged=out["converged"],
+        history=IcpHistory(out["history_fitness"], out["history_rmse"]),
+        motion={k: float(v) for k, v in motion.items()},
+        dof="".join(ch for ch in "xyzabc" if ch in dof.lower()),
+        undetermined=out["undetermined"],
     )
 
 

@@ -43,6 +43,18 @@ impl Error {
         Error::Invalid { name: name.to_string(), reason: reason.into() }
     }
 
+    /// The same error naming the argument `to` where it named `from`: for a caller whose
+    /// argument has another name than the kernel's.
+    pub fn renamed(self, from: &str, to: &str) -> Self {
+        match self {
+            Error::Shape { name, expected, actual } if name == from => {
+                Error::Shape { name: to.into(), expected, actual }
+            }
+            Error::Invalid { name, reason } if name == from => Error::Invalid { name: to.into(), reason },
+            other => other,
+        }
+    }
+
     /// The OS refused `action` ("read" or "write") on `path`.
     pub fn io(path: &Path, action: &'static str, e: &std::io::Error) -> Self {
         let text = e.to_string();

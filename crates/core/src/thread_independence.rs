@@ -320,6 +320,26 @@ fn meshes_closest_points_and_geodesics(#[case] threads: usize) {
 }
 
 #[apply(threads)]
+fn signed_distances_and_the_fit_to_a_mesh(#[case] threads: usize) {
+    use crate::mesh::{delaunay_xy, face_statistics, signed_distances};
+    use crate::registration::{fit_to_mesh, Dof, MeshFitOptions};
+    let pts: Vec<[f64; 3]> = surface(6_000).into_iter().filter(|p| p[2] < 1.0).collect();
+    let (a, b) = on_threads_and_one(threads, || {
+        let faces = delaunay_xy(&pts, None).unwrap();
+        let scan: Vec<[f64; 3]> = pts.iter().step_by(3).map(|p| [p[0] + 0.05, p[1] - 0.04, p[2] + 0.02]).collect();
+        let signed = signed_distances(&pts, &faces, &scan).unwrap();
+        let d: Vec<f64> = signed.iter().map(|s| s.distance).collect();
+        let group: Vec<u32> = signed.iter().map(|s| (s.closest.triangle % 5) as u32).collect();
+        let stats = face_statistics(&d, &group, 5, -0.01, 0.01).unwrap();
+        let o = MeshFitOptions { dof: Dof::parse("xyzc").unwrap(), ..MeshFitOptions::new(1.0) };
+        let fit = fit_to_mesh(&scan, &pts, &faces, &nalgebra::Matrix4::identity(), &o).unwrap();
+        let pose: Vec<u64> = fit.icp.transformation.as_slice().iter().map(|x| x.to_bits()).collect();
+        (d.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), format!("{stats:?}"), pose, fit.icp.iterations)
+    });
+    assert_eq!(a, b);
+}
+
+#[apply(threads)]
 fn grinding_paths_and_the_simulated_pass(#[case] threads: usize) {
     use crate::toolpath::grinding::{grinding_paths, simulate_removal, GrindingOptions, Stock};
     let (model, normals, _) = model_and_blank();

@@ -2,8 +2,9 @@
 use super::convert::{count, enter, enter_long, points_to_numpy, to_numpy, triangle_indices, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::mesh::{
-    closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, geodesic_distances as run_geodesic_distances,
-    insert_points as run_insert_points, GeodesicMethod, GeodesicSolver, Landing,
+    closest_points as run_closest_points, delaunay_xy as run_delaunay_xy, face_statistics as run_face_statistics,
+    geodesic_distances as run_geodesic_distances, insert_points as run_insert_points,
+    signed_distances as run_signed_distances, GeodesicMethod, GeodesicSolver, Landing,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -50,9 +51,19 @@ fn delaunay_xy<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, max_edge: Optio
 
 /// A mesh argument: vertices and the triangles' vertex indices.
 fn mesh<'py>(vertices: &Bound<'py, PyAny>, faces: &Bound<'py, PyAny>) -> PyResult<(F64Array<'py>, Vec<[u32; 3]>)> {
+    mesh_named(vertices, faces, "faces")
+}
+
+/// A mesh argument whose triangles go by `faces_name` (the comparison with CAD says
+/// "triangles", as a CAD mesh's faces are its B-rep faces).
+pub(super) fn mesh_named<'py>(
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    faces_name: &str,
+) -> PyResult<(F64Array<'py>, Vec<[u32; 3]>)> {
     let v = F64Array::points(vertices, "vertices")?;
-    let f = F64Array::indices(faces, "faces", &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
-    let tri = triangle_indices("faces", f.values()?)?;
+    let f = F64Array::indices(faces, faces_name, &[Dim::Any("M"), Dim::Is(3)], "(vertex indices of triangles)")?;
+    let tri = triangle_indices(faces_name, f.values()?)?;
     Ok((v, tri))
 }
 
@@ -93,6 +104,65 @@ fn closest_points<'py>(
     d.set_item("triangles", to_numpy(py, found.iter().map(|c| c.triangle as i64).collect(), &[n])?)?;
     d.set_item("barycentric", points_to_numpy(py, found.iter().map(|c| c.barycentric).collect())?)?;
     Ok(d)
+}
+
+/// Signed distances to a triangle mesh; ``machscan.signed_distances`` documents it and wraps
+/// the arrays this returns.
+#[pyfunction]
+fn signed_distances<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    vertices: &Bound<'py, PyAny>,
+    triangles: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (v, tri) = mesh_named(vertices, triangles, "triangles")?;
+    let p = F64Array::points(points, "points")?;
+    let (vr, pr) = (v.rows::<3>()?, p.rows::<3>()?);
+    let found = enter(py, || run_signed_distances(vr, &tri, pr).map_err(|e| e.renamed("faces", "triangles")))?;
+    let n = found.len();
+    let d = PyDict::new(py);
+    d.set_item("distances", to_numpy(py, found.iter().map(|s| s.distance).collect(), &[n])?)?;
+    d.set_item("points", points_to_numpy(py, found.iter().map(|s| s.closest.point).collect())?)?;
+    d.set_item("triangles", to_numpy(py, found.iter().map(|s| s.closest.triangle as i64).collect(), &[n])?)?;
+    Ok(d)
+}
+
+/// Per-face statistics of signed distances; ``machscan.SignedDistances.statistics`` documents
+/// it.
+#[pyfunction]
+#[pyo3(signature = (distances, faces, *, count, lower, upper))]
+fn face_statistics<'py>(
+    py: Python<'py>,
+    distances: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    count: usize,
+    lower: f64,
+    upper: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = F64Array::extract(distances, "distances", &[Dim::Any("N")], "")?;
+    let n = d.shape()[0];
+    let f = F64Array::indices(faces, "faces", &[Dim::Is(n)], "(the face of each distance)")?;
+    let groups: Vec<u32> = f
+        .values()?
+        .iter()
+        .map(|&x| {
+            (x >= 0.0 && x < u32::MAX as f64 && x.fract() == 0.0).then_some(x as u32).ok_or_else(|| {
+                pyo3::exceptions::PyValueError::new_err(format!("faces: expected face indices, found {x}"))
+            })
+        })
+        .collect::<PyResult<_>>()?;
+    let dv = d.values()?;
+    let s = enter(py, || run_face_statistics(dv, &groups, count, lower, upper))?;
+    let k = s.len();
+    let out = PyDict::new(py);
+    out.set_item("face", to_numpy(py, s.iter().map(|x| i64::from(x.face)).collect(), &[k])?)?;
+    out.set_item("count", to_numpy(py, s.iter().map(|x| x.count as i64).collect(), &[k])?)?;
+    out.set_item("min", to_numpy(py, s.iter().map(|x| x.min).collect(), &[k])?)?;
+    out.set_item("max", to_numpy(py, s.iter().map(|x| x.max).collect(), &[k])?)?;
+    out.set_item("mean", to_numpy(py, s.iter().map(|x| x.mean).collect(), &[k])?)?;
+    out.set_item("std", to_numpy(py, s.iter().map(|x| x.std).collect(), &[k])?)?;
+    out.set_item("out_of_tolerance", to_numpy(py, s.iter().map(|x| x.out_of_tolerance).collect(), &[k])?)?;
+    Ok(out)
 }
 
 /// Points inserted into a mesh as vertices (SPEC S2); ``machscan.insert_points`` documents it
@@ -192,6 +262,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(geodesic_distances, m)?)?;
     m.add_function(wrap_pyfunction!(insert_points, m)?)?;
     m.add_function(wrap_pyfunction!(closest_points, m)?)?;
+    m.add_function(wrap_pyfunction!(signed_distances, m)?)?;
+    m.add_function(wrap_pyfunction!(face_statistics, m)?)?;
     m.add_function(wrap_pyfunction!(delaunay_xy, m)?)?;
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! Bindings of `machscan_core::registration`. Every option is a required keyword here: the Python
 //! signatures give the defaults (ICP's read from `icp_defaults()`, which reads `IcpOptions::new`
 //! in the core), so each default is written once.
-use super::convert::{count, enter, indices_to_numpy, to_numpy, Dim, F64Array};
+use super::convert::{count, enter, f64_vector, indices_to_numpy, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::registration::{
     align_blank as run_align_blank, allowance as run_allowance, allowance::PLANE_POINTS, cloud_locating_points,
@@ -9,6 +9,7 @@ use machscan_core::registration::{
     icp::NORMAL_NEIGHBORS, positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, BlankOptions,
     BlankSurface, IcpMethod, IcpOptions, ProbePattern, Robust, RobustKernel,
 };
+use machscan_core::registration::{fit_to_mesh as run_fit_to_mesh, Dof, MeshFitOptions, RotaryAxis};
 use nalgebra::Matrix4;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -110,6 +111,61 @@ fn icp<'py>(
     let k = r.history.len();
     d.set_item("history_fitness", to_numpy(py, r.history.iter().map(|h| h.fitness).collect(), &[k])?)?;
     d.set_item("history_rmse", to_numpy(py, r.history.iter().map(|h| h.rmse).collect(), &[k])?)?;
+    Ok(d)
+}
+
+/// The fit of a scan to a mesh in chosen motions; ``machscan.fit_to_mesh`` documents it and
+/// wraps the arrays this returns.
+#[pyfunction]
+#[pyo3(signature = (points, vertices, triangles, max_distance, *, init, dof, axis_point, axis_direction,
+    max_iterations, relative_fitness, relative_rmse))]
+#[allow(clippy::too_many_arguments)]
+fn fit_to_mesh<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    vertices: &Bound<'py, PyAny>,
+    triangles: &Bound<'py, PyAny>,
+    max_distance: f64,
+    init: Option<&Bound<'py, PyAny>>,
+    dof: &str,
+    axis_point: Option<&Bound<'py, PyAny>>,
+    axis_direction: Option<&Bound<'py, PyAny>>,
+    max_iterations: i64,
+    relative_fitness: f64,
+    relative_rmse: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = F64Array::points(points, "points")?;
+    let (v, tri) = super::mesh::mesh_named(vertices, triangles, "triangles")?;
+    let init = transform_opt(init, "init")?;
+    let axis = match (axis_point, axis_direction) {
+        (Some(point), Some(direction)) => Some(RotaryAxis {
+            point: f64_vector::<3>(point, "axis", "(the axis point, mm)")?,
+            direction: f64_vector::<3>(direction, "axis", "(the axis direction)")?,
+        }),
+        _ => None,
+    };
+    let options = MeshFitOptions {
+        max_distance,
+        max_iterations: count("max_iterations", max_iterations)?,
+        relative_fitness,
+        relative_rmse,
+        dof: Dof::parse(dof).py()?,
+        axis,
+    };
+    let (pr, vr) = (p.rows::<3>()?, v.rows::<3>()?);
+    let r = enter(py, || run_fit_to_mesh(pr, vr, &tri, &init, &options).map_err(|e| e.renamed("faces", "triangles")))?;
+    let d = PyDict::new(py);
+    d.set_item("transformation", transform_to_numpy(py, &r.icp.transformation)?)?;
+    d.set_item("fitness", r.icp.fitness)?;
+    d.set_item("rmse", r.icp.rmse)?;
+    d.set_item("correspondences", r.icp.correspondences)?;
+    d.set_item("iterations", r.icp.iterations)?;
+    d.set_item("converged", r.icp.converged)?;
+    let k = r.icp.history.len();
+    d.set_item("history_fitness", to_numpy(py, r.icp.history.iter().map(|h| h.fitness).collect(), &[k])?)?;
+    d.set_item("history_rmse", to_numpy(py, r.icp.history.iter().map(|h| h.rmse).collect(), &[k])?)?;
+    d.set_item("motion", r.motion.to_vec())?;
+    d.set_item("undetermined", r.undetermined)?;
     Ok(d)
 }
 
@@ -362,5 +418,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(coarse_align, m)?)?;
     m.add_function(wrap_pyfunction!(icp_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(icp, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_to_mesh, m)?)?;
     Ok(())
 }
