@@ -16,6 +16,9 @@ Formats, by extension (:data:`READ_FORMATS`, :data:`WRITE_FORMATS`):
 - ``.e57`` — ASTM E2807: every scan, poses applied, Cartesian or spherical, in mm (E57 stores
   metres); invalid points dropped and counted (``CloudFile.dropped``); written as one scan.
 
+CAD solids (``.step``/``.stp``, ``.iges``/``.igs``) come in through :func:`read_cad` as a mesh within
+a chordal tolerance, each triangle keeping its B-rep face (``machscan[cad]``).
+
 PLY, PCD, LAS/LAZ and E57 files are read by their signature whatever their extension (a LAZ file
 named ``.las`` reads as LAZ).
 
@@ -42,16 +45,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
+from machscan.cad import CadMesh, read_cad
 
 __all__ = [
     "READ_FORMATS",
     "WRITE_FORMATS",
+    "CadMesh",
     "CloudFile",
     "FileFormatError",
     "Table",
     "Toolpath",
     "TriangleMesh",
     "read",
+    "read_cad",
     "read_mesh",
     "read_points",
     "read_table",

@@ -42,7 +42,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
 __all__ = [
+    "allowance_map",
     "contour_error_map",
+    "deviation_map",
     "error_along",
     "error_decomposition",
     "levelled_frame",
@@ -725,4 +727,123 @@ def allowance_map(
         f"{n_short} point{'s' if n_short != 1 else ''} below {min_allowance:g} mm{none}"
     )
     fig.colorbar(sc, ax=ax3d, label="allowance (mm)", shrink=0.7)
+    return fig
+
+
+def deviation_map(
+    points: ArrayLike,
+    distances: ArrayLike,
+    *,
+    tolerance: float | tuple[float, float],
+    vertices: ArrayLike | None = None,
+    triangles: ArrayLike | None = None,
+    ax: Axes | None = None,
+    cmap: str = "RdBu_r",
+    max_points: int = 60000,
+    max_triangles: int = 20000,
+    elev: float = 25.0,
+    azim: float = -60.0,
+) -> Figure:
+    """The signed deviation from the CAD model (:func:`machscan.signed_distances`) as a colour
+    map: the measured points in 3D, diverging colours centred on zero (red outside the material,
+    blue inside), the tolerance band marked on the colour bar and every point outside it ringed
+    in black. With the CAD mesh given, the mesh is drawn in grey underneath: grey is where no
+    point was measured. Points without a distance (NaN) are grey and counted in the title.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        The measured points, in the model's frame, mm.
+    distances : array_like, shape (N,)
+        Their signed distances, mm.
+    tolerance : float or (float, float)
+        ``t`` for the band ±t, or ``(lower, upper)``, mm.
+    vertices, triangles : array_like, optional
+        The CAD mesh, drawn in grey (an even subsample of about ``max_triangles``).
+    ax : matplotlib 3D Axes, optional
+        Where to draw (``projection="3d"``); default a new figure.
+    cmap : str
+        A diverging colour map.
+    max_points : int
+        More points are drawn as an even subsample of about this many (out-of-tolerance points
+        always).
+    elev, azim : float
+        View angles of a new 3D axes, degrees.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> d = machscan.signed_distances(scan, cad.vertices, cad.triangles)
+    >>> machscan.plot.deviation_map(scan, d.distances, tolerance=0.05).savefig("deviation.png")
+    """
+    from machscan.deviation import tolerance_band
+
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    d = np.asarray(distances, dtype=np.float64).reshape(-1)
+    if len(d) != len(p):
+        raise ValueError(f"distances: expected one value per point ({len(p)}), got {len(d)}")
+    if max_points < 1 or max_triangles < 1:
+        raise ValueError(f"max_points, max_triangles: must be at least 1, got {max_points}, {max_triangles}")
+    if (vertices is None) != (triangles is None):
+        raise ValueError("vertices, triangles: give both (the CAD mesh) or neither")
+    lower, upper = tolerance_band(tolerance)
+    plt = _pyplot()
+    from matplotlib.colors import Normalize
+
+    ax3d: Any
+    if ax is None:
+        fig = plt.figure(figsize=(8, 6.5), layout="constrained")
+        ax3d = fig.add_subplot(projection="3d")
+        ax3d.view_init(elev=elev, azim=azim)
+    else:
+        fig, ax3d = ax.figure, ax
+    extent = p
+    if vertices is not None and triangles is not None:
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+        v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+        t = np.asarray(triangles).reshape(-1, 3)
+        t = t[:: max(1, int(np.ceil(len(t) / max_triangles)))]
+        ax3d.add_collection3d(Poly3DCollection(v[t], facecolors="0.8", edgecolors="none", alpha=0.35))
+        extent = np.vstack([p, v]) if len(p) else v
+    finite = np.isfinite(d)
+    out = finite & ((d < lower) | (d > upper))
+    keep = np.zeros(len(p), dtype=bool)
+    keep[:: max(1, int(np.ceil(len(p) / max_points)))] = True
+    keep |= out
+    if not finite.any():
+        _empty(ax3d, "no deviation measured")
+        return fig
+    # Symmetric about zero, and wide enough to show the band.
+    reach = max(float(np.abs(d[finite]).max()), abs(lower), abs(upper), 1e-9)
+    norm = Normalize(vmin=-reach, vmax=reach)
+    grey = keep & ~finite
+    if grey.any():
+        ax3d.scatter(*p[grey].T, s=2, color="0.6", lw=0)
+    ok = keep & finite
+    sc = ax3d.scatter(*p[ok].T, c=d[ok], cmap=cmap, norm=norm, s=3, lw=0)
+    if out.any():
+        ax3d.scatter(*p[out].T, s=12, facecolors="none", edgecolors="k", lw=0.6)
+    if len(extent):
+        ax3d.set_box_aspect(np.ptp(extent, axis=0) + 1e-9)
+        lo, hi = extent.min(axis=0), extent.max(axis=0)
+        ax3d.set_xlim(lo[0], hi[0])
+        ax3d.set_ylim(lo[1], hi[1])
+        ax3d.set_zlim(lo[2], hi[2])
+    ax3d.set_xlabel("x (mm)")
+    ax3d.set_ylabel("y (mm)")
+    ax3d.set_zlabel("z (mm)")
+    n_out, n_none = int(out.sum()), int((~finite).sum())
+    none = f"; {n_none} without a distance (grey)" if n_none else ""
+    ax3d.set_title(
+        f"Deviation: min {d[finite].min():+.3f}, mean {d[finite].mean():+.3f}, max {d[finite].max():+.3f} mm; "
+        f"{n_out} point{'s' if n_out != 1 else ''} outside [{lower:g}, {upper:g}] mm{none}"
+    )
+    bar = fig.colorbar(sc, ax=ax3d, label="signed deviation (mm), + outside the material", shrink=0.7)
+    for edge in (lower, upper):
+        bar.ax.axhline(edge, color="k", lw=1.2)
+    bar.ax.axhspan(lower, upper, color="k", alpha=0.08)
     return fig

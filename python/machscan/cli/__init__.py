@@ -13,6 +13,10 @@ machscan allowance MODEL BLANK [--out a.ply]    stock per model point (PLY/PCD/X
 machscan allowance MODEL BLANK --fit [--start pose.txt] [--local]
                                                 the blank's pose first: coarse alignment, ICP, the
                                                 envelope fit (--local: the envelope fit alone)
+machscan compare SCAN CAD --tolerance T [--fit] [--dof xyc] [--out DIR]
+                                                signed deviation from the CAD (STEP/IGES or a mesh),
+                                                per point and per CAD face, with a figure; exit
+                                                status 3 when points are out of tolerance
 machscan compensate THEORETICAL SCAN TOOLPATH --locating loc.csv --matching match.csv [--out DIR]
                                                 mirror milling: toolpath onto the bent skin (CL)
                                                 and a report; exit status 3 when the match did
@@ -33,7 +37,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from machscan.cli import allowance, batch, compensate, demo, grind, grooves, points, position
+from machscan.cli import allowance, batch, compare, compensate, demo, grind, grooves, points, position
 
 __all__ = ["build_parser", "main"]
 
@@ -49,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"machscan {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    for command in (demo, grooves, points, position, allowance, compensate, grind, batch):
+    for command in (demo, grooves, points, position, allowance, compare, compensate, grind, batch):
         command.add_parser(sub)
     return parser
 
