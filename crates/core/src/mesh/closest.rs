@@ -24,21 +24,44 @@ pub struct Closest {
     pub barycentric: [f64; 3],
 }
 
-/// A node of the hierarchy: its box and either two children or a range of triangles.
-struct Node {
-    lo: [f64; 3],
-    hi: [f64; 3],
-    /// Leaf: `(start, count)` in `corners`; inner: `(left child, 0)` (right = left + 1).
+/// A child of a node: its box (float32, rounded outward, so it still holds every triangle
+/// below it) and either a range of leaf slots (`count` > 0) or the index of its node.
+#[derive(Clone, Copy)]
+struct Child {
+    lo: [f32; 3],
+    hi: [f32; 3],
     first: u32,
     count: u32,
 }
 
-/// Deepest stack a search needs: median splits give a depth of log2(triangles / LEAF) + 1,
-/// and each level leaves at most one node waiting.
+impl Child {
+    /// A child nothing can be closer than: its box is empty (lo > hi gives an infinite distance).
+    const NONE: Child = Child { lo: [f32::INFINITY; 3], hi: [f32::NEG_INFINITY; 3], first: 0, count: 0 };
+
+    /// Squared distance from `q` to the box (0 inside), in float64 from the rounded-out box:
+    /// never more than the distance to any triangle inside.
+    #[inline]
+    fn distance2(&self, q: &[f64; 3]) -> f64 {
+        let d = |k: usize| (self.lo[k] as f64 - q[k]).max(0.0).max(q[k] - self.hi[k] as f64);
+        let (x, y, z) = (d(0), d(1), d(2));
+        x * x + y * y + z * z
+    }
+}
+
+/// A node: both children's boxes side by side, so one cache line decides where to go next.
+#[derive(Clone, Copy)]
+#[repr(align(64))]
+struct Node {
+    child: [Child; 2],
+}
+
+/// Deepest stack a search needs: median splits halve the triangles, so a tree over fewer than
+/// 2^31 of them is at most 31 nodes deep, and each level leaves at most one child waiting.
 const STACK: usize = 64;
 
 /// The mesh and its hierarchy. The triangles' corners are copied in leaf order, so that a leaf
-/// is read from one run of memory rather than through the face and vertex tables.
+/// is read from one run of memory rather than through the face and vertex tables. Boxes are
+/// float32 (half the memory a search walks through); corners and distances stay float64.
 pub struct TriangleBvh<'a> {
     vertices: &'a [[f64; 3]],
     faces: &'a [[u32; 3]],
@@ -46,6 +69,8 @@ pub struct TriangleBvh<'a> {
     order: Vec<u32>,
     /// The three corners of each leaf slot's triangle.
     corners: Vec<[Vector3<f64>; 3]>,
+    /// The root: the box of the whole mesh and where it leads.
+    root: Child,
     nodes: Vec<Node>,
 }
 
@@ -65,38 +90,10 @@ impl<'a> TriangleBvh<'a> {
         let centroid: Vec<Vector3<f64>> =
             (0..faces.len() as u32).map(|t| (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0).collect();
         let mut order: Vec<u32> = (0..faces.len() as u32).collect();
-        let mut nodes = vec![Node { lo: [0.0; 3], hi: [0.0; 3], first: 0, count: faces.len() as u32 }];
-        let mut stack = vec![0usize];
-        while let Some(n) = stack.pop() {
-            let (first, count) = (nodes[n].first as usize, nodes[n].count as usize);
-            let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
-            for &t in &order[first..first + count] {
-                for k in 0..3 {
-                    let c = corner(t, k);
-                    lo = lo.inf(&c);
-                    hi = hi.sup(&c);
-                }
-            }
-            nodes[n].lo = lo.into();
-            nodes[n].hi = hi.into();
-            if count <= LEAF {
-                continue;
-            }
-            let axis = (hi - lo).imax();
-            let mid = count / 2;
-            order[first..first + count].select_nth_unstable_by(mid, |&a, &b| {
-                centroid[a as usize][axis].total_cmp(&centroid[b as usize][axis]).then(a.cmp(&b))
-            });
-            let left = nodes.len();
-            nodes.push(Node { lo: lo.into(), hi: hi.into(), first: first as u32, count: mid as u32 });
-            nodes.push(Node { lo: lo.into(), hi: hi.into(), first: (first + mid) as u32, count: (count - mid) as u32 });
-            nodes[n].first = left as u32;
-            nodes[n].count = 0;
-            stack.push(left);
-            stack.push(left + 1);
-        }
+        let mut nodes = Vec::with_capacity(faces.len() / LEAF + 1);
+        let root = build(&mut order, 0, faces.len(), &centroid, &corner, &mut nodes);
         let corners = order.iter().map(|&t| [corner(t, 0), corner(t, 1), corner(t, 2)]).collect();
-        Ok(TriangleBvh { vertices, faces, order, corners, nodes })
+        Ok(TriangleBvh { vertices, faces, order, corners, root, nodes })
     }
 
     /// The mesh's vertices.
@@ -129,13 +126,25 @@ impl<'a> TriangleBvh<'a> {
             best_d2 = (p - qv).norm_squared();
             best = Closest { point: p.into(), distance: 0.0, triangle: t, barycentric: w };
         }
-        let mut stack = [0u32; STACK];
+        // Children waiting, with their box distance (so a wait is dropped without a fetch).
+        let mut stack = [(Child::NONE, 0.0f64); STACK];
         let mut top = 0usize;
-        let mut n = 0usize;
-        loop {
-            let node = &self.nodes[n];
-            if node.count > 0 {
-                let (first, count) = (node.first as usize, node.count as usize);
+        let mut next = Some((self.root, self.root.distance2(q)));
+        while let Some((child, d2)) = next.take().or_else(|| {
+            // The nearest waiting child still worth a look.
+            while top > 0 {
+                top -= 1;
+                if stack[top].1 <= best_d2 {
+                    return Some(stack[top]);
+                }
+            }
+            None
+        }) {
+            if d2 > best_d2 {
+                continue;
+            }
+            if child.count > 0 {
+                let (first, count) = (child.first as usize, child.count as usize);
                 for (slot, [a, b, c]) in self.corners[first..first + count].iter().enumerate() {
                     let t = self.order[first + slot] as usize;
                     let (p, w) = closest_on_triangle(&qv, a, b, c);
@@ -145,111 +154,113 @@ impl<'a> TriangleBvh<'a> {
                         best = Closest { point: p.into(), distance: 0.0, triangle: t, barycentric: w };
                     }
                 }
-            } else {
-                // Into the nearer child; the other waits on the stack if it can still hold a
-                // closer triangle.
-                let (l, r) = (node.first as usize, node.first as usize + 1);
-                let (dl, dr) = (self.box_distance2(l, q), self.box_distance2(r, q));
-                let (near, far, dn, df) = if dl <= dr { (l, r, dl, dr) } else { (r, l, dr, dl) };
-                if dn <= best_d2 {
-                    if df <= best_d2 && top < STACK {
-                        stack[top] = far as u32;
-                        top += 1;
-                    } else if df <= best_d2 {
-                        // Deeper than any median-split tree gets; searched at once instead.
-                        let sub = self.closest_below(far, &qv, best_d2, best);
-                        if (sub.distance, sub.triangle) < (best_d2, best.triangle) {
-                            best_d2 = sub.distance;
-                            best = sub;
-                        }
-                    }
-                    n = near;
-                    continue;
-                }
-            }
-            // Next waiting node still worth a look.
-            loop {
-                if top == 0 {
-                    best.distance = best_d2.sqrt();
-                    return best;
-                }
-                top -= 1;
-                n = stack[top] as usize;
-                if self.box_distance2(n, q) <= best_d2 {
-                    break;
-                }
-            }
-        }
-    }
-
-    /// The search below node `root` alone (a fallback for a stack overflow that median splits
-    /// never cause); the returned `distance` is squared.
-    fn closest_below(&self, root: usize, q: &Vector3<f64>, bound: f64, seed: Closest) -> Closest {
-        let mut best = seed;
-        let mut best_d2 = bound;
-        let mut stack = vec![root];
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n];
-            if self.box_distance2(n, &[q.x, q.y, q.z]) > best_d2 {
                 continue;
             }
-            if node.count > 0 {
-                let (first, count) = (node.first as usize, node.count as usize);
-                for (slot, [a, b, c]) in self.corners[first..first + count].iter().enumerate() {
-                    let t = self.order[first + slot] as usize;
-                    let (p, w) = closest_on_triangle(q, a, b, c);
-                    let d2 = (p - q).norm_squared();
-                    if d2 < best_d2 || (d2 == best_d2 && t < best.triangle) {
-                        best_d2 = d2;
-                        best = Closest { point: p.into(), distance: 0.0, triangle: t, barycentric: w };
-                    }
-                }
-            } else {
-                stack.push(node.first as usize);
-                stack.push(node.first as usize + 1);
+            // Into the nearer child; the other waits if it can still hold a closer triangle.
+            let node = &self.nodes[child.first as usize];
+            let (l, r) = (node.child[0], node.child[1]);
+            let (dl, dr) = (l.distance2(q), r.distance2(q));
+            let ((near, dn), (far, df)) = if dl <= dr { ((l, dl), (r, dr)) } else { ((r, dr), (l, dl)) };
+            if df <= best_d2 {
+                stack[top] = (far, df);
+                top += 1;
             }
+            next = Some((near, dn));
         }
-        best.distance = best_d2;
+        best.distance = best_d2.sqrt();
         best
-    }
-
-    /// Squared distance from `q` to node `n`'s box (0 inside).
-    #[inline]
-    fn box_distance2(&self, n: usize, q: &[f64; 3]) -> f64 {
-        let (lo, hi) = (&self.nodes[n].lo, &self.nodes[n].hi);
-        let d = |k: usize| (lo[k] - q[k]).max(0.0).max(q[k] - hi[k]);
-        let (x, y, z) = (d(0), d(1), d(2));
-        x * x + y * y + z * z
     }
 
     /// The closest point to each query, in parallel. The queries are visited in Morton order of
     /// their position, in runs of fixed length, each query's search bounded by its predecessor's
     /// triangle: neighbouring queries mostly share a closest triangle, and the bound prunes most
-    /// of the tree from the first step. Results are those of `closest` for each query.
-    pub fn closest_many(&self, queries: &[[f64; 3]]) -> Vec<Closest> {
+    /// of the tree from the first step. `then` turns each query's answer into the result kept.
+    /// Results are those of `closest` for each query, whatever the thread count.
+    pub fn closest_many_with<T, F>(&self, queries: &[[f64; 3]], then: F) -> Vec<T>
+    where
+        T: Send + Clone,
+        F: Fn(&[f64; 3], Closest) -> T + Sync,
+    {
         const RUN: usize = 256;
         let order = morton_order(queries);
-        let found: Vec<(u32, Closest)> = order
+        let found: Vec<(u32, T)> = order
             .par_chunks(RUN)
             .flat_map_iter(|run| {
                 let mut hint = None;
+                let then = &then;
                 run.iter().map(move |&i| {
-                    let c = self.closest_from(&queries[i as usize], hint);
+                    let q = &queries[i as usize];
+                    let c = self.closest_from(q, hint);
                     hint = Some(c.triangle);
-                    (i, c)
+                    (i, then(q, c))
                 })
             })
             .collect();
-        let mut out =
-            vec![
-                Closest { point: [f64::NAN; 3], distance: f64::NAN, triangle: usize::MAX, barycentric: [0.0; 3] };
-                queries.len()
-            ];
-        for (i, c) in found {
-            out[i as usize] = c;
+        let mut out: Vec<Option<T>> = vec![None; queries.len()];
+        for (i, t) in found {
+            out[i as usize] = Some(t);
         }
-        out
+        // Every index of the permutation was visited once.
+        out.into_iter().flatten().collect()
     }
+
+    /// The closest point to each query (see `closest_many_with`).
+    pub fn closest_many(&self, queries: &[[f64; 3]]) -> Vec<Closest> {
+        self.closest_many_with(queries, |_, c| c)
+    }
+}
+
+/// The hierarchy over leaf slots `first..first + count` of `order`: a leaf child when it is
+/// small, else a node (pushed to `nodes`) over its two halves split at the median centroid
+/// along the longest axis of their box.
+fn build(
+    order: &mut [u32],
+    first: usize,
+    count: usize,
+    centroid: &[Vector3<f64>],
+    corner: &dyn Fn(u32, usize) -> Vector3<f64>,
+    nodes: &mut Vec<Node>,
+) -> Child {
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    for &t in &order[first..first + count] {
+        for k in 0..3 {
+            let c = corner(t, k);
+            lo = lo.inf(&c);
+            hi = hi.sup(&c);
+        }
+    }
+    // Rounded outward to float32: the box still holds every corner.
+    let down = |v: f64| {
+        let x = v as f32;
+        if x as f64 > v {
+            x.next_down()
+        } else {
+            x
+        }
+    };
+    let up = |v: f64| {
+        let x = v as f32;
+        if (x as f64) < v {
+            x.next_up()
+        } else {
+            x
+        }
+    };
+    let (blo, bhi) = ([down(lo.x), down(lo.y), down(lo.z)], [up(hi.x), up(hi.y), up(hi.z)]);
+    if count <= LEAF {
+        return Child { lo: blo, hi: bhi, first: first as u32, count: count as u32 };
+    }
+    let axis = (hi - lo).imax();
+    let mid = count / 2;
+    order[first..first + count].select_nth_unstable_by(mid, |&a, &b| {
+        centroid[a as usize][axis].total_cmp(&centroid[b as usize][axis]).then(a.cmp(&b))
+    });
+    let at = nodes.len();
+    nodes.push(Node { child: [Child::NONE; 2] });
+    let left = build(order, first, mid, centroid, corner, nodes);
+    let right = build(order, first + mid, count - mid, centroid, corner, nodes);
+    nodes[at] = Node { child: [left, right] };
+    Child { lo: blo, hi: bhi, first: at as u32, count: 0 }
 }
 
 /// The closest point of triangle `abc` to `p` and its barycentric weights, by the Voronoi

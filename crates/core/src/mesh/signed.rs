@@ -147,9 +147,7 @@ impl<'a> SignedMesh<'a> {
 
     /// Every query's signed distance, in parallel; independent of the thread count.
     pub fn signed_distances(&self, queries: &[[f64; 3]]) -> Vec<SignedClosest> {
-        use rayon::prelude::*;
-        let closest = self.bvh.closest_many(queries);
-        queries.par_iter().zip(closest).map(|(q, c)| self.signed(q, c)).collect()
+        self.bvh.closest_many_with(queries, |q, c| self.signed(q, c))
     }
 }
 
