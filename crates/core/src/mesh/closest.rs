@@ -55,9 +55,9 @@ struct Node {
     child: [Child; 2],
 }
 
-/// Deepest stack a search needs: median splits halve the triangles, so a tree over fewer than
-/// 2^31 of them is at most 31 nodes deep, and each level leaves at most one child waiting.
-const STACK: usize = 64;
+/// Room for the children a search leaves waiting: median splits halve the triangles, so a tree
+/// over fewer than 2^31 of them is at most 31 nodes deep, and each level leaves at most one.
+const STACK: usize = 32;
 
 /// The mesh and its hierarchy. The triangles' corners are copied in leaf order, so that a leaf
 /// is read from one run of memory rather than through the face and vertex tables. Boxes are
@@ -116,6 +116,12 @@ impl<'a> TriangleBvh<'a> {
     /// hint: the least distance, ties to the lowest triangle index, is found either way, since
     /// only boxes strictly farther than the best so far are skipped.
     pub fn closest_from(&self, q: &[f64; 3], hint: Option<usize>) -> Closest {
+        self.closest_with(q, hint, &mut Vec::with_capacity(STACK))
+    }
+
+    /// `closest_from` with the caller's stack of waiting children (reused across a run of
+    /// queries: filling a fresh one for every query cost more than the search).
+    fn closest_with(&self, q: &[f64; 3], hint: Option<usize>, stack: &mut Vec<(Child, f64)>) -> Closest {
         let qv = Vector3::from(*q);
         let mut best =
             Closest { point: [f64::NAN; 3], distance: f64::INFINITY, triangle: usize::MAX, barycentric: [0.0; 3] };
@@ -127,19 +133,9 @@ impl<'a> TriangleBvh<'a> {
             best = Closest { point: p.into(), distance: 0.0, triangle: t, barycentric: w };
         }
         // Children waiting, with their box distance (so a wait is dropped without a fetch).
-        let mut stack = [(Child::NONE, 0.0f64); STACK];
-        let mut top = 0usize;
+        stack.clear();
         let mut next = Some((self.root, self.root.distance2(q)));
-        while let Some((child, d2)) = next.take().or_else(|| {
-            // The nearest waiting child still worth a look.
-            while top > 0 {
-                top -= 1;
-                if stack[top].1 <= best_d2 {
-                    return Some(stack[top]);
-                }
-            }
-            None
-        }) {
+        while let Some((child, d2)) = next.take().or_else(|| stack.pop()) {
             if d2 > best_d2 {
                 continue;
             }
@@ -162,8 +158,7 @@ impl<'a> TriangleBvh<'a> {
             let (dl, dr) = (l.distance2(q), r.distance2(q));
             let ((near, dn), (far, df)) = if dl <= dr { ((l, dl), (r, dr)) } else { ((r, dr), (l, dl)) };
             if df <= best_d2 {
-                stack[top] = (far, df);
-                top += 1;
+                stack.push((far, df));
             }
             next = Some((near, dn));
         }
@@ -178,30 +173,31 @@ impl<'a> TriangleBvh<'a> {
     /// Results are those of `closest` for each query, whatever the thread count.
     pub fn closest_many_with<T, F>(&self, queries: &[[f64; 3]], then: F) -> Vec<T>
     where
-        T: Send + Clone,
+        T: Send + Sync + Clone,
         F: Fn(&[f64; 3], Closest) -> T + Sync,
     {
         const RUN: usize = 256;
         let order = morton_order(queries);
-        let found: Vec<(u32, T)> = order
+        let found: Vec<T> = order
             .par_chunks(RUN)
             .flat_map_iter(|run| {
                 let mut hint = None;
+                let mut stack = Vec::with_capacity(STACK);
                 let then = &then;
                 run.iter().map(move |&i| {
                     let q = &queries[i as usize];
-                    let c = self.closest_from(q, hint);
+                    let c = self.closest_with(q, hint, &mut stack);
                     hint = Some(c.triangle);
-                    (i, then(q, c))
+                    then(q, c)
                 })
             })
             .collect();
-        let mut out: Vec<Option<T>> = vec![None; queries.len()];
-        for (i, t) in found {
-            out[i as usize] = Some(t);
+        // Back to the queries' order: query order[j] was answered j-th.
+        let mut at = vec![0u32; queries.len()];
+        for (j, &i) in order.iter().enumerate() {
+            at[i as usize] = j as u32;
         }
-        // Every index of the permutation was visited once.
-        out.into_iter().flatten().collect()
+        at.par_iter().map(|&j| found[j as usize].clone()).collect()
     }
 
     /// The closest point to each query (see `closest_many_with`).
