@@ -88,11 +88,10 @@ impl<'a> TriangleBvh<'a> {
         }
         let corner = |t: u32, k: usize| Vector3::from(vertices[faces[t as usize][k] as usize]);
         let centroid: Vec<Vector3<f64>> =
-            (0..faces.len() as u32).map(|t| (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0).collect();
+            (0..faces.len() as u32).into_par_iter().map(|t| (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0).collect();
         let mut order: Vec<u32> = (0..faces.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(faces.len() / LEAF + 1);
-        let root = build(&mut order, 0, faces.len(), &centroid, &corner, &mut nodes);
-        let corners = order.iter().map(|&t| [corner(t, 0), corner(t, 1), corner(t, 2)]).collect();
+        let (root, nodes) = build(&mut order, 0, &centroid, &corner);
+        let corners = order.par_iter().map(|&t| [corner(t, 0), corner(t, 1), corner(t, 2)]).collect();
         Ok(TriangleBvh { vertices, faces, order, corners, root, nodes })
     }
 
@@ -206,19 +205,21 @@ impl<'a> TriangleBvh<'a> {
     }
 }
 
-/// The hierarchy over leaf slots `first..first + count` of `order`: a leaf child when it is
-/// small, else a node (pushed to `nodes`) over its two halves split at the median centroid
-/// along the longest axis of their box.
+/// The hierarchy over the leaf slots `order` (the first of them is slot `first`): a leaf child
+/// when they are few, else a node over its two halves split at the median centroid along the
+/// longest axis of their box, and the nodes below it in depth-first order (the node first). Large
+/// halves are built in parallel; the tree and its layout are the same on any thread count.
 fn build(
     order: &mut [u32],
     first: usize,
-    count: usize,
     centroid: &[Vector3<f64>],
-    corner: &dyn Fn(u32, usize) -> Vector3<f64>,
-    nodes: &mut Vec<Node>,
-) -> Child {
+    corner: &(dyn Fn(u32, usize) -> Vector3<f64> + Sync),
+) -> (Child, Vec<Node>) {
+    /// Halves smaller than this are built on the calling thread.
+    const PARALLEL: usize = 4096;
+    let count = order.len();
     let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
-    for &t in &order[first..first + count] {
+    for &t in order.iter() {
         for k in 0..3 {
             let c = corner(t, k);
             lo = lo.inf(&c);
@@ -244,19 +245,31 @@ fn build(
     };
     let (blo, bhi) = ([down(lo.x), down(lo.y), down(lo.z)], [up(hi.x), up(hi.y), up(hi.z)]);
     if count <= LEAF {
-        return Child { lo: blo, hi: bhi, first: first as u32, count: count as u32 };
+        return (Child { lo: blo, hi: bhi, first: first as u32, count: count as u32 }, Vec::new());
     }
     let axis = (hi - lo).imax();
     let mid = count / 2;
-    order[first..first + count].select_nth_unstable_by(mid, |&a, &b| {
+    order.select_nth_unstable_by(mid, |&a, &b| {
         centroid[a as usize][axis].total_cmp(&centroid[b as usize][axis]).then(a.cmp(&b))
     });
-    let at = nodes.len();
-    nodes.push(Node { child: [Child::NONE; 2] });
-    let left = build(order, first, mid, centroid, corner, nodes);
-    let right = build(order, first + mid, count - mid, centroid, corner, nodes);
-    nodes[at] = Node { child: [left, right] };
-    Child { lo: blo, hi: bhi, first: at as u32, count: 0 }
+    let (left_slots, right_slots) = order.split_at_mut(mid);
+    let ((left, left_nodes), (right, right_nodes)) = if count >= PARALLEL {
+        rayon::join(
+            || build(left_slots, first, centroid, corner),
+            || build(right_slots, first + mid, centroid, corner),
+        )
+    } else {
+        (build(left_slots, first, centroid, corner), build(right_slots, first + mid, centroid, corner))
+    };
+    // This node, then the left half's nodes, then the right half's: their inner children move
+    // by where their half now starts.
+    let moved = |c: Child, by: usize| if c.count == 0 { Child { first: c.first + by as u32, ..c } } else { c };
+    let (lbase, rbase) = (1, 1 + left_nodes.len());
+    let mut nodes = Vec::with_capacity(1 + left_nodes.len() + right_nodes.len());
+    nodes.push(Node { child: [moved(left, lbase), moved(right, rbase)] });
+    nodes.extend(left_nodes.into_iter().map(|n| Node { child: n.child.map(|c| moved(c, lbase)) }));
+    nodes.extend(right_nodes.into_iter().map(|n| Node { child: n.child.map(|c| moved(c, rbase)) }));
+    (Child { lo: blo, hi: bhi, first: 0, count: 0 }, nodes)
 }
 
 /// The closest point of triangle `abc` to `p` and its barycentric weights, by the Voronoi

@@ -11,7 +11,7 @@
 use super::closest::{Closest, TriangleBvh};
 use crate::error::{check_finite_points, Error, Result};
 use nalgebra::Vector3;
-use std::collections::HashMap;
+use rayon::prelude::*;
 
 /// A measured point's signed distance and where it lands on the mesh.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -36,7 +36,7 @@ impl PseudoNormals {
     pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<Self> {
         let corner = |f: &[u32; 3], k: usize| Vector3::from(vertices[f[k] as usize]);
         let face: Vec<Vector3<f64>> = faces
-            .iter()
+            .par_iter()
             .map(|f| {
                 let n = (corner(f, 1) - corner(f, 0)).cross(&(corner(f, 2) - corner(f, 0)));
                 let len = n.norm();
@@ -48,25 +48,54 @@ impl PseudoNormals {
                 }
             })
             .collect();
-        // Each undirected edge: the sum of its triangles' normals, and how often it runs each way.
-        let mut edges: HashMap<(u32, u32), (Vector3<f64>, u32, u32)> = HashMap::with_capacity(faces.len() * 3 / 2);
+        // Each corner's share of its vertex's pseudo-normal: its angle times the face normal.
+        let share: Vec<[Vector3<f64>; 3]> = faces
+            .par_iter()
+            .zip(&face)
+            .map(|(f, n)| {
+                std::array::from_fn(|k| {
+                    let (u, v) = (corner(f, (k + 1) % 3) - corner(f, k), corner(f, (k + 2) % 3) - corner(f, k));
+                    let angle = if u.norm() > 0.0 && v.norm() > 0.0 { u.angle(&v) } else { 0.0 };
+                    angle * n
+                })
+            })
+            .collect();
         let mut vertex = vec![Vector3::zeros(); vertices.len()];
-        for (f, n) in faces.iter().zip(&face) {
+        for (f, s) in faces.iter().zip(&share) {
             for k in 0..3 {
-                let (a, b) = (f[k], f[(k + 1) % 3]);
-                let e = edges.entry((a.min(b), a.max(b))).or_insert((Vector3::zeros(), 0, 0));
-                e.0 += n;
-                if a < b {
-                    e.1 += 1;
-                } else {
-                    e.2 += 1;
-                }
-                let (u, v) = (corner(f, (k + 1) % 3) - corner(f, k), corner(f, (k + 2) % 3) - corner(f, k));
-                let angle = if u.norm() > 0.0 && v.norm() > 0.0 { u.angle(&v) } else { 0.0 };
-                vertex[f[k] as usize] += angle * n;
+                vertex[f[k] as usize] += s[k];
             }
         }
-        let clashing = edges.values().filter(|(_, fwd, bwd)| fwd + bwd == 2 && (*fwd == 2 || *bwd == 2)).count();
+        // The edges: every triangle side (slot 3·face + k runs from corner k to k + 1) keyed by
+        // its two vertices, sorted, so the sides of one edge are neighbours, in slot order.
+        let key = |slot: usize| {
+            let f = faces[slot / 3];
+            let (a, b) = (f[slot % 3], f[(slot % 3 + 1) % 3]);
+            (u64::from(a.min(b)) << 32) | u64::from(a.max(b))
+        };
+        let mut sides: Vec<(u64, u32)> = (0..faces.len() * 3).into_par_iter().map(|s| (key(s), s as u32)).collect();
+        sides.par_sort_unstable();
+        let mut edge = vec![[Vector3::zeros(); 3]; faces.len()];
+        let (mut clashing, mut closed) = (0usize, true);
+        for group in sides.chunk_by(|x, y| x.0 == y.0) {
+            // How often the edge runs from its lower vertex to its higher, and back.
+            let forward = group
+                .iter()
+                .filter(|&&(_, s)| {
+                    let f = faces[s as usize / 3];
+                    f[s as usize % 3] < f[(s as usize % 3 + 1) % 3]
+                })
+                .count();
+            let backward = group.len() - forward;
+            if group.len() == 2 && (forward == 2 || backward == 2) {
+                clashing += 1;
+            }
+            closed &= forward == 1 && backward == 1;
+            let sum: Vector3<f64> = group.iter().map(|&(_, s)| face[s as usize / 3]).sum();
+            for &(_, s) in group {
+                edge[s as usize / 3][s as usize % 3] = sum;
+            }
+        }
         if clashing > 0 {
             return Err(Error::invalid(
                 "faces",
@@ -77,7 +106,6 @@ impl PseudoNormals {
                 ),
             ));
         }
-        let closed = edges.values().all(|(_, fwd, bwd)| *fwd == 1 && *bwd == 1);
         if closed && enclosed_volume(vertices, faces) < 0.0 {
             return Err(Error::invalid(
                 "faces",
@@ -85,10 +113,6 @@ impl PseudoNormals {
                  vertex order",
             ));
         }
-        let edge = faces
-            .iter()
-            .map(|f| std::array::from_fn(|k| edges[&(f[k].min(f[(k + 1) % 3]), f[k].max(f[(k + 1) % 3]))].0))
-            .collect();
         Ok(PseudoNormals { face, edge, vertex })
     }
 
