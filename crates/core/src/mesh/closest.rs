@@ -35,9 +35,6 @@ struct Child {
 }
 
 impl Child {
-    /// A child nothing can be closer than: its box is empty (lo > hi gives an infinite distance).
-    const NONE: Child = Child { lo: [f32::INFINITY; 3], hi: [f32::NEG_INFINITY; 3], first: 0, count: 0 };
-
     /// Squared distance from `q` to the box (0 inside), in float64 from the rounded-out box:
     /// never more than the distance to any triangle inside.
     #[inline]
@@ -48,16 +45,53 @@ impl Child {
     }
 }
 
-/// A node: both children's boxes side by side, so one cache line decides where to go next.
+/// A child left for later in a search: where it leads and its box distance (so the wait is
+/// dropped without a fetch when the best has come closer).
 #[derive(Clone, Copy)]
-#[repr(align(64))]
+struct Waiting {
+    first: u32,
+    count: u32,
+    d2: f64,
+}
+
+/// A node of the binary tree the build makes: both children.
+#[derive(Clone, Copy)]
 struct Node {
     child: [Child; 2],
 }
 
-/// Room for the children a search leaves waiting: median splits halve the triangles, so a tree
-/// over fewer than 2^31 of them is at most 31 nodes deep, and each level leaves at most one.
-const STACK: usize = 32;
+/// A node of the tree searched: up to four children, their float32 boxes coordinate by
+/// coordinate, so the four box distances are computed side by side (the compiler vectorises
+/// them) and the tree is half as deep as the binary one it is collapsed from.
+#[derive(Clone, Copy)]
+#[repr(align(64))]
+struct Wide {
+    lo: [[f32; 4]; 3],
+    hi: [[f32; 4]; 3],
+    /// Leaf: the first slot; inner: the wide node's index.
+    first: [u32; 4],
+    /// Leaf: its triangles (> 0); inner: 0; no child: 0 with an empty box.
+    count: [u32; 4],
+}
+
+impl Wide {
+    /// Squared distances from `q` to the four boxes (infinite for a missing child).
+    #[inline]
+    fn distances2(&self, q: &[f64; 3]) -> [f64; 4] {
+        let mut d2 = [0.0f64; 4];
+        for k in 0..3 {
+            for i in 0..4 {
+                let d = (self.lo[k][i] as f64 - q[k]).max(0.0).max(q[k] - self.hi[k][i] as f64);
+                d2[i] += d * d;
+            }
+        }
+        d2
+    }
+}
+
+/// Room for the children a search usually leaves waiting (three per level of a tree of at most
+/// 16 wide levels over 2^31 triangles); the stack grows beyond it if it must.
+const STACK: usize = 48;
 
 /// The mesh and its hierarchy. The triangles' corners are copied in leaf order, so that a leaf
 /// is read from one run of memory rather than through the face and vertex tables. Boxes are
@@ -69,9 +103,9 @@ pub struct TriangleBvh<'a> {
     order: Vec<u32>,
     /// The three corners of each leaf slot's triangle.
     corners: Vec<[Vector3<f64>; 3]>,
-    /// The root: the box of the whole mesh and where it leads.
+    /// The root: the box of the whole mesh and where it leads (a leaf, or wide node 0).
     root: Child,
-    nodes: Vec<Node>,
+    nodes: Vec<Wide>,
 }
 
 impl<'a> TriangleBvh<'a> {
@@ -87,10 +121,16 @@ impl<'a> TriangleBvh<'a> {
             return Err(Error::invalid("faces", format!("{} triangles is beyond 2^31", faces.len())));
         }
         let corner = |t: u32, k: usize| Vector3::from(vertices[faces[t as usize][k] as usize]);
-        let centroid: Vec<Vector3<f64>> =
-            (0..faces.len() as u32).into_par_iter().map(|t| (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0).collect();
+        let centroid: Vec<Vector3<f64>> = (0..faces.len() as u32)
+            .into_par_iter()
+            .map(|t| (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0)
+            .collect();
         let mut order: Vec<u32> = (0..faces.len() as u32).collect();
-        let (root, nodes) = build(&mut order, 0, &centroid, &corner);
+        let (root, binary) = build(&mut order, 0, &centroid, &corner);
+        let mut nodes = Vec::with_capacity(binary.len() / 2 + 1);
+        if root.count == 0 {
+            widen(&binary, 0, &mut nodes);
+        }
         let corners = order.par_iter().map(|&t| [corner(t, 0), corner(t, 1), corner(t, 2)]).collect();
         Ok(TriangleBvh { vertices, faces, order, corners, root, nodes })
     }
@@ -120,7 +160,7 @@ impl<'a> TriangleBvh<'a> {
 
     /// `closest_from` with the caller's stack of waiting children (reused across a run of
     /// queries: filling a fresh one for every query cost more than the search).
-    fn closest_with(&self, q: &[f64; 3], hint: Option<usize>, stack: &mut Vec<(Child, f64)>) -> Closest {
+    fn closest_with(&self, q: &[f64; 3], hint: Option<usize>, stack: &mut Vec<Waiting>) -> Closest {
         let qv = Vector3::from(*q);
         let mut best =
             Closest { point: [f64::NAN; 3], distance: f64::INFINITY, triangle: usize::MAX, barycentric: [0.0; 3] };
@@ -133,13 +173,13 @@ impl<'a> TriangleBvh<'a> {
         }
         // Children waiting, with their box distance (so a wait is dropped without a fetch).
         stack.clear();
-        let mut next = Some((self.root, self.root.distance2(q)));
-        while let Some((child, d2)) = next.take().or_else(|| stack.pop()) {
+        let mut next = Some(Waiting { first: self.root.first, count: self.root.count, d2: self.root.distance2(q) });
+        while let Some(Waiting { first, count, d2 }) = next.take().or_else(|| stack.pop()) {
             if d2 > best_d2 {
                 continue;
             }
-            if child.count > 0 {
-                let (first, count) = (child.first as usize, child.count as usize);
+            if count > 0 {
+                let (first, count) = (first as usize, count as usize);
                 for (slot, [a, b, c]) in self.corners[first..first + count].iter().enumerate() {
                     let t = self.order[first + slot] as usize;
                     let (p, w) = closest_on_triangle(&qv, a, b, c);
@@ -151,15 +191,20 @@ impl<'a> TriangleBvh<'a> {
                 }
                 continue;
             }
-            // Into the nearer child; the other waits if it can still hold a closer triangle.
-            let node = &self.nodes[child.first as usize];
-            let (l, r) = (node.child[0], node.child[1]);
-            let (dl, dr) = (l.distance2(q), r.distance2(q));
-            let ((near, dn), (far, df)) = if dl <= dr { ((l, dl), (r, dr)) } else { ((r, dr), (l, dl)) };
-            if df <= best_d2 {
-                stack.push((far, df));
+            // Into the nearest child; the others wait, nearer ones on top, if they can still hold
+            // a closer triangle.
+            let node = &self.nodes[first as usize];
+            let d = node.distances2(q);
+            let mut by = [0usize, 1, 2, 3];
+            by.sort_unstable_by(|&i, &j| d[i].total_cmp(&d[j]).then(i.cmp(&j)));
+            // A missing child's box is empty: its distance is infinite, and it is never taken.
+            for &i in by[1..].iter().rev() {
+                if d[i] <= best_d2 && d[i] < f64::INFINITY {
+                    stack.push(Waiting { first: node.first[i], count: node.count[i], d2: d[i] });
+                }
             }
-            next = Some((near, dn));
+            let i = by[0];
+            next = Some(Waiting { first: node.first[i], count: node.count[i], d2: d[i] });
         }
         best.distance = best_d2.sqrt();
         best
@@ -254,10 +299,7 @@ fn build(
     });
     let (left_slots, right_slots) = order.split_at_mut(mid);
     let ((left, left_nodes), (right, right_nodes)) = if count >= PARALLEL {
-        rayon::join(
-            || build(left_slots, first, centroid, corner),
-            || build(right_slots, first + mid, centroid, corner),
-        )
+        rayon::join(|| build(left_slots, first, centroid, corner), || build(right_slots, first + mid, centroid, corner))
     } else {
         (build(left_slots, first, centroid, corner), build(right_slots, first + mid, centroid, corner))
     };
@@ -270,6 +312,34 @@ fn build(
     nodes.extend(left_nodes.into_iter().map(|n| Node { child: n.child.map(|c| moved(c, lbase)) }));
     nodes.extend(right_nodes.into_iter().map(|n| Node { child: n.child.map(|c| moved(c, rbase)) }));
     (Child { lo: blo, hi: bhi, first: 0, count: 0 }, nodes)
+}
+
+/// The wide node for binary node `n` (pushed to `wide`, its index returned): the binary node's
+/// children, an inner one among them replaced by its own two while there is room for four (the
+/// first inner one each time, so the shape is fixed by the binary tree alone), then the wide
+/// nodes below, depth first.
+fn widen(binary: &[Node], n: usize, wide: &mut Vec<Wide>) -> u32 {
+    let mut kids: Vec<Child> = binary[n].child.to_vec();
+    while kids.len() < 4 {
+        let Some(k) = kids.iter().position(|c| c.count == 0) else { break };
+        let inner = kids.remove(k);
+        let [a, b] = binary[inner.first as usize].child;
+        kids.insert(k, b);
+        kids.insert(k, a);
+    }
+    let at = wide.len();
+    wide.push(Wide { lo: [[f32::INFINITY; 4]; 3], hi: [[f32::NEG_INFINITY; 4]; 3], first: [0; 4], count: [0; 4] });
+    for (i, c) in kids.iter().enumerate() {
+        let first = if c.count == 0 { widen(binary, c.first as usize, wide) } else { c.first };
+        let node = &mut wide[at];
+        for k in 0..3 {
+            node.lo[k][i] = c.lo[k];
+            node.hi[k][i] = c.hi[k];
+        }
+        node.first[i] = first;
+        node.count[i] = c.count;
+    }
+    at as u32
 }
 
 /// The closest point of triangle `abc` to `p` and its barycentric weights, by the Voronoi
@@ -383,6 +453,25 @@ mod tests {
             let p: Vector3<f64> = (0..3).map(|k| c.barycentric[k] * Vector3::from(vertices[f[k] as usize])).sum();
             assert!((p - Vector3::from(c.point)).norm() < 1e-12);
             assert!((c.barycentric.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn every_tree_shape_finds_what_brute_force_finds() {
+        // 1 to 40 triangles: a lone leaf, wide nodes with two, three and four children.
+        let mut seed = 11u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for m in 1..=40usize {
+            let vertices: Vec<[f64; 3]> = (0..3 * m).map(|_| [next() * 10.0, next() * 10.0, next() * 2.0]).collect();
+            let faces: Vec<[u32; 3]> = (0..m as u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+            let queries: Vec<[f64; 3]> =
+                (0..50).map(|_| [next() * 14.0 - 2.0, next() * 14.0 - 2.0, next() * 6.0 - 3.0]).collect();
+            for (q, c) in queries.iter().zip(closest_points(&vertices, &faces, &queries).unwrap()) {
+                assert!((c.distance - brute(&vertices, &faces, q)).abs() < 1e-12, "{m} triangles");
+            }
         }
     }
 
