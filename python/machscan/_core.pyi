@@ -163,6 +163,19 @@ class _FaceStatisticsArrays(TypedDict):
     std: _F64
     out_of_tolerance: _F64
 
+class _ProfileArrays(TypedDict):
+    layout: str
+    x: _F64
+    heights: _F64
+    y: _F64 | None
+    time: _F64 | None
+    encoder: _F64 | None
+    frame: _F64 | None
+    x_resolution: float | None
+    y_resolution: float | None
+    model: str | None
+    serial: str | None
+
 class _InsertedArrays(TypedDict):
     vertices: _F64
     faces: _I64
@@ -879,6 +892,11 @@ class KinematicChain:
         """
 
 # ---- io ---------------------------------------------------------------------------------------
+
+def read_profiles(path: _Path) -> _ProfileArrays:
+    """A line-profiler export (Gocator CSV, Keyence height rows) as its arrays;
+    ``machscan.io.read_profiles`` documents it and builds the ``Scan``.
+    """
 
 def read_table(
     path: _Path,

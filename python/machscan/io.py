@@ -16,6 +16,9 @@ Formats, by extension (:data:`READ_FORMATS`, :data:`WRITE_FORMATS`):
 - ``.e57`` — ASTM E2807: every scan, poses applied, Cartesian or spherical, in mm (E57 stores
   metres); invalid points dropped and counted (``CloudFile.dropped``); written as one scan.
 
+Line-profiler exports (LMI Gocator CSV, Keyence height rows) come in as a :class:`machscan.Scan`
+through :func:`read_profiles`.
+
 CAD solids (``.step``/``.stp``, ``.iges``/``.igs``) come in through :func:`read_cad` as a mesh within
 a chordal tolerance, each triangle keeping its B-rep face (``machscan[cad]``).
 
@@ -46,6 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from machscan import _core
 from machscan.cad import CadMesh, read_cad
+from machscan.scan import read_profiles
 
 __all__ = [
     "READ_FORMATS",
@@ -60,6 +64,7 @@ __all__ = [
     "read_cad",
     "read_mesh",
     "read_points",
+    "read_profiles",
     "read_table",
     "read_toolpath",
     "write_mesh",

@@ -39,6 +39,7 @@ __all__ = [
     "SENTINEL",
     "Profiler",
     "Scan",
+    "read_profiles",
     "read_scan_csv",
     "write_scan_csv",
 ]
@@ -668,6 +669,117 @@ def read_scan_csv(
         mount=mount,
         metadata=meta,
     )
+
+
+def read_profiles(
+    path: str | os.PathLike[str],
+    *,
+    pitch: float | None = None,
+    x_start: float | None = None,
+    y_pitch: float | None = None,
+) -> Scan:
+    """A line-profiler export as a :class:`Scan`: the files plants have from their profilers'
+    own software, read by content (Rust; ``docs/clouds.md``).
+
+    - **LMI Gocator CSV** (the web interface's or emulator's CSV export): the ``Profile``
+      section (resampled profiles: a row per frame with Frame, Time, Encoder, Y and one height
+      per x column) or the ``Part`` section (a resampled surface: a row per y). The readings' x
+      grid comes from the column headers (its pitch and offset: the profiler's ``pitch`` and
+      ``center``), the frame's position along the scan from the ``Y`` column, its time from
+      ``Time`` (µs, as the sensor stamps it, made seconds from the first frame), and ``Encoder``
+      and ``Frame`` go to ``scan.metadata``. Empty cells are no reading (NaN). ``RawProfile`` and
+      ``SurfacePointCloud`` exports (points off a grid) are refused: export with uniform spacing.
+    - **Keyence LJ-X / LJ-V height rows** (the communication library samples' ``…_height.csv``,
+      UTF-16 or ASCII, one profile per line): integers in 0.01 µm with the sensor's no-reading
+      codes (−2147483648…−2147483645, and their 20-bit forms) → NaN; numbers with a decimal point
+      are mm, with LJ-Navigator's −999.99… no reading. The file has no x grid and no frame
+      spacing: give ``pitch``, ``x_start`` (the sensor's profile information, in mm) and
+      ``y_pitch``.
+
+    Heights are as the vendor gives them (larger is nearer the sensor: machscan's SCS z). The scan
+    is of a part moving under a fixed sensor: every pose is ``(0, y, 0, 0, 0, 0)`` with no mount
+    offset, so :meth:`Scan.wcs_points` gives the vendor's own (x, y, z).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    pitch, x_start : float, optional
+        Keyence: the readings' spacing and the first reading's x, mm.
+    y_pitch : float, optional
+        The frames' spacing along the scan, mm: Keyence, or a Gocator export without a Y column.
+
+    Returns
+    -------
+    Scan
+        ``metadata`` holds ``layout``, ``model``, ``serial`` and, where the file has them,
+        ``encoder`` and ``frame`` per frame.
+
+    Raises
+    ------
+    machscan.io.FileFormatError
+        A layout machscan does not read, or a cell that is not what its column holds — naming
+        the file, the line and what was expected; an x grid that is not uniform.
+    ValueError
+        A Keyence file without ``pitch``, ``x_start`` or ``y_pitch``, or one of them given where
+        the file has its own.
+
+    Examples
+    --------
+    >>> scan = machscan.io.read_profiles("gocator_export.csv")
+    >>> fits = machscan.fit_grooves(scan.profiler.x, scan.frames)
+    >>> points, frame = scan.wcs_points()
+    """
+    from machscan.io import FileFormatError
+
+    out = _core.read_profiles(os.fspath(path))
+    heights = out["heights"]
+    frames, readings = heights.shape
+    layout = out["layout"]
+    keyence = layout.startswith("Keyence")
+    if keyence:
+        missing = [n for n, v in (("pitch", pitch), ("x_start", x_start), ("y_pitch", y_pitch)) if v is None]
+        if missing:
+            raise ValueError(
+                f"{', '.join(missing)}: a Keyence height export holds no x grid and no frame spacing; give pitch= "
+                "and x_start= (mm: the sensor's X pitch and X start) and y_pitch= (mm between frames)"
+            )
+        step = _finite_float(pitch, "pitch")
+        x0 = _finite_float(x_start, "x_start")
+    else:
+        for name, given in (("pitch", pitch), ("x_start", x_start)):
+            if given is not None:
+                raise ValueError(f"{name}: the {layout} export gives its own x grid; leave {name} out")
+        x = out["x"]
+        x0 = float(x[0])
+        step = float((x[-1] - x[0]) / (readings - 1)) if readings > 1 else float(out["x_resolution"] or 1.0)
+        off = np.abs(x - (x0 + step * np.arange(readings)))
+        # The headers are printed to 5 decimals: their rounding, and no more.
+        if readings > 1 and (not step > 0 or off.max() > 1e-5 + 1e-9 * np.abs(x).max()):
+            raise FileFormatError(
+                f"{os.fspath(path)}: the x positions of the {layout} columns are not an even grid (off by up to "
+                f"{off.max():.3g} mm): a Scan holds readings at a fixed pitch"
+            )
+    if not step > 0:
+        raise ValueError(f"pitch: must be a positive spacing in mm, got {step}")
+    y = out["y"]
+    if y is not None and y_pitch is not None:
+        raise ValueError("y_pitch: the export gives each frame's Y; leave y_pitch out")
+    if y is None:
+        if y_pitch is None:
+            raise ValueError(f"y_pitch: the {layout} export has no Y column; give the frames' spacing, mm")
+        y = _finite_float(y_pitch, "y_pitch") * np.arange(frames)
+    times = np.zeros(frames)
+    if out["time"] is not None and np.all(np.diff(out["time"]) >= 0):
+        times = (out["time"] - out["time"][0]) * 1e-6
+    poses = np.zeros((frames, 6))
+    poses[:, 1] = y
+    name = " ".join(v for v in (layout.split()[0], out["model"]) if v)
+    profiler = Profiler(readings=readings, pitch=step, center=-x0 / step, sentinel=None, name=name)
+    metadata: dict[str, Any] = {"source": os.fspath(path), "layout": layout, "model": out["model"], "serial": out["serial"]}
+    for key in ("encoder", "frame"):
+        if out[key] is not None:
+            metadata[key] = [float(v) for v in out[key]]
+    return Scan(heights, poses, times, profiler, np.zeros(3), np.zeros(6), metadata=metadata)
 
 
 def write_scan_csv(

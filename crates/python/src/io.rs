@@ -40,6 +40,33 @@ fn read_table<'py>(
     Ok(d)
 }
 
+/// A line-profiler export (Gocator CSV, Keyence height rows) as its arrays;
+/// ``machscan.io.read_profiles`` documents it and builds the ``Scan``.
+#[pyfunction]
+fn read_profiles<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let p = enter(py, || machscan_core::io::read_profiles(&path))?;
+    let n = if p.frames > 0 { p.heights.len() / p.frames } else { 0 };
+    let d = PyDict::new(py);
+    d.set_item("layout", p.layout)?;
+    let k = p.x.len();
+    d.set_item("x", to_numpy(py, p.x, &[k])?)?;
+    d.set_item("heights", to_numpy(py, p.heights, &[p.frames, n])?)?;
+    for (name, v) in [("y", p.y), ("time", p.time), ("encoder", p.encoder), ("frame", p.frame)] {
+        match v {
+            Some(v) => {
+                let k = v.len();
+                d.set_item(name, to_numpy(py, v, &[k])?)?
+            }
+            None => d.set_item(name, py.None())?,
+        }
+    }
+    d.set_item("x_resolution", p.x_resolution)?;
+    d.set_item("y_resolution", p.y_resolution)?;
+    d.set_item("model", p.model)?;
+    d.set_item("serial", p.serial)?;
+    Ok(d)
+}
+
 /// Read a point or mesh file by its extension (see ``machscan.io.read``); returns the
 /// ``CloudArrays`` ``points``, ``normals`` (or None), ``scalars`` and ``triangles``.
 #[pyfunction]
@@ -180,6 +207,7 @@ fn write_toolpath(
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_table, m)?)?;
+    m.add_function(wrap_pyfunction!(read_profiles, m)?)?;
     m.add_function(wrap_pyfunction!(read_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(write_cloud, m)?)?;
     m.add_function(wrap_pyfunction!(readable_formats, m)?)?;

@@ -9,6 +9,7 @@ mod lzf;
 mod obj;
 mod pcd;
 mod ply;
+mod profiles;
 mod stl;
 mod table;
 mod text;
@@ -20,6 +21,7 @@ pub use lzf::{lzf_decompress, lzf_store};
 pub use obj::parse_obj;
 pub use pcd::{parse_pcd, PcdEncoding};
 pub use ply::parse_ply;
+pub use profiles::{parse_profiles, read_profiles, ProfileExport};
 pub use stl::parse_stl;
 pub use table::{parse_table, read_table, Table, TableOptions};
 pub use text::{parse_mesh_txt, read_xyz};
@@ -612,6 +614,19 @@ mod fuzz {
             } else {
                 let _ = parse_pcd(Path::new("f.pcd"), &b);
             }
+        }
+
+        #[test]
+        fn profile_exports_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..300), cut in 0usize..900, flips in proptest::collection::vec((any::<usize>(), any::<u8>()), 0..6)) {
+            let _ = parse_profiles(Path::new("f.csv"), &bytes);
+            // Behind a Gocator section and a Keyence row, and a valid Gocator export mutated.
+            for prefix in [&b"Profile\nFrame Count\n1\nFrame,Y,Axis,0.0,0.1\n"[..], b"1234500\t"] {
+                let mut b = prefix.to_vec();
+                b.extend_from_slice(&bytes);
+                let _ = parse_profiles(Path::new("f.csv"), &b);
+            }
+            let valid = b"Info\nXResolution\n0.1\nEnd\nProfile\nFrame Count\n2\nFrame,Source,Time,Encoder,Y,Axis,0.0,0.1\n0,0,5,1,0.0,Z,1.0,\n1,0,9,2,0.1,Z,-,2.0\nEnd\nPart\nRow Count\n1\nY\\X,0,1\n0,1,2\nEnd\n";
+            let _ = parse_profiles(Path::new("f.csv"), &mutate(valid.to_vec(), cut, &flips, false));
         }
 
         #[test]
