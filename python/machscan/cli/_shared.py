@@ -69,6 +69,10 @@ def _load_scan(args: argparse.Namespace):
     path = Path(args.scan)
     if path.suffix.lower() == ".npz":
         return Scan.load(path)
+    if getattr(args, "poses", None) is None and _is_gocator_export(path):
+        from machscan.scan import read_profiles
+
+        return read_profiles(path)
     missing = [n for n in ("poses", "pitch", "c2_offset", "mount") if getattr(args, n, None) is None]
     if missing:
         raise ValueError(f"scan: {path} is a CSV export; give --{' --'.join(m.replace('_', '-') for m in missing)} too")
@@ -81,6 +85,18 @@ def _load_scan(args: argparse.Namespace):
         name="profiler",
     )
     return read_scan_csv(path, args.poses, profiler, args.c2_offset, args.mount)
+
+
+def _is_gocator_export(path: Path) -> bool:
+    """A Gocator CSV export starts with a section name (``Info``, ``Profile``, ``Part``, ...)
+    alone on its line; a frames CSV with numbers or a header of several cells."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(256)
+    except OSError:
+        return False
+    first = next((line.strip() for line in head.decode("latin-1").splitlines() if line.strip()), "")
+    return first.isalpha()
 
 
 def _csv_readings(path: Path) -> int:
