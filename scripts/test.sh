@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 
 # System libraries a test dependency needs, installed only when missing.
 need=()
-for pkg in libusb-1.0-0 libgl1 libgomp1; do
+for pkg in libusb-1.0-0 libgl1 libx11-6 libgomp1; do
   dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
 done
 if [ ${#need[@]} -gt 0 ]; then

@@ -120,7 +120,8 @@ def test_statistics_per_cad_face_equal_numpy_and_follow_the_tolerance():
     for i, face in enumerate(s.face):
         x = d.distances[d.cad_faces == face]
         assert s.count[i] == len(x)
-        np.testing.assert_allclose([s.min[i], s.max[i], s.mean[i], s.std[i]], [x.min(), x.max(), x.mean(), x.std(ddof=1)], atol=1e-12)
+        got = [s.min[i], s.max[i], s.mean[i], s.std[i]]
+        np.testing.assert_allclose(got, [x.min(), x.max(), x.mean(), x.std(ddof=1)], atol=1e-12)
         assert s.out_of_tolerance[i] == pytest.approx(np.mean((x < -0.5) | (x > 1.0)))
     whole = machscan.signed_distances(q, v, f).statistics(0.5)
     assert list(whole.face) == [0] and whole.count[0] == len(q)
@@ -132,7 +133,7 @@ def test_bad_meshes_and_arguments_are_refused_by_name():
     q = np.zeros((1, 3))
     g = f.copy()
     g[0] = g[0, ::-1]
-    with pytest.raises(ValueError, match="triangles: .*wound consistently"):
+    with pytest.raises(ValueError, match=r"triangles: .*wound consistently"):
         machscan.signed_distances(q, v, g)
     with pytest.raises(ValueError, match="triangles: the closed mesh is wound inside out"):
         machscan.signed_distances(q, v, f[:, ::-1])

@@ -74,9 +74,10 @@ def test_a_gocator_profile_export_is_a_scan_of_its_frames(tmp_path):
     assert scan.metadata["encoder"] == list(map(float, encoder)) and scan.metadata["serial"] == "41234"
     assert scan.profiler.name == "Gocator 2340"
     # The points are the vendor's own (x, y, z); NaN readings dropped.
-    points, frame = scan.wcs_points()
+    points, _ = scan.wcs_points()
     valid = ~np.isnan(frames)
-    want = np.column_stack([np.broadcast_to(x, frames.shape)[valid], np.broadcast_to(y[:, None], frames.shape)[valid], frames[valid]])
+    xs, ys = np.broadcast_to(x, frames.shape)[valid], np.broadcast_to(y[:, None], frames.shape)[valid]
+    want = np.column_stack([xs, ys, frames[valid]])
     np.testing.assert_allclose(points, want, atol=1e-9)
     # On to the groove fit: 0.6 mm wide, 0.2 mm deep.
     fits = machscan.fit_grooves(scan.profiler.x, scan.frames)

@@ -162,11 +162,11 @@ def test_bad_files_and_arguments_are_refused_by_name(tmp_path, monkeypatch):
         machscan.io.read_cad(tmp_path / "missing.step")
     junk = tmp_path / "junk.step"
     junk.write_text("ISO-10303-21;\nnot a step file\n")
-    with pytest.raises(machscan.io.FileFormatError, match="junk.step"):
+    with pytest.raises(machscan.io.FileFormatError, match=r"junk\.step"):
         machscan.io.read_cad(junk)
     with pytest.raises(ValueError, match="tolerance"):
         machscan.io.read_cad(junk, tolerance=0.0)
-    with pytest.raises(ValueError, match="path: .* is not STEP or IGES"):
+    with pytest.raises(ValueError, match=r"path: .* is not STEP or IGES"):
         machscan.io.read_cad(tmp_path / "part.stl")
     monkeypatch.setitem(sys.modules, "OCP", None)
     with pytest.raises(ImportError, match=r"machscan\[cad\]"):

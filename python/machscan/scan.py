@@ -761,13 +761,15 @@ def read_profiles(
             )
     if not step > 0:
         raise ValueError(f"pitch: must be a positive spacing in mm, got {step}")
-    y = out["y"]
-    if y is not None and y_pitch is not None:
+    given_y = out["y"]
+    if given_y is not None and y_pitch is not None:
         raise ValueError("y_pitch: the export gives each frame's Y; leave y_pitch out")
-    if y is None:
-        if y_pitch is None:
-            raise ValueError(f"y_pitch: the {layout} export has no Y column; give the frames' spacing, mm")
-        y = _finite_float(y_pitch, "y_pitch") * np.arange(frames)
+    if given_y is not None:
+        y = np.asarray(given_y, dtype=np.float64)
+    elif y_pitch is None:
+        raise ValueError(f"y_pitch: the {layout} export has no Y column; give the frames' spacing, mm")
+    else:
+        y = _finite_float(y_pitch, "y_pitch") * np.arange(frames, dtype=np.float64)
     times = np.zeros(frames)
     if out["time"] is not None and np.all(np.diff(out["time"]) >= 0):
         times = (out["time"] - out["time"][0]) * 1e-6
@@ -777,8 +779,9 @@ def read_profiles(
     profiler = Profiler(readings=readings, pitch=step, center=-x0 / step, sentinel=None, name=name)
     metadata: dict[str, Any] = {"source": os.fspath(path), "layout": layout, "model": out["model"], "serial": out["serial"]}
     for key in ("encoder", "frame"):
-        if out[key] is not None:
-            metadata[key] = [float(v) for v in out[key]]
+        column = out["encoder"] if key == "encoder" else out["frame"]
+        if column is not None:
+            metadata[key] = [float(v) for v in column]
     return Scan(heights, poses, times, profiler, np.zeros(3), np.zeros(6), metadata=metadata)
 
 

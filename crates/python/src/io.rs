@@ -45,7 +45,7 @@ fn read_table<'py>(
 #[pyfunction]
 fn read_profiles<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let p = enter(py, || machscan_core::io::read_profiles(&path))?;
-    let n = if p.frames > 0 { p.heights.len() / p.frames } else { 0 };
+    let n = p.heights.len().checked_div(p.frames).unwrap_or(0);
     let d = PyDict::new(py);
     d.set_item("layout", p.layout)?;
     let k = p.x.len();

@@ -79,10 +79,10 @@ impl Wide {
     #[inline]
     fn distances2(&self, q: &[f64; 3]) -> [f64; 4] {
         let mut d2 = [0.0f64; 4];
-        for k in 0..3 {
-            for i in 0..4 {
-                let d = (self.lo[k][i] as f64 - q[k]).max(0.0).max(q[k] - self.hi[k][i] as f64);
-                d2[i] += d * d;
+        for ((lo, hi), &qk) in self.lo.iter().zip(&self.hi).zip(q) {
+            for ((d2, &lo), &hi) in d2.iter_mut().zip(lo).zip(hi) {
+                let d = (lo as f64 - qk).max(0.0).max(qk - hi as f64);
+                *d2 += d * d;
             }
         }
         d2
