@@ -195,6 +195,19 @@ def test_held_motions_are_exactly_zero_and_c_turns_about_the_rotary_axis():
     assert fit.motion["c"] == pytest.approx(3.0, abs=1e-8)
 
 
+def test_results_do_not_depend_on_the_thread_count():
+    v, f = lumpy_body(3)
+    on = _surface_points(v, f, 3000, 9)
+    scan = on @ _pose((0.5, 0, 1.0), (0.2, 0, 0))[:3, :3].T
+    runs = []
+    for threads in (1, 2):
+        with machscan.thread_limit(threads):
+            d = machscan.signed_distances(scan, v, f)
+            fit = machscan.fit_to_mesh(scan, v, f, 2.0)
+        runs.append((d.distances.tobytes(), d.triangles.tobytes(), fit.transformation.tobytes()))
+    assert runs[0] == runs[1]
+
+
 def test_fit_to_mesh_refuses_bad_options_by_name():
     v, f = lumpy_body(1)
     q = v[:10]

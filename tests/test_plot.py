@@ -285,3 +285,30 @@ def test_allowance_map_colors_the_stock_and_rings_the_short_points():
     with pytest.raises(ValueError, match="allowance"):
         plot.allowance_map(p, a[:-1])
     plt.close(fig)
+
+
+def test_deviation_map_centres_on_zero_marks_the_band_and_greys_the_cad_without_data():
+    rng = np.random.default_rng(1)
+    p = rng.normal(size=(400, 3)) * 10
+    d = np.linspace(-0.08, 0.03, 400)
+    d[5] = np.nan
+    v = np.array([[0, 0, 0], [10, 0, 0], [0, 10, 0], [0, 0, 10]], dtype=float)
+    t = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    fig = plot.deviation_map(p, d, tolerance=(-0.05, 0.02), vertices=v, triangles=t)
+    ax = fig.axes[0]
+    colored = [c for c in ax.collections if isinstance(c, PathCollection) and c.get_array() is not None]
+    assert len(colored) == 1
+    norm = colored[0].norm
+    assert norm.vmin == -norm.vmax == pytest.approx(-0.08)  # symmetric about zero
+    out = int(np.sum((d < -0.05) | (d > 0.02)))
+    assert f"{out} points outside [-0.05, 0.02] mm" in ax.get_title() and "1 without a distance" in ax.get_title()
+    bar = fig.axes[1]
+    assert "mm" in bar.get_ylabel()
+    assert sorted(round(line.get_ydata()[0], 6) for line in bar.lines) == [-0.05, 0.02]
+    # The CAD drawn underneath, grey.
+    assert any(type(c).__name__ == "Poly3DCollection" for c in ax.collections)
+    with pytest.raises(ValueError, match="distances"):
+        plot.deviation_map(p, d[:-1], tolerance=0.05)
+    with pytest.raises(ValueError, match="tolerance"):
+        plot.deviation_map(p, d, tolerance=(0.1, -0.1))
+    plt.close(fig)

@@ -839,7 +839,7 @@ def deviation_map(
     n_out, n_none = int(out.sum()), int((~finite).sum())
     none = f"; {n_none} without a distance (grey)" if n_none else ""
     ax3d.set_title(
-        f"Deviation: min {d[finite].min():+.3f}, mean {d[finite].mean():+.3f}, max {d[finite].max():+.3f} mm; "
+        f"Deviation: min {d[finite].min():+.3f}, mean {d[finite].mean():+.3f}, max {d[finite].max():+.3f} mm\n"
         f"{n_out} point{'s' if n_out != 1 else ''} outside [{lower:g}, {upper:g}] mm{none}"
     )
     bar = fig.colorbar(sc, ax=ax3d, label="signed deviation (mm), + outside the material", shrink=0.7)
