@@ -26,6 +26,7 @@ __all__ = [
     "align_blank",
     "allowance",
     "calibrate_mount",
+    "calibrate_mount_sphere",
     "closest_points",
     "signed_distances",
     "face_statistics",
@@ -123,6 +124,17 @@ class _IcpArrays(TypedDict):
 class _MeshFitArrays(_IcpArrays):
     motion: list[float]
     undetermined: str
+
+class _SphereCalibrationArrays(TypedDict):
+    params: _F64
+    sphere_center: _F64
+    rms: float
+    std_errors: _F64
+    covariance: _F64
+    residuals: _F64
+    frame_index: _I64
+    iterations: int
+    converged: bool
 
 class _ProbeFitArrays(TypedDict):
     transformation: _F64
@@ -829,6 +841,23 @@ def fit_to_mesh(
 ) -> _MeshFitArrays:
     """The fit of a scan to a mesh in chosen motions; ``machscan.fit_to_mesh`` documents it and
     wraps the arrays this returns.
+    """
+
+def calibrate_mount_sphere(
+    frames: ArrayLike,
+    poses: ArrayLike,
+    *,
+    pitch: float,
+    center: float | None,
+    valid_range: ArrayLike | None,
+    sentinel: float | None,
+    c2_offset: ArrayLike,
+    radius: float,
+    mount: ArrayLike,
+    sphere_center: ArrayLike | None,
+) -> _SphereCalibrationArrays:
+    """Sensor mount calibration with a reference sphere (SPEC K4 beyond);
+    ``machscan.calibrate_mount_sphere`` documents it and wraps the arrays this returns.
     """
 
 def calibrate_mount(

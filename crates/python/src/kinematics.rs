@@ -382,6 +382,47 @@ fn calibrate_mount<'py>(
     Ok(d)
 }
 
+/// Sensor mount calibration with a reference sphere (SPEC K4 beyond);
+/// ``machscan.calibrate_mount_sphere`` documents it and wraps the arrays this returns.
+#[pyfunction]
+#[pyo3(signature = (frames, poses, *, pitch, center, valid_range, sentinel, c2_offset, radius, mount, sphere_center))]
+#[allow(clippy::too_many_arguments)]
+fn calibrate_mount_sphere<'py>(
+    py: Python<'py>,
+    frames: &Bound<'py, PyAny>,
+    poses: &Bound<'py, PyAny>,
+    pitch: f64,
+    center: Option<f64>,
+    valid_range: Option<&Bound<'py, PyAny>>,
+    sentinel: Option<f64>,
+    c2_offset: &Bound<'py, PyAny>,
+    radius: f64,
+    mount: &Bound<'py, PyAny>,
+    sphere_center: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (arr, profiler) = frames_and_profiler(frames, pitch, center, valid_range, sentinel)?;
+    let f = arr.shape()[0];
+    let poses = F64Array::extract(poses, "poses", &[Dim::Is(f), Dim::Is(6)], AC_HEAD_AXES)?;
+    let c2 = f64_vector::<3>(c2_offset, "c2_offset", "(Lx, Ly, Lz) in mm")?;
+    let mount = f64_vector::<6>(mount, "mount", "(theta, psi, phi, dx, dy, dz): the start")?;
+    let start = f64_vector_opt::<3>(sphere_center, "sphere_center", "(x, y, z) in mm: the start")?;
+    let n = arr.shape()[1];
+    let (fr, po) = (arr.values()?, poses.values()?);
+    let cal = enter(py, || kin::calibrate_mount_sphere(fr, n, &profiler, po, c2, radius, mount, start))?;
+    let d = PyDict::new(py);
+    let m = cal.residuals.len();
+    d.set_item("params", to_numpy(py, cal.mount.to_vec(), &[6])?)?;
+    d.set_item("sphere_center", to_numpy(py, cal.center.to_vec(), &[3])?)?;
+    d.set_item("rms", cal.rms)?;
+    d.set_item("std_errors", to_numpy(py, cal.std_errors.to_vec(), &[9])?)?;
+    d.set_item("covariance", to_numpy(py, cal.covariance.to_vec(), &[9, 9])?)?;
+    d.set_item("residuals", to_numpy(py, cal.residuals, &[m])?)?;
+    d.set_item("frame_index", to_numpy(py, cal.frame_index, &[m])?)?;
+    d.set_item("iterations", cal.iterations)?;
+    d.set_item("converged", cal.converged)?;
+    Ok(d)
+}
+
 /// A machine model: a chain of elementary transforms mapping the last link (sensor, tool,
 /// part) into the WCS (SPEC K7).
 ///
@@ -573,6 +614,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ac_table_rotate, m)?)?;
     m.add_function(wrap_pyfunction!(interpolate_poses, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_mount, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate_mount_sphere, m)?)?;
     m.add_class::<PyKinematicChain>()?;
     m.add("SENTINEL", VENDOR_SENTINEL)?;
     Ok(())

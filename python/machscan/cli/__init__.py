@@ -4,6 +4,9 @@ machscan demo [--out DIR] [--seed 0]            synthetic engraved plate → gro
 machscan grooves SCAN CAD [CAD ...] [--out DIR] raw scan + CAD contours → groove tables (CSV);
                                                 exit status 3 when no contour matched
 machscan points SCAN [--out cloud.ply]          raw scan → workpiece point cloud (PLY)
+machscan calibrate SCAN --radius R [--out mount.txt]
+                                                the sensor mount from a scan of a reference sphere
+                                                (--simulate: the built-in sphere and its truth)
 machscan position MODEL --plan plan.csv         model → probe points and approach directions
 machscan position MODEL --plan plan.csv --measured probed.csv [--out pose.txt]
                                                 one probe round → part pose, error table
@@ -37,7 +40,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from machscan.cli import allowance, batch, compare, compensate, demo, grind, grooves, points, position
+from machscan.cli import allowance, batch, calibrate, compare, compensate, demo, grind, grooves, points, position
 
 __all__ = ["build_parser", "main"]
 
@@ -53,7 +56,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"machscan {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    for command in (demo, grooves, points, position, allowance, compare, compensate, grind, batch):
+    for command in (demo, grooves, points, calibrate, position, allowance, compare, compensate, grind, batch):
         command.add_parser(sub)
     return parser
 

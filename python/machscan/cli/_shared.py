@@ -188,10 +188,16 @@ def _read_rows(path: Path, name: str, widths: tuple[int, ...], nan_columns: tupl
     return rows
 
 
-def _scan_arguments(p: argparse.ArgumentParser) -> None:
+def _scan_arguments(p: argparse.ArgumentParser, *, optional: bool = False) -> None:
+    """The scan argument (optional for a command that can simulate one) and a CSV scan's options."""
     from machscan.scan import SENTINEL
 
-    p.add_argument("scan", type=Path, help="raw scan: .npz saved by Scan.save, or a CSV export (one frame per row)")
+    p.add_argument(
+        "scan",
+        type=Path,
+        nargs="?" if optional else None,
+        help="raw scan: .npz saved by Scan.save, a Gocator CSV export, or a CSV export (one frame per row)",
+    )
     g = p.add_argument_group("for a CSV scan")
     g.add_argument("--poses", type=Path, help="poses CSV (X, Y, Z, A, C, C2 per frame, optional leading t)")
     g.add_argument("--pitch", type=float, help="reading spacing, mm")

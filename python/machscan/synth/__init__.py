@@ -31,12 +31,14 @@ from machscan.synth.grooves import (
 )
 from machscan.synth.pocket import pocket_plate
 from machscan.synth.skin import BentSkin
+from machscan.synth.sphere import SPHERE_POSES, SphereTruth, sphere_scan
 
 __all__ = [
     "DEFAULT_C2_OFFSET",
     "DEFAULT_MOUNT",
     "GROOVE_SHAPES",
     "PLATE",
+    "SPHERE_POSES",
     "AllowanceCloud",
     "BentSkin",
     "Blade",
@@ -45,6 +47,7 @@ __all__ = [
     "GrooveFrames",
     "GrooveTruth",
     "PeriodicProfile",
+    "SphereTruth",
     "SurfaceError",
     "TouchProbe",
     "WavyPanel",
@@ -55,5 +58,6 @@ __all__ = [
     "groove_scan",
     "misplacement",
     "pocket_plate",
+    "sphere_scan",
     "surface_error",
 ]
