@@ -107,7 +107,7 @@ def test_a_gocator_part_export_is_a_frame_per_row(tmp_path):
 
 def test_keyence_height_rows_need_their_grid_and_drop_the_sensor_codes(tmp_path):
     x, frames = groove_frames(6, seed=2)
-    raw = np.round(frames * 1e5).astype(np.int64)  # 0.01 µm
+    raw = np.round(np.nan_to_num(frames) * 1e5).astype(np.int64)  # 0.01 µm
     codes = np.array([-2147483648, -2147483647, -2147483646, -2147483645])
     raw[np.isnan(frames)] = codes[np.arange(np.isnan(frames).sum()) % 4]
     path = tmp_path / "scan_height.csv"

@@ -206,6 +206,40 @@ def test_dict_results_have_exactly_the_keys_their_typed_dict_declares(tmp_path):
     )
     results["_BlankAlignmentArrays"] = aligned
     results["_AlignmentStageArrays"] = aligned["stages"][0]
+    # The comparison with CAD, the profiler exports and the sphere calibration.
+    tet = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    tet_faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    results["_SignedArrays"] = _core.signed_distances(unit, tet, tet_faces)
+    results["_FaceStatisticsArrays"] = _core.face_statistics(np.zeros(3), [0, 0, 1], count=2, lower=-1.0, upper=1.0)
+    results["_MeshFitArrays"] = _core.fit_to_mesh(
+        tet[:3] + 0.01,
+        tet,
+        tet_faces,
+        1.0,
+        init=None,
+        dof="xyz",
+        axis_point=None,
+        axis_direction=None,
+        max_iterations=5,
+        relative_fitness=1e-6,
+        relative_rmse=1e-6,
+    )
+    export = tmp_path / "k_height.csv"
+    export.write_text("1234500\t1234600\t\n")
+    results["_ProfileArrays"] = _core.read_profiles(export)
+    sphere, truth = machscan.synth.sphere_scan(3, sweeps=2)
+    results["_SphereCalibrationArrays"] = _core.calibrate_mount_sphere(
+        sphere.frames,
+        sphere.poses,
+        pitch=sphere.profiler.pitch,
+        center=None,
+        valid_range=None,
+        sentinel=None,
+        c2_offset=sphere.c2_offset,
+        radius=truth.radius,
+        mount=sphere.mount,
+        sphere_center=None,
+    )
     assert set(results) == set(declared), "every TypedDict of the stub is checked here"
     for name, value in results.items():
         assert list(value) == declared[name], name

@@ -121,7 +121,15 @@ class _IcpArrays(TypedDict):
     history_fitness: _F64
     history_rmse: _F64
 
-class _MeshFitArrays(_IcpArrays):
+class _MeshFitArrays(TypedDict):
+    transformation: _F64
+    fitness: float
+    rmse: float
+    correspondences: int
+    iterations: int
+    converged: bool
+    history_fitness: _F64
+    history_rmse: _F64
     motion: list[float]
     undetermined: str
 
