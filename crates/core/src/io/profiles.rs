@@ -216,17 +216,20 @@ fn gocator(path: &Path, lines: &[&str]) -> Result<ProfileExport> {
 /// The `Profile` section: attribute header and row, data header, rows per frame and axis.
 fn gocator_profile(path: &Path, s: &Section, out: &mut ProfileExport) -> Result<()> {
     out.layout = "Gocator Profile".into();
-    let Some(header) = s.body.get(2) else {
-        return Err(Error::format(path, format!("line {}: the Profile section has no data header", s.line)));
-    };
-    let names = cells(header);
-    let header_line = s.line + 3;
-    let Some(axis) = names.iter().position(|c| c.eq_ignore_ascii_case("Axis")) else {
+    // The data header is the line naming an Axis column (after the attribute header and row
+    // the manual shows; found by its content, so an export without them reads too).
+    let Some(at) = s.body.iter().position(|l| cells(l).iter().any(|c| c.eq_ignore_ascii_case("Axis"))) else {
         return Err(Error::format(
             path,
-            format!("line {header_line}: expected the Profile data header (Frame, Source, Time, …, Y, Axis, x…)"),
+            format!(
+                "line {}: expected the Profile data header (Frame, Source, Time, …, Y, Axis, x…) in the section",
+                s.line + 1
+            ),
         ));
     };
+    let names = cells(s.body[at]);
+    let header_line = s.line + at + 1;
+    let axis = names.iter().position(|c| c.eq_ignore_ascii_case("Axis")).unwrap_or(0);
     let col = |key: &str| names[..axis].iter().position(|c| c.eq_ignore_ascii_case(key));
     out.x = names[axis + 1..]
         .iter()
@@ -241,7 +244,7 @@ fn gocator_profile(path: &Path, s: &Section, out: &mut ProfileExport) -> Result<
     let (source, time, encoder, y, frame) = (col("Source"), col("Time"), col("Encoder"), col("Y"), col("Frame"));
     let (mut ys, mut ts, mut es, mut fs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut first_source: Option<String> = None;
-    for (k, line) in s.body[3..].iter().enumerate() {
+    for (k, line) in s.body[at + 1..].iter().enumerate() {
         let at = header_line + 1 + k;
         if line.trim().is_empty() {
             continue;
@@ -476,6 +479,14 @@ End\n";
         }
         // (Compared as text: NaN is not equal to itself.)
         assert_eq!(format!("{:?}", parse_profiles(Path::new("p.csv"), &utf16).unwrap()), format!("{p:?}"));
+    }
+
+    #[test]
+    fn a_profile_section_without_its_attribute_rows_reads_too() {
+        let text = "Profile\nFrame,Time,Y,Axis,0.0,0.1\n0,10,0.0,Z,1.0,1.5\n1,20,0.2,Z,,1.25\nEnd\n";
+        let p = parse_profiles(Path::new("p.csv"), text.as_bytes()).unwrap();
+        assert_eq!((p.frames, p.x.clone(), p.y.clone()), (2, vec![0.0, 0.1], Some(vec![0.0, 0.2])));
+        assert!(p.heights[2].is_nan() && p.heights[3] == 1.25);
     }
 
     #[test]
