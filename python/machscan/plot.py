@@ -632,6 +632,49 @@ def levelled_frame(
     return fig
 
 
+def _axes3d(plt: Any, ax: Axes | None, elev: float, azim: float) -> tuple[Any, Any]:
+    """The figure and 3D axes a map draws on: ``ax``, or a new figure's at the view angles given.
+    Typed ``Any``: matplotlib's stubs type ``add_subplot`` as the 2D Axes, whose scatter takes (x, y)."""
+    if ax is not None:
+        return ax.figure, ax
+    fig = plt.figure(figsize=(8, 6.5), layout="constrained")
+    ax3d = fig.add_subplot(projection="3d")
+    ax3d.view_init(elev=elev, azim=azim)
+    return fig, ax3d
+
+
+def _scatter_field(
+    ax3d: Any,
+    p: NDArray[np.float64],
+    values: NDArray[np.float64],
+    flagged: NDArray[np.bool_],
+    max_points: int,
+    cmap: str,
+    norm: Any,
+) -> Any:
+    """Points coloured by a field: an even subsample of about ``max_points`` (every flagged point
+    kept), those without a value grey, the flagged ones ringed in black. Returns the coloured set."""
+    keep = np.zeros(len(p), dtype=bool)
+    keep[:: max(1, int(np.ceil(len(p) / max_points)))] = True
+    keep |= flagged
+    finite = np.isfinite(values)
+    grey = keep & ~finite
+    if grey.any():
+        ax3d.scatter(*p[grey].T, s=2, color="0.6", lw=0)
+    ok = keep & finite
+    sc = ax3d.scatter(*p[ok].T, c=values[ok], cmap=cmap, norm=norm, s=3, lw=0)
+    if flagged.any():
+        ax3d.scatter(*p[flagged].T, s=12, facecolors="none", edgecolors="k", lw=0.6)
+    return sc
+
+
+def _label_mm(ax3d: Any) -> None:
+    ax3d.set_xlabel("x (mm)")
+    ax3d.set_ylabel("y (mm)")
+    if hasattr(ax3d, "set_zlabel"):
+        ax3d.set_zlabel("z (mm)")
+
+
 def allowance_map(
     points: ArrayLike,
     allowance: ArrayLike,
@@ -683,19 +726,9 @@ def allowance_map(
     plt = _pyplot()
     from matplotlib.colors import TwoSlopeNorm
 
-    # A 3D axes: matplotlib's stubs type `add_subplot` as the 2D Axes, whose scatter takes (x, y).
-    ax3d: Any
-    if ax is None:
-        fig = plt.figure(figsize=(8, 6.5), layout="constrained")
-        ax3d = fig.add_subplot(projection="3d")
-        ax3d.view_init(elev=elev, azim=azim)
-    else:
-        fig, ax3d = ax.figure, ax
+    fig, ax3d = _axes3d(plt, ax, elev, azim)
     finite = np.isfinite(a)
     short = finite & (a < min_allowance)
-    keep = np.zeros(len(p), dtype=bool)
-    keep[:: max(1, int(np.ceil(len(p) / max_points)))] = True
-    keep |= short
     if not finite.any():
         _empty(ax3d, "no allowance")
         return fig
@@ -705,21 +738,12 @@ def allowance_map(
     norm = TwoSlopeNorm(
         vcenter=min_allowance, vmin=min(lo, min_allowance - 1e-3 * span), vmax=max(hi, min_allowance + 1e-3 * span)
     )
-    grey = keep & ~finite
-    if grey.any():
-        ax3d.scatter(*p[grey].T, s=2, color="0.6", lw=0)
-    ok = keep & finite
-    sc = ax3d.scatter(*p[ok].T, c=a[ok], cmap=cmap, norm=norm, s=3, lw=0)
-    if short.any():
-        ax3d.scatter(*p[short].T, s=12, facecolors="none", edgecolors="k", lw=0.6)
+    sc = _scatter_field(ax3d, p, a, short, max_points, cmap, norm)
     try:  # equal scales on a 3D axes (matplotlib >= 3.3)
         ax3d.set_box_aspect(np.ptp(p[finite], axis=0) + 1e-9)
     except (AttributeError, TypeError):  # pragma: no cover - a 2D axes given
         pass
-    ax3d.set_xlabel("x (mm)")
-    ax3d.set_ylabel("y (mm)")
-    if hasattr(ax3d, "set_zlabel"):
-        ax3d.set_zlabel("z (mm)")
+    _label_mm(ax3d)
     n_short, n_none = int(short.sum()), int((~finite).sum())
     none = f"; {n_none} without stock measured (grey)" if n_none else ""
     ax3d.set_title(
@@ -793,13 +817,7 @@ def deviation_map(
     plt = _pyplot()
     from matplotlib.colors import Normalize
 
-    ax3d: Any
-    if ax is None:
-        fig = plt.figure(figsize=(8, 6.5), layout="constrained")
-        ax3d = fig.add_subplot(projection="3d")
-        ax3d.view_init(elev=elev, azim=azim)
-    else:
-        fig, ax3d = ax.figure, ax
+    fig, ax3d = _axes3d(plt, ax, elev, azim)
     extent = p
     if vertices is not None and triangles is not None:
         from mpl_toolkits.mplot3d.art3d import Poly3DCollection
@@ -811,31 +829,20 @@ def deviation_map(
         extent = np.vstack([p, v]) if len(p) else v
     finite = np.isfinite(d)
     out = finite & ((d < lower) | (d > upper))
-    keep = np.zeros(len(p), dtype=bool)
-    keep[:: max(1, int(np.ceil(len(p) / max_points)))] = True
-    keep |= out
     if not finite.any():
         _empty(ax3d, "no deviation measured")
         return fig
     # Symmetric about zero, and wide enough to show the band.
     reach = max(float(np.abs(d[finite]).max()), abs(lower), abs(upper), 1e-9)
     norm = Normalize(vmin=-reach, vmax=reach)
-    grey = keep & ~finite
-    if grey.any():
-        ax3d.scatter(*p[grey].T, s=2, color="0.6", lw=0)
-    ok = keep & finite
-    sc = ax3d.scatter(*p[ok].T, c=d[ok], cmap=cmap, norm=norm, s=3, lw=0)
-    if out.any():
-        ax3d.scatter(*p[out].T, s=12, facecolors="none", edgecolors="k", lw=0.6)
+    sc = _scatter_field(ax3d, p, d, out, max_points, cmap, norm)
     if len(extent):
         ax3d.set_box_aspect(np.ptp(extent, axis=0) + 1e-9)
         lo, hi = extent.min(axis=0), extent.max(axis=0)
         ax3d.set_xlim(lo[0], hi[0])
         ax3d.set_ylim(lo[1], hi[1])
         ax3d.set_zlim(lo[2], hi[2])
-    ax3d.set_xlabel("x (mm)")
-    ax3d.set_ylabel("y (mm)")
-    ax3d.set_zlabel("z (mm)")
+    _label_mm(ax3d)
     n_out, n_none = int(out.sum()), int((~finite).sum())
     none = f"; {n_none} without a distance (grey)" if n_none else ""
     ax3d.set_title(

@@ -7,7 +7,7 @@ use machscan_core::registration::{
     align_blank as run_align_blank, allowance as run_allowance, allowance::PLANE_POINTS, cloud_locating_points,
     coarse_align as run_coarse_align, envelope_fit as run_envelope_fit, grid_locating_points, icp as run_icp,
     icp::NORMAL_NEIGHBORS, positioning_errors as run_positioning_errors, probe_fit as run_probe_fit, BlankOptions,
-    BlankSurface, IcpMethod, IcpOptions, ProbePattern, Robust, RobustKernel,
+    BlankSurface, IcpMethod, IcpOptions, IcpResult, ProbePattern, Robust, RobustKernel,
 };
 use machscan_core::registration::{fit_to_mesh as run_fit_to_mesh, Dof, MeshFitOptions, RotaryAxis};
 use nalgebra::Matrix4;
@@ -101,6 +101,11 @@ fn icp<'py>(
     let (s, t) = (src.rows::<3>()?, tgt.rows::<3>()?);
     let n = normals.as_ref().map(|a| a.rows::<3>()).transpose()?;
     let r = enter(py, || run_icp(s, t, n, &init, &options))?;
+    icp_arrays(py, &r)
+}
+
+/// The ``_IcpArrays`` of an ICP result (also the first keys of the fit to a mesh).
+fn icp_arrays<'py>(py: Python<'py>, r: &IcpResult) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("transformation", transform_to_numpy(py, &r.transformation)?)?;
     d.set_item("fitness", r.fitness)?;
@@ -154,16 +159,7 @@ fn fit_to_mesh<'py>(
     };
     let (pr, vr) = (p.rows::<3>()?, v.rows::<3>()?);
     let r = enter(py, || run_fit_to_mesh(pr, vr, &tri, &init, &options).map_err(|e| e.renamed("faces", "triangles")))?;
-    let d = PyDict::new(py);
-    d.set_item("transformation", transform_to_numpy(py, &r.icp.transformation)?)?;
-    d.set_item("fitness", r.icp.fitness)?;
-    d.set_item("rmse", r.icp.rmse)?;
-    d.set_item("correspondences", r.icp.correspondences)?;
-    d.set_item("iterations", r.icp.iterations)?;
-    d.set_item("converged", r.icp.converged)?;
-    let k = r.icp.history.len();
-    d.set_item("history_fitness", to_numpy(py, r.icp.history.iter().map(|h| h.fitness).collect(), &[k])?)?;
-    d.set_item("history_rmse", to_numpy(py, r.icp.history.iter().map(|h| h.rmse).collect(), &[k])?)?;
+    let d = icp_arrays(py, &r.icp)?;
     d.set_item("motion", r.motion.to_vec())?;
     d.set_item("undetermined", r.undetermined)?;
     Ok(d)

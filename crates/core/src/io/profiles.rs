@@ -22,7 +22,7 @@ use crate::error::{Error, Result};
 use std::path::Path;
 
 /// One profiler export.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct ProfileExport {
     /// "Gocator Profile", "Gocator Part" or "Keyence height".
     pub layout: String,
@@ -159,20 +159,7 @@ fn field(path: &Path, s: &Section, header: usize, key: &str) -> Result<Option<f6
 fn gocator(path: &Path, lines: &[&str]) -> Result<ProfileExport> {
     let all = sections(path, lines)?;
     let find = |name: &str| all.iter().find(|s| s.name.eq_ignore_ascii_case(name));
-    let mut out = ProfileExport {
-        layout: String::new(),
-        x: Vec::new(),
-        heights: Vec::new(),
-        frames: 0,
-        y: None,
-        time: None,
-        encoder: None,
-        frame: None,
-        x_resolution: None,
-        y_resolution: None,
-        model: None,
-        serial: None,
-    };
+    let mut out = ProfileExport::default();
     if let Some(info) = find("Info") {
         out.x_resolution = field(path, info, 0, "XResolution")?;
         out.y_resolution = field(path, info, 0, "YResolution")?;
@@ -395,20 +382,7 @@ fn keyence(path: &Path, lines: &[&str], first: usize) -> Result<ProfileExport> {
         }
         frames += 1;
     }
-    Ok(ProfileExport {
-        layout: "Keyence height".into(),
-        x: Vec::new(),
-        heights,
-        frames,
-        y: None,
-        time: None,
-        encoder: None,
-        frame: None,
-        x_resolution: None,
-        y_resolution: None,
-        model: None,
-        serial: None,
-    })
+    Ok(ProfileExport { layout: "Keyence height".into(), heights, frames, ..ProfileExport::default() })
 }
 
 /// A Keyence value in mm, NaN for the no-reading codes (module docs).

@@ -174,11 +174,11 @@ pub fn calibrate_mount_sphere(
     x0[6] = center.x;
     x0[7] = center.y;
     x0[8] = center.z;
-    undetermined(&problem, &x0)?;
+    undetermined(&problem.normal_equations(&x0).0)?;
     let options = LmOptions { max_iterations: 200, ..LmOptions::default() };
     let fit = levenberg_marquardt(&problem, x0, &options);
     let x = fit.x;
-    undetermined(&problem, &x)?;
+    undetermined(&fit.jtj)?;
     let residuals = problem.residuals(&x);
     let n = residuals.len();
     let ss: f64 = residuals.iter().map(|r| r * r).sum();
@@ -206,10 +206,9 @@ pub fn calibrate_mount_sphere(
     })
 }
 
-/// Refuses poses that leave a combination of the parameters unseen (module docs), naming the
-/// parameters the weakest direction moves and what to add.
-fn undetermined(problem: &SphereProblem, x: &SVector<f64, 9>) -> Result<()> {
-    let (jtj, _, _) = problem.normal_equations(x);
+/// Refuses poses that leave a combination of the parameters unseen (module docs), from the
+/// normal equations JᵀJ, naming the parameters the weakest direction moves and what to add.
+fn undetermined(jtj: &SMatrix<f64, 9, 9>) -> Result<()> {
     let scale: Vec<f64> = (0..9).map(|i| jtj[(i, i)].sqrt()).collect();
     if let Some(k) = scale.iter().position(|&s| !(s > 0.0)) {
         return Err(Error::invalid(

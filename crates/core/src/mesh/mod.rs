@@ -16,7 +16,9 @@ pub use geodesic::{geodesic_distances, geodesic_fmm, GeodesicMethod, GeodesicSol
 pub use geodesic::{geodesic_exact, geodesic_heat, HeatSolver};
 pub use insert::{insert_points, Inserted, Landing};
 pub use locate::{XyLanding, XyLocator};
-pub use signed::{face_statistics, signed_distances, FaceStatistics, PseudoNormals, SignedClosest, SignedMesh};
+pub use signed::{
+    face_statistics, signed_distances, unit_face_normals, FaceStatistics, PseudoNormals, SignedClosest, SignedMesh,
+};
 pub use thin::{thin_xy, xy_area};
 
 use crate::error::{Error, Result};

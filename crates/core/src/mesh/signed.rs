@@ -35,19 +35,8 @@ impl PseudoNormals {
     /// an edge shared by two triangles must run opposite ways in them.
     pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<Self> {
         let corner = |f: &[u32; 3], k: usize| Vector3::from(vertices[f[k] as usize]);
-        let face: Vec<Vector3<f64>> = faces
-            .par_iter()
-            .map(|f| {
-                let n = (corner(f, 1) - corner(f, 0)).cross(&(corner(f, 2) - corner(f, 0)));
-                let len = n.norm();
-                // A zero-area triangle has no outside; it adds nothing to its neighbours' sums.
-                if len > 0.0 {
-                    n / len
-                } else {
-                    Vector3::zeros()
-                }
-            })
-            .collect();
+        // A zero-area triangle's normal is zero: it adds nothing to its neighbours' sums.
+        let face = unit_face_normals(vertices, faces);
         // Each corner's share of its vertex's pseudo-normal: its angle times the face normal.
         let share: Vec<[Vector3<f64>; 3]> = faces
             .par_iter()
@@ -129,6 +118,24 @@ impl PseudoNormals {
             _ => self.face[c.triangle],
         }
     }
+}
+
+/// Each triangle's unit normal (right-handed in its vertex order); zero for a triangle of no area,
+/// which has no side.
+pub fn unit_face_normals(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<Vector3<f64>> {
+    faces
+        .par_iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| Vector3::from(vertices[v as usize]));
+            let n = (b - a).cross(&(c - a));
+            let len = n.norm();
+            if len > 0.0 {
+                n / len
+            } else {
+                Vector3::zeros()
+            }
+        })
+        .collect()
 }
 
 /// The volume the triangles enclose, by the divergence theorem (positive when wound

@@ -270,10 +270,7 @@ pub fn icp(
     if target.is_empty() {
         return Err(Error::invalid("target", "must hold at least one point"));
     }
-    let last_row = [init[(3, 0)], init[(3, 1)], init[(3, 2)], init[(3, 3)]];
-    if init.iter().any(|v| !v.is_finite()) || last_row != [0.0, 0.0, 0.0, 1.0] {
-        return Err(Error::invalid("init", "must be a finite 4×4 rigid transform with last row (0, 0, 0, 1)"));
-    }
+    check_init(init)?;
     let estimated;
     let normals = match (o.method, target_normals) {
         (_, Some(n)) if n.len() != target.len() => {
@@ -493,7 +490,16 @@ where
     }
 }
 
-fn rigid(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Matrix4<f64> {
+/// A start transform: finite, with last row (0, 0, 0, 1); refused naming `init` otherwise.
+pub(super) fn check_init(init: &Matrix4<f64>) -> Result<()> {
+    let last_row = [init[(3, 0)], init[(3, 1)], init[(3, 2)], init[(3, 3)]];
+    if init.iter().any(|v| !v.is_finite()) || last_row != [0.0, 0.0, 0.0, 1.0] {
+        return Err(Error::invalid("init", "must be a finite 4×4 rigid transform with last row (0, 0, 0, 1)"));
+    }
+    Ok(())
+}
+
+pub(super) fn rigid(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Matrix4<f64> {
     let mut t = Matrix4::identity();
     t.fixed_view_mut::<3, 3>(0, 0).copy_from(&rotation);
     t.fixed_view_mut::<3, 1>(0, 3).copy_from(&translation);

@@ -13,10 +13,10 @@
 //! free rotations about X and Z would leave one about Y). Correspondences, fitness, rmse and
 //! the stop rule are those of `icp` (Open3D's), with the rmse taken over the distances to the
 //! triangles, not to their planes.
-use super::icp::{IcpResult, IcpStep, ROUNDING};
+use super::icp::{check_init, rigid, IcpResult, IcpStep, ROUNDING};
 use crate::error::{check_finite_points, Error, Result};
 use crate::geom::{rot_x, rot_y, rot_z, transform_point};
-use crate::mesh::{Closest, TriangleBvh};
+use crate::mesh::{unit_face_normals, Closest, TriangleBvh};
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Matrix6, Vector3, Vector6};
 use rayon::prelude::*;
 
@@ -129,11 +129,7 @@ impl Pivot {
     /// The pose of the six numbers, and its derivative along each of them applied to `p`.
     fn pose(&self, m: &[f64; 6]) -> Matrix4<f64> {
         let r = self.frame * rot_z(m[5]) * rot_y(m[4]) * rot_x(m[3]) * self.frame.transpose();
-        let t = Vector3::new(m[0], m[1], m[2]) + self.origin - r * self.origin;
-        let mut out = Matrix4::identity();
-        out.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
-        out.fixed_view_mut::<3, 1>(0, 3).copy_from(&t);
-        out
+        rigid(r, Vector3::new(m[0], m[1], m[2]) + self.origin - r * self.origin)
     }
 
     /// ∂(pose · p)/∂m for the three rotations, at m, for a point `p` already moved by `init`.
@@ -173,24 +169,10 @@ pub fn fit_to_mesh(
     if points.len() > u32::MAX as usize {
         return Err(Error::invalid("points", format!("{} points is beyond 2^32", points.len())));
     }
-    let last_row = [init[(3, 0)], init[(3, 1)], init[(3, 2)], init[(3, 3)]];
-    if init.iter().any(|v| !v.is_finite()) || last_row != [0.0, 0.0, 0.0, 1.0] {
-        return Err(Error::invalid("init", "must be a finite 4×4 rigid transform with last row (0, 0, 0, 1)"));
-    }
+    check_init(init)?;
     let pivot = Pivot::new(o.axis)?;
     let bvh = TriangleBvh::new(vertices, faces)?;
-    let normal: Vec<Vector3<f64>> = faces
-        .iter()
-        .map(|f| {
-            let [a, b, c] = f.map(|v| Vector3::from(vertices[v as usize]));
-            let n = (b - a).cross(&(c - a));
-            if n.norm() > 0.0 {
-                n.normalize()
-            } else {
-                Vector3::zeros()
-            }
-        })
-        .collect();
+    let normal = unit_face_normals(vertices, faces);
     let started: Vec<[f64; 3]> = points.par_iter().map(|&p| transform_point(init, p)).collect();
     let free: Vec<usize> = (0..6).filter(|&k| o.dof.0[k]).collect();
     let max_d2 = o.max_distance * o.max_distance;
