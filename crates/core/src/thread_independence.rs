@@ -174,7 +174,7 @@ fn groove_fits(#[case] threads: usize) {
     };
     for template in [crate::groove::TemplateKind::Auto, crate::groove::TemplateKind::Tanh] {
         let o = GrooveOptions { template, ..GrooveOptions::default() };
-        let (a, b) = on_threads_and_one(threads, || fit_frames(&x, &z, &o).unwrap());
+        let (a, b) = on_threads_and_one(threads, || fit_frames(&x, &z, &o).unwrap().fits);
         assert!(a.iter().zip(&b).all(|(p, q)| key(p) == key(q) && p.status == q.status && p.model == q.model));
     }
 }

@@ -1,8 +1,8 @@
 //! The batch groove fit: each frame measured by the method its options ask for (the section
 //! models of `measure.rs` by default, the paper's tanh template of `tanh.rs`), the frames in
 //! parallel, and the view of one frame for figures.
-use super::measure::{measure_frame, MeasureSettings};
-use super::options::{window_range, FitModel, GrooveFit, GrooveOptions, TemplateKind};
+use super::measure::{measure_grooves, MeasureSettings};
+use super::options::{window_range, FitModel, GrooveFit, GrooveOptions, GrooveSelect, GrooveStatus, TemplateKind};
 use super::section::SectionModel;
 use super::tanh::{fit_tanh, fit_tanh_detailed};
 use super::template::TanhTemplate;
@@ -14,7 +14,16 @@ use rayon::prelude::*;
 /// On x86-64 CPUs with AVX2 and FMA the same code runs compiled for them (chosen at run time,
 /// the same choice for every frame on a machine, so results never depend on the thread count):
 /// the tanh and dot-product passes then run four readings at a time.
+///
+/// The groove `o.select` asks for; with `GrooveSelect::All` the leftmost ([`fit_frame_grooves`]
+/// gives them all).
 pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+    fit_frame_grooves(x, z, o).swap_remove(0)
+}
+
+/// The grooves of one frame `o.select` asks for: one, or with `GrooveSelect::All` one per
+/// groove, left to right (one failed fit saying why when there is none).
+pub fn fit_frame_grooves(x: &[f64], z: &[f64], o: &GrooveOptions) -> Vec<GrooveFit> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
@@ -27,7 +36,7 @@ pub fn fit_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn fit_frame_avx2_fma(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+unsafe fn fit_frame_avx2_fma(x: &[f64], z: &[f64], o: &GrooveOptions) -> Vec<GrooveFit> {
     fit_frame_portable(x, z, o)
 }
 
@@ -38,12 +47,17 @@ unsafe fn fit_frame_avx2_fma(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveF
 // tanh and dot-product passes only run four readings at a time when they are inlined into the
 // AVX2 function.
 #[inline(always)]
-fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> GrooveFit {
+fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> Vec<GrooveFit> {
     if o.template == TemplateKind::Tanh {
-        return fit_tanh(x, z, o);
+        let fit = fit_tanh(x, z, o);
+        let measured = matches!(fit.status, GrooveStatus::Converged | GrooveStatus::MaxIterations);
+        if measured && !o.limits.admit(fit.width, fit.depth) {
+            return vec![GrooveFit::failed(GrooveStatus::NoGroove, fit.n_used as usize)];
+        }
+        return vec![fit];
     }
     let (lo, hi) = window_range(x.len().min(z.len()), o);
-    measure_frame(&x[lo..hi], &z[lo..hi], &section_settings(o))
+    measure_grooves(&x[lo..hi], &z[lo..hi], &section_settings(o)).0
 }
 
 /// The section models' settings from the options: the models `template` asks for (all four
@@ -60,6 +74,8 @@ fn section_settings(o: &GrooveOptions) -> MeasureSettings<'_> {
         min_depth: o.min_depth,
         min_valid: o.min_valid,
         criteria: o.criteria.section(),
+        select: o.select,
+        limits: o.limits,
     }
 }
 
@@ -137,9 +153,17 @@ pub fn view_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> Result<FrameView> 
     Ok(FrameView { z: d.v.iter().map(|v| v + lift).collect(), x: d.u, shape_x, shape_z, tilt: d.tilt, fit })
 }
 
+/// The fits of a batch of frames: a row per frame, or with `GrooveSelect::All` a row per
+/// groove (and one for a frame without any), `frame` saying whose.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct GrooveRows {
+    pub frame: Vec<u32>,
+    pub fits: Vec<GrooveFit>,
+}
+
 /// All frames of `z (F, N)` row-major sharing the abscissae `x (N,)`, in parallel. Each frame
 /// is fitted on its own, so the result is identical whatever the thread count.
-pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<GrooveFit>> {
+pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<GrooveRows> {
     options.validate()?;
     let n = x.len();
     if n == 0 {
@@ -164,7 +188,19 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Vec<G
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
         return Err(Error::invalid("x", format!("must be finite, found {} at index {i}", x[i])));
     }
-    Ok(z.par_chunks(n).map(|row| fit_frame(x, &options.valid.masked(row), options)).collect())
+    if options.select != GrooveSelect::All {
+        let fits: Vec<GrooveFit> =
+            z.par_chunks(n).map(|row| fit_frame(x, &options.valid.masked(row), options)).collect();
+        return Ok(GrooveRows { frame: (0..fits.len() as u32).collect(), fits });
+    }
+    let per_frame: Vec<Vec<GrooveFit>> =
+        z.par_chunks(n).map(|row| fit_frame_grooves(x, &options.valid.masked(row), options)).collect();
+    let mut rows = GrooveRows::default();
+    for (f, fits) in per_frame.into_iter().enumerate() {
+        rows.frame.extend(std::iter::repeat_n(f as u32, fits.len()));
+        rows.fits.extend(fits);
+    }
+    Ok(rows)
 }
 
 #[cfg(test)]
@@ -236,15 +272,18 @@ mod tests {
     }
 
     #[test]
-    fn two_grooves_are_flagged() {
+    fn two_grooves_flag_the_template_and_the_section_models_measure_the_deepest() {
         let a = TanhTemplate { x0: -1.2, z0: 0.0, depth: 0.3, width: 0.48, alpha: 20.0 };
         let b = TanhTemplate { x0: 1.3, z0: 0.0, depth: 0.28, width: 0.48, alpha: 20.0 };
         let x: Vec<f64> = (0..200).map(|i| (i as f64 - 100.0) * 0.025).collect();
         let z: Vec<f64> = x.iter().map(|&x| a.value(x) + b.value(x)).collect();
-        for o in [GrooveOptions::default(), tanh()] {
-            let f = fit_frame(&x, &z, &o);
-            assert_eq!(f.status, GrooveStatus::TwoGrooves, "{f:?}");
-        }
+        assert_eq!(fit_frame(&x, &z, &tanh()).status, GrooveStatus::TwoGrooves);
+        let f = fit_frame(&x, &z, &GrooveOptions::default());
+        assert_eq!((f.status, f.groove), (GrooveStatus::Converged, 0), "{f:?}");
+        assert!((f.x0 - a.x0).abs() < 0.01, "{f:?}");
+        // A selection the template cannot make is refused, naming the option.
+        let o = GrooveOptions { select: GrooveSelect::All, ..tanh() };
+        assert!(fit_frames(&x, &z, &o).unwrap_err().to_string().contains("select"));
     }
 
     #[test]
@@ -264,7 +303,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| fit_frames(&x, &z, &o).unwrap())
+                .install(|| fit_frames(&x, &z, &o).unwrap().fits)
         };
         let (a, b) = (run(1), run(2));
         for (p, q) in a.iter().zip(&b) {

@@ -19,7 +19,7 @@
 //! 5. width = the chosen section's flank crossings with the surface line, depth = its deepest
 //!    point (for V's an Akaike-weighted mean of the sharp and the round-bottomed V, since a tip
 //!    rounded by about a reading spacing is barely visible), center = the crossings' midpoint.
-use super::options::{GrooveFit, GrooveStatus};
+use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
 use super::section::{pieces_jacobian, Beams, Pieces, SectionModel};
 use crate::optim::{bounded_levenberg_marquardt, BoundedLeastSquares, BoundedLmOptions, LeastSquares};
@@ -60,18 +60,6 @@ const FINISH: usize = 3;
 /// The fit controls of the section models (`GrooveOptions`' criteria left at None).
 pub const SECTION_CRITERIA: BoundedLmOptions =
     BoundedLmOptions { max_iterations: 15, cost_tolerance: 1e-5, step_tolerance: 1e-6, gradient_tolerance: 0.0 };
-
-/// From `i0`, the first reading in direction `step` with `v ≥ −thr`; None past the end.
-fn walk(v: &[f64], i0: usize, step: isize, thr: f64) -> Option<usize> {
-    let mut i = i0 as isize;
-    while i >= 0 && (i as usize) < v.len() {
-        if v[i as usize] >= -thr {
-            return Some(i as usize);
-        }
-        i += step;
-    }
-    None
-}
 
 /// A levelled frame: `u = c·x + s·z`, `v = −s·x + c·z − b·c` puts the line `z = kx + b` at v = 0.
 struct Levelled {
@@ -609,12 +597,8 @@ pub struct MeasureSettings<'a> {
     pub min_depth: f64,
     pub min_valid: usize,
     pub criteria: BoundedLmOptions,
-}
-
-/// Measures the groove of one frame: `x` reading abscissae, `z` readings (NaN = invalid).
-#[inline(always)]
-pub fn measure_frame(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> GrooveFit {
-    measure_frame_detailed(x, z, o).0
+    pub select: GrooveSelect,
+    pub limits: GrooveLimits,
 }
 
 /// What a figure of the frame needs: the levelled readings and the fitted section.
@@ -635,9 +619,96 @@ impl Detail {
 }
 
 /// [`measure_frame`] with the [`Detail`] of the frame (None when it failed before levelling).
+/// With `select` = all, the leftmost groove's.
 #[inline(always)]
 pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (GrooveFit, Option<Detail>) {
-    let failed = |status, n: usize| (GrooveFit::failed(status, n), None);
+    let (mut fits, detail) = measure_grooves(x, z, o);
+    (fits.swap_remove(0), detail)
+}
+
+/// A groove found in the levelled frame: its bottom reading, its ends (the first surface
+/// reading out from the bottom, or the corner it shares with a neighbour; None: the frame ends
+/// first) and its depth at the bottom.
+#[derive(Debug, Clone, Copy)]
+struct Dip {
+    ib: usize,
+    il: Option<usize>,
+    ir: Option<usize>,
+    /// The end is a corner shared with a neighbouring groove, not the surface.
+    shared: (bool, bool),
+    depth0: f64,
+}
+
+/// Most grooves looked for in one frame.
+const MAX_DIPS: usize = 64;
+
+/// From the bottom `ib`, out in direction `step`: the first reading with `v ≥ −thr` (the
+/// surface), or the top of a ridge the walk has passed — a fall of more than `drop` below the
+/// highest reading so far, or a reading `claimed` by another groove: a corner shared with a
+/// neighbour (second value true). None past the end of the frame.
+fn walk_dip(v: &[f64], ib: usize, step: isize, thr: f64, drop: f64, claimed: &[bool]) -> (Option<usize>, bool) {
+    let (mut top, mut at) = (v[ib], ib);
+    let mut i = ib as isize + step;
+    while i >= 0 && (i as usize) < v.len() {
+        let j = i as usize;
+        if claimed[j] {
+            return (Some(at), true);
+        }
+        if v[j] >= -thr {
+            return (Some(j), false);
+        }
+        if v[j] > top {
+            (top, at) = (v[j], j);
+        } else if v[j] < top - drop {
+            return (Some(at), true);
+        }
+        i += step;
+    }
+    (None, false)
+}
+
+/// The deepest reading not yet claimed: the deepest 5-reading mean, then the deepest 3-median
+/// within ±2 readings.
+fn deepest_unclaimed(v5: &[f64], v3: &[f64], claimed: &[bool]) -> Option<usize> {
+    let n = v5.len();
+    let ib = (0..n).filter(|&i| !claimed[i]).min_by(|&a, &b| v5[a].total_cmp(&v5[b]))?;
+    let (lo, hi) = (ib.saturating_sub(2), (ib + 3).min(n));
+    Some((lo..hi).filter(|&i| !claimed[i]).min_by(|&a, &b| v3[a].total_cmp(&v3[b])).unwrap_or(ib))
+}
+
+/// Every groove of a levelled frame, deepest first: from the deepest unclaimed reading, a walk
+/// out both ways ([`walk_dip`]); its readings are claimed, and the next deepest is looked for,
+/// until no reading is `deep_enough` below the surface.
+fn find_dips(v5: &[f64], v3: &[f64], first: usize, sigma: f64, deep_enough: f64) -> Vec<Dip> {
+    let n = v3.len();
+    let mut claimed = vec![false; n];
+    let mut dips = Vec::new();
+    let mut next = Some(first);
+    while let Some(ib) = next {
+        let depth0 = -v3[ib];
+        if !(depth0 >= deep_enough) || dips.len() == MAX_DIPS {
+            break;
+        }
+        let thr = (EDGE_SIGMAS * sigma).max(EDGE_FRACTION * depth0);
+        let drop = (DEPTH_SIGMAS * sigma).max(RIDGE_FRACTION * depth0);
+        let (il, sl) = walk_dip(v3, ib, -1, thr, drop, &claimed);
+        let (ir, sr) = walk_dip(v3, ib, 1, thr, drop, &claimed);
+        claimed[il.unwrap_or(0)..=ir.unwrap_or(n - 1)].iter_mut().for_each(|c| *c = true);
+        dips.push(Dip { ib, il, ir, shared: (sl, sr), depth0 });
+        next = deepest_unclaimed(v5, v3, &claimed);
+    }
+    dips
+}
+
+/// A shared corner is this far (as a share of the depth) above the lower side at least: a
+/// ridge lower than that between two bottoms is noise on one floor.
+const RIDGE_FRACTION: f64 = 0.1;
+
+/// The grooves `o.select` asks for in one frame (one fit, or a row per groove for `All`; one
+/// failed fit saying why when there is none) and the frame's [`Detail`].
+#[inline(always)]
+pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<GrooveFit>, Option<Detail>) {
+    let failed = |status, n: usize| (vec![GrooveFit::failed(status, n)], None);
     let (mut px, mut pz) = select_pairs(x, z, |i| x[i].is_finite() && z[i].is_finite());
     let min_valid = o.min_valid.max(6);
     if px.len() < min_valid {
@@ -653,15 +724,14 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
     }
     let n = px.len();
     let mut scratch = Vec::with_capacity(n);
+    let none = |status, n: usize, lv: Levelled| (vec![GrooveFit::failed(status, n)], Detail::of(lv, None));
     // 2. Robust surface line; level.
     let Some((k, b)) = robust_line(&px, &pz, &mut scratch) else { return failed(GrooveStatus::TooFewValid, n) };
     let lv = level(&px, &pz, k, b);
-    // 3. Bottom: the deepest 5-reading mean, then the deepest 3-median within ±2 readings.
+    // 3. The deepest bottom; the noise away from it; every groove.
     let v5 = mean5(&lv.v);
-    let mut ib = (0..n).min_by(|&a, &b| v5[a].total_cmp(&v5[b])).unwrap_or(0);
     let v3 = median3(&lv.v);
-    let (lo, hi) = (ib.saturating_sub(2), (ib + 3).min(n));
-    ib = (lo..hi).min_by(|&a, &b| v3[a].total_cmp(&v3[b])).unwrap_or(ib);
+    let Some(ib) = deepest_unclaimed(&v5, &v3, &vec![false; n]) else { return failed(GrooveStatus::TooFewValid, n) };
     let depth0 = -v3[ib];
     let far = lv.u.iter().filter(|&&u| (u - lv.u[ib]).abs() > 0.7).count();
     let sigma = if far >= 10 {
@@ -670,28 +740,29 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
         mad_sigma(lv.v.iter().copied(), &mut scratch)
     }
     .max(1e-4);
-    if !(depth0 >= o.min_depth.max(DEPTH_SIGMAS * sigma)) {
-        return (GrooveFit::failed(GrooveStatus::NoGroove, n), Detail::of(lv, None));
+    let deep_enough = o.min_depth.max(DEPTH_SIGMAS * sigma);
+    if !(depth0 >= deep_enough) {
+        return none(GrooveStatus::NoGroove, n, lv);
     }
-    let thr = (EDGE_SIGMAS * sigma).max(EDGE_FRACTION * depth0);
-    let clipped = |il: Option<usize>, ir: Option<usize>| match (il, ir) {
-        (Some(l), Some(r)) if l >= MIN_SURFACE && r + 1 + MIN_SURFACE <= n => Some((l, r)),
-        _ => None,
+    let dips = find_dips(&v5, &v3, ib, sigma, deep_enough);
+    // 4. The surface again, without the grooves and their lips, trimmed at 3σ; level again.
+    let extent = |d: &Dip| (lv.u[d.il.unwrap_or(0)], lv.u[d.ir.unwrap_or(n - 1)]);
+    let outside = |u: f64, margin: f64| {
+        dips.iter().all(|d| {
+            let (l, r) = extent(d);
+            u < l - margin || u > r + margin
+        })
     };
-    let Some((il, ir)) = clipped(walk(&v3, ib, -1, thr), walk(&v3, ib, 1, thr)) else {
-        return (GrooveFit::failed(GrooveStatus::Clipped, n), Detail::of(lv, None));
-    };
-    // 4. The surface again, without the groove and the lips, trimmed at 3σ; level again.
-    let mut surface: Vec<bool> = lv.u.iter().map(|&u| u < lv.u[il] - LIP_MARGIN || u > lv.u[ir] + LIP_MARGIN).collect();
+    let mut surface: Vec<bool> = lv.u.iter().map(|&u| outside(u, LIP_MARGIN)).collect();
     if surface.iter().filter(|&&s| s).count() < 6 {
-        surface = lv.u.iter().map(|&u| u < lv.u[il] || u > lv.u[ir]).collect();
+        surface = lv.u.iter().map(|&u| outside(u, 0.0)).collect();
     }
     let (sx, sz) = select_pairs(&px, &pz, |i| surface[i]);
     if sx.len() < 6 {
-        return (GrooveFit::failed(GrooveStatus::TooFewValid, n), Detail::of(lv, None));
+        return none(GrooveStatus::TooFewValid, n, lv);
     }
     let Some((mut k2, mut b2)) = fit_line(sx.iter().copied().zip(sz.iter().copied())) else {
-        return (GrooveFit::failed(GrooveStatus::TooFewValid, n), Detail::of(lv, None));
+        return none(GrooveStatus::TooFewValid, n, lv);
     };
     // Up to three trims at 3σ of the first line's residuals (σ by MAD: robust already, so it is
     // not re-estimated per trim); once the kept readings stay the same, so does the line. σ is
@@ -717,32 +788,127 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
     };
     let lv = level(&px, &pz, k2, b2);
     let v3 = median3(&lv.v);
-    let depth0 = -v3[ib];
     let deep_enough = o.min_depth.max(DEPTH_SIGMAS * sigma);
-    if !(depth0 >= deep_enough) {
-        return (GrooveFit::failed(GrooveStatus::NoGroove, n), Detail::of(lv, None));
+    // Each groove again on the new level, its ends walked out again (the other grooves'
+    // readings as found before are theirs), left to right.
+    let mut grooves: Vec<Dip> = Vec::with_capacity(dips.len());
+    let mut order: Vec<usize> = (0..dips.len()).collect();
+    order.sort_by_key(|&i| dips[i].ib);
+    for &i in &order {
+        let d = dips[i];
+        let depth0 = -v3[d.ib];
+        if !(depth0 >= deep_enough) {
+            continue;
+        }
+        let mut claimed = vec![false; n];
+        for (j, other) in dips.iter().enumerate() {
+            if j != i {
+                let (l, r) = (other.il.unwrap_or(0), other.ir.unwrap_or(n - 1));
+                claimed[l..=r].iter_mut().for_each(|c| *c = true);
+            }
+        }
+        let thr = (EDGE_SIGMAS * sigma).max(EDGE_FRACTION * depth0);
+        let drop = (DEPTH_SIGMAS * sigma).max(RIDGE_FRACTION * depth0);
+        let (il, sl) = walk_dip(&v3, d.ib, -1, thr, drop, &claimed);
+        let (ir, sr) = walk_dip(&v3, d.ib, 1, thr, drop, &claimed);
+        grooves.push(Dip { ib: d.ib, il, ir, shared: (sl, sr), depth0 });
     }
-    let other = (0..n).filter(|&i| surface[i]).map(|i| -v3[i]).fold(0.0, f64::max);
-    if other > 0.5 * depth0 && other > deep_enough {
-        return (GrooveFit::failed(GrooveStatus::TwoGrooves, n), Detail::of(lv, None));
+    if grooves.is_empty() {
+        return none(GrooveStatus::NoGroove, n, lv);
     }
-    let thr = (EDGE_SIGMAS * sigma).max(EDGE_FRACTION * depth0);
-    let Some((il, ir)) = clipped(walk(&v3, ib, -1, thr), walk(&v3, ib, 1, thr)) else {
-        return (GrooveFit::failed(GrooveStatus::Clipped, n), Detail::of(lv, None));
+    // 5.–7. The grooves asked for, fitted; the candidates in the order the selection prefers.
+    let mut candidates: Vec<usize> = (0..grooves.len()).collect();
+    match o.select {
+        GrooveSelect::Deepest => candidates.sort_by(|&a, &b| grooves[b].depth0.total_cmp(&grooves[a].depth0)),
+        GrooveSelect::Right(_) => candidates.reverse(),
+        GrooveSelect::Nearest(x0) => {
+            candidates.sort_by(|&a, &b| (px[grooves[a].ib] - x0).abs().total_cmp(&(px[grooves[b].ib] - x0).abs()))
+        }
+        GrooveSelect::Left(_) | GrooveSelect::All => {}
+    }
+    let wanted = match o.select {
+        GrooveSelect::Left(k) | GrooveSelect::Right(k) => k,
+        _ => 0,
     };
+    let pitch = reading_pitch(x);
+    let mut found: Vec<(GrooveFit, Option<(Pieces, f64)>)> = Vec::new();
+    let mut first_failure: Option<GrooveFit> = None;
+    let mut admitted = 0;
+    for &c in &candidates {
+        // The readings this groove may use: up to its neighbours' ends.
+        let lo = if c > 0 { grooves[c - 1].ir.unwrap_or(0) } else { 0 };
+        let hi = grooves.get(c + 1).map_or(n - 1, |g| g.il.unwrap_or(n - 1));
+        let (mut fit, shape) = fit_groove(&lv, &grooves[c], (lo, hi), sigma, k2, pitch, o);
+        fit.groove = c as i32;
+        let measured = matches!(fit.status, GrooveStatus::Converged | GrooveStatus::MaxIterations);
+        if measured && !o.limits.admit(fit.width, fit.depth) {
+            continue;
+        }
+        if !measured {
+            if o.select == GrooveSelect::All {
+                found.push((fit, shape));
+            } else if first_failure.is_none() {
+                first_failure = Some(fit);
+            }
+            continue;
+        }
+        if o.select == GrooveSelect::All {
+            found.push((fit, shape));
+            continue;
+        }
+        if admitted == wanted {
+            return (vec![fit], Detail::of(lv, shape));
+        }
+        admitted += 1;
+    }
+    if found.is_empty() {
+        let fit = first_failure.unwrap_or_else(|| GrooveFit::failed(GrooveStatus::NoGroove, n));
+        return (vec![fit], Detail::of(lv, None));
+    }
+    let shape = found[0].1;
+    (found.into_iter().map(|(f, _)| f).collect(), Detail::of(lv, shape))
+}
+
+/// Steps 5–7 for one groove of a levelled frame: start values, the section models fitted and
+/// chosen, width, depth and center. `within` = the readings it may use (its neighbours' ends).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn fit_groove(
+    lv: &Levelled,
+    dip: &Dip,
+    within: (usize, usize),
+    sigma: f64,
+    k2: f64,
+    pitch: f64,
+    o: &MeasureSettings<'_>,
+) -> (GrooveFit, Option<(Pieces, f64)>) {
+    let n = lv.u.len();
+    let (ib, depth0) = (dip.ib, dip.depth0);
+    // Clipped: no surface readings between an end and the frame's end (a shared corner has
+    // its neighbour beyond it instead).
+    let (il, ir) = match (dip.il, dip.ir) {
+        (Some(l), Some(r)) if (l >= MIN_SURFACE || dip.shared.0) && (r + 1 + MIN_SURFACE <= n || dip.shared.1) => {
+            (l, r)
+        }
+        _ => return (GrooveFit::failed(GrooveStatus::Clipped, n), None),
+    };
+    let thr = (EDGE_SIGMAS * sigma).max(EDGE_FRACTION * depth0);
+    let mut scratch = Vec::new();
     // 5. Start values (depth from the 5-reading mean: the deepest single reading of a flat
     //    floor lies about 2σ too deep) and the readings fitted: between the start edges (with
-    //    the first surface reading on each side) and the walk-out ends.
+    //    the first surface reading on each side) and the walk-out ends, not past a neighbour's.
     let v5 = mean5(&lv.v);
     let p0 = initial(&lv.u, &lv.v, ib, il, ir, (-v5[ib]).max(0.5 * depth0), thr);
     let (ul, ur) = (lv.u[il], lv.u[ir]);
+    let (ulo, uhi) = (lv.u[within.0], lv.u[within.1]);
     let (mut us, mut vs) = select_pairs(&lv.u, &lv.v, |i| {
-        (lv.u[i] >= p0[0] - OUTER && lv.u[i] <= p0[1] + OUTER) || (lv.u[i] >= ul && lv.u[i] <= ur)
+        let u = lv.u[i];
+        ((u >= p0[0] - OUTER && u <= p0[1] + OUTER) || (u >= ul && u <= ur)) && u >= ulo && u <= uhi
     });
     if us.len() < 6 {
-        return (GrooveFit::failed(GrooveStatus::Failed, us.len()), Detail::of(lv, None));
+        return (GrooveFit::failed(GrooveStatus::Failed, us.len()), None);
     }
-    let start = Start { p0, depth0, sigma, u_bottom: lv.u[ib], pitch: reading_pitch(x) };
+    let start = Start { p0, depth0, sigma, u_bottom: lv.u[ib], pitch };
     let (sin, cos) = (lv.sin, lv.cos);
     fn readings<'a>(u: &'a [f64], v: &'a [f64], sin: f64, cos: f64) -> Readings<'a> {
         Readings { u, v, sin, cos }
@@ -794,6 +960,7 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
     }
     // 7. Width, depth and center from the chosen section.
     let p = chosen.pieces();
+    let shape = Some((p, chosen.gamma));
     let (mut xl, mut xr) = p.crossings();
     let mut depth = p.d;
     let (se_width, mut se_depth) = standard_errors(&chosen, us.len());
@@ -818,14 +985,14 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
     }
     let width = xr - xl;
     if !(chosen.q.iter().all(|v| v.is_finite()) && width > 0.0 && depth > 0.0) {
-        return (GrooveFit::failed(GrooveStatus::Failed, us.len()), Detail::of(lv, Some((p, chosen.gamma))));
+        return (GrooveFit::failed(GrooveStatus::Failed, us.len()), shape);
     }
     let (umin, umax) = lv.u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &u| (a.min(u), b.max(u)));
     if xl < umin || xr > umax {
-        return (GrooveFit::failed(GrooveStatus::Clipped, us.len()), Detail::of(lv, Some((p, chosen.gamma))));
+        return (GrooveFit::failed(GrooveStatus::Clipped, us.len()), shape);
     }
     if depth < o.min_depth {
-        return (GrooveFit::failed(GrooveStatus::NoGroove, us.len()), Detail::of(lv, Some((p, chosen.gamma))));
+        return (GrooveFit::failed(GrooveStatus::NoGroove, us.len()), shape);
     }
     let (uc, vc) = (0.5 * (xl + xr), lv.b * lv.cos);
     let fit = GrooveFit {
@@ -842,14 +1009,15 @@ pub fn measure_frame_detailed(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> 
         n_used: us.len() as u32,
         status: if chosen.converged { GrooveStatus::Converged } else { GrooveStatus::MaxIterations },
         model: super::options::FitModel::Section(chosen.model),
+        groove: -1,
     };
-    (fit, Detail::of(lv, Some((p, chosen.gamma))))
+    (fit, shape)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::groove::{fit_frame, GrooveOptions, GrooveStatus};
+    use crate::groove::{fit_frame, GrooveLimits, GrooveOptions, GrooveSelect, GrooveStatus};
     use crate::testing::{gauss, lcg};
 
     /// A frame of 200 readings across `section` (exact, levelled coordinates), rotated by
@@ -946,6 +1114,89 @@ mod tests {
             assert!(measured >= n * 98 / 100, "{name}: {measured} of {n} measured");
             assert!(w <= 0.010 && d <= 0.015 && c <= 0.010, "{name}: |w| {w:.4} mm, |d| {d:.4}, |c| {c:.4} mm");
         }
+    }
+
+    /// A frame of 400 readings (pitch 0.025) across several V grooves, `(center, width, depth)`,
+    /// the section the union of their cut-outs (two may share a corner), with noise.
+    fn several(grooves: &[(f64, f64, f64)], noise: f64, seed: &mut u64) -> (Vec<f64>, Vec<f64>) {
+        let x: Vec<f64> = (0..400).map(|i| (i as f64 - 200.0) * 0.025).collect();
+        let z = x
+            .iter()
+            .map(|&u| {
+                let v =
+                    grooves.iter().map(|&(c, w, d)| (-d + (u - c).abs() * 2.0 * d / w).min(0.0)).fold(0.0, f64::min);
+                v + noise * gauss(seed)
+            })
+            .collect();
+        (x, z)
+    }
+
+    fn select(select: GrooveSelect) -> GrooveOptions {
+        GrooveOptions { select, ..GrooveOptions::default() }
+    }
+
+    #[test]
+    fn every_groove_of_a_frame_is_found_and_the_one_asked_for_measured() {
+        // Three V's: a shallow one on the left, the deepest in the middle, and one sharing its
+        // corner with the deepest (their flanks meet 0.1 mm below the surface).
+        let g = [(-3.0, 0.5, 0.15), (0.0, 0.6, 0.3), (0.45, 0.5, 0.25)];
+        let mut seed = 17u64;
+        let (x, z) = several(&g, 0.004, &mut seed);
+        let all = crate::groove::fit_frame_grooves(&x, &z, &select(GrooveSelect::All));
+        assert_eq!(all.len(), 3, "{all:#?}");
+        for (k, (f, &(c, w, d))) in all.iter().zip(&g).enumerate() {
+            assert_eq!(f.groove, k as i32);
+            assert_eq!(f.status, GrooveStatus::Converged, "{k}: {f:?}");
+            assert!((f.x0 - c).abs() < 0.01 && (f.depth - d).abs() < 0.01 && (f.width - w).abs() < 0.02, "{k}: {f:?}");
+        }
+        let one = |s| fit_frame(&x, &z, &select(s));
+        assert_eq!(one(GrooveSelect::Deepest).groove, 1);
+        assert_eq!(one(GrooveSelect::Left(0)).groove, 0);
+        assert_eq!(one(GrooveSelect::Left(2)).groove, 2);
+        assert_eq!(one(GrooveSelect::Right(0)).groove, 2);
+        assert_eq!(one(GrooveSelect::Right(2)).groove, 0);
+        assert_eq!(one(GrooveSelect::Nearest(-2.0)).groove, 0);
+        assert_eq!(one(GrooveSelect::Nearest(0.6)).groove, 2);
+        // The same grooves measured alone or among the others.
+        assert_eq!(one(GrooveSelect::Deepest).depth.to_bits(), all[1].depth.to_bits());
+        // No fourth groove from the left.
+        assert_eq!(one(GrooveSelect::Left(3)).status, GrooveStatus::NoGroove);
+        // Validity limits: the widest groove is out, so the deepest of the rest is the third.
+        let limited = GrooveOptions {
+            limits: GrooveLimits { max_width: Some(0.55), ..GrooveLimits::default() },
+            ..select(GrooveSelect::Deepest)
+        };
+        assert_eq!(fit_frame(&x, &z, &limited).groove, 2);
+        let limited = GrooveOptions {
+            limits: GrooveLimits { min_width: Some(0.55), ..GrooveLimits::default() },
+            ..select(GrooveSelect::All)
+        };
+        let rows = crate::groove::fit_frame_grooves(&x, &z, &limited);
+        assert_eq!(rows.iter().map(|f| f.groove).collect::<Vec<_>>(), vec![1]);
+        let shallow = GrooveOptions {
+            limits: GrooveLimits { max_depth: Some(0.2), ..GrooveLimits::default() },
+            ..select(GrooveSelect::Deepest)
+        };
+        assert_eq!(fit_frame(&x, &z, &shallow).groove, 0);
+    }
+
+    #[test]
+    fn a_lone_groove_is_measured_alike_by_every_selection() {
+        let mut seed = 23u64;
+        let (x, z) = several(&[(0.7, 0.5, 0.2)], 0.008, &mut seed);
+        let deepest = fit_frame(&x, &z, &GrooveOptions::default());
+        assert_eq!(deepest.status, GrooveStatus::Converged);
+        for s in [GrooveSelect::Left(0), GrooveSelect::Right(0), GrooveSelect::Nearest(-4.0), GrooveSelect::All] {
+            let f = fit_frame(&x, &z, &select(s));
+            assert_eq!(
+                (f.depth.to_bits(), f.width.to_bits(), f.groove),
+                (deepest.depth.to_bits(), deepest.width.to_bits(), 0),
+                "{s:?}"
+            );
+        }
+        let flat: Vec<f64> = x.iter().map(|_| 0.008 * gauss(&mut seed)).collect();
+        let rows = crate::groove::fit_frame_grooves(&x, &flat, &select(GrooveSelect::All));
+        assert_eq!((rows.len(), rows[0].status, rows[0].groove), (1, GrooveStatus::NoGroove, -1));
     }
 
     #[test]

@@ -10,9 +10,12 @@ mod section;
 mod tanh;
 mod template;
 
-pub use fit::{fit_frame, fit_frames, view_frame, FrameView};
+pub use fit::{fit_frame, fit_frame_grooves, fit_frames, view_frame, FrameView, GrooveRows};
 pub use measure::SECTION_CRITERIA;
-pub use options::{FitCriteria, FitModel, GrooveFit, GrooveOptions, GrooveStatus, TemplateKind, TANH_CRITERIA};
+pub use options::{
+    FitCriteria, FitModel, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, GrooveStatus, TemplateKind,
+    TANH_CRITERIA,
+};
 pub use section::{Beams, Pieces, SectionModel};
 pub use tanh::{level_frame, LevelledFrame};
 pub use template::TanhTemplate;

@@ -19,7 +19,8 @@ pub enum GrooveStatus {
     NoGroove = 2,
     /// Fewer valid readings than `min_valid` in the window, or too few surface readings left.
     TooFewValid = 3,
-    /// A second dip at least half as deep as the first lies in the window.
+    /// A second dip at least half as deep as the first lies in the window (the tanh template;
+    /// the section models find every groove and measure the one `select` asks for).
     TwoGrooves = 4,
     /// The groove touches the window edge: no surface on one side.
     Clipped = 5,
@@ -152,6 +153,109 @@ impl FitCriteria {
     }
 }
 
+/// Which of a frame's grooves are measured. Grooves are dips deeper than `min_depth` and the
+/// surface noise, found by walking from each bottom out to the surface (or to the corner it
+/// shares with a neighbour); those measured outside the validity limits do not count.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GrooveSelect {
+    /// The deepest (the default).
+    Deepest,
+    /// The n-th from the left (0 = the leftmost), counting grooves within the limits.
+    Left(usize),
+    /// The n-th from the right.
+    Right(usize),
+    /// The one whose bottom is nearest this x (in the frame's own coordinates, mm).
+    Nearest(f64),
+    /// Every groove: a row per groove, left to right.
+    All,
+}
+
+impl GrooveSelect {
+    pub const NAMES: [&'static str; 5] = ["deepest", "left", "right", "nearest", "all"];
+
+    /// The selection named `name`, with the `index` of "left"/"right" and the `near` x of
+    /// "nearest" (each refused where it has no meaning, so a mistyped call is not silently
+    /// another selection).
+    pub fn parse(name: &str, index: usize, near: Option<f64>) -> Result<Self> {
+        let select = match name {
+            "deepest" => GrooveSelect::Deepest,
+            "left" => GrooveSelect::Left(index),
+            "right" => GrooveSelect::Right(index),
+            "all" => GrooveSelect::All,
+            "nearest" => match near {
+                Some(x) if x.is_finite() => GrooveSelect::Nearest(x),
+                Some(x) => return Err(Error::invalid("near", format!("must be a finite x, mm, got {x}"))),
+                None => return Err(Error::invalid("near", "select=\"nearest\" needs the x to be near, mm")),
+            },
+            other => {
+                return Err(Error::invalid(
+                    "select",
+                    format!("expected one of {}, got {other:?}", Self::NAMES.map(|n| format!("{n:?}")).join(", ")),
+                ))
+            }
+        };
+        if index != 0 && !matches!(select, GrooveSelect::Left(_) | GrooveSelect::Right(_)) {
+            return Err(Error::invalid(
+                "index",
+                format!("counts grooves for select=\"left\" or \"right\", not {name:?}"),
+            ));
+        }
+        if near.is_some() && !matches!(select, GrooveSelect::Nearest(_)) {
+            return Err(Error::invalid("near", format!("is for select=\"nearest\", not {name:?}")));
+        }
+        Ok(select)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            GrooveSelect::Deepest => "deepest",
+            GrooveSelect::Left(_) => "left",
+            GrooveSelect::Right(_) => "right",
+            GrooveSelect::Nearest(_) => "nearest",
+            GrooveSelect::All => "all",
+        }
+    }
+}
+
+/// Validity limits: a groove measured outside them is not a groove of the part (a scratch, a
+/// neighbouring feature); `None` = no limit. `min_depth` is the options' own.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GrooveLimits {
+    pub min_width: Option<f64>,
+    pub max_width: Option<f64>,
+    pub max_depth: Option<f64>,
+}
+
+impl GrooveLimits {
+    fn check(&self, min_depth: f64) -> Result<()> {
+        for (name, v) in [("min_width", self.min_width), ("max_width", self.max_width), ("max_depth", self.max_depth)] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(Error::invalid(name, format!("must be a positive width or depth, mm, got {v}")));
+                }
+            }
+        }
+        if let (Some(lo), Some(hi)) = (self.min_width, self.max_width) {
+            if lo > hi {
+                return Err(Error::invalid("max_width", format!("{hi} mm is below min_width {lo} mm")));
+            }
+        }
+        if let Some(hi) = self.max_depth {
+            if hi < min_depth {
+                return Err(Error::invalid("max_depth", format!("{hi} mm is below min_depth {min_depth} mm")));
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether a measured width and depth lie within the limits.
+    pub fn admit(&self, width: f64, depth: f64) -> bool {
+        self.min_width.is_none_or(|lo| width >= lo)
+            && self.max_width.is_none_or(|hi| width <= hi)
+            && self.max_depth.is_none_or(|hi| depth <= hi)
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GrooveOptions {
     /// How the groove is measured.
@@ -180,6 +284,10 @@ pub struct GrooveOptions {
     /// Which readings are valid: the others (NaN, the vendor's no-reading code, outside the
     /// measuring range) are left out, by the rule every function that takes frames applies.
     pub valid: ValidReadings,
+    /// Which grooves of a frame are measured.
+    pub select: GrooveSelect,
+    /// What counts as a groove beyond `min_depth`.
+    pub limits: GrooveLimits,
 }
 
 impl Default for GrooveOptions {
@@ -196,6 +304,8 @@ impl Default for GrooveOptions {
             min_valid: 12,
             criteria: FitCriteria::default(),
             valid: ValidReadings::default(),
+            select: GrooveSelect::Deepest,
+            limits: GrooveLimits::default(),
         }
     }
 }
@@ -220,6 +330,16 @@ impl GrooveOptions {
         if self.window == Some(0) {
             return Err(Error::invalid("window", "must hold at least one reading"));
         }
+        if self.template == TemplateKind::Tanh && self.select != GrooveSelect::Deepest {
+            return Err(Error::invalid(
+                "select",
+                format!(
+                    "{:?} needs the section models: the tanh template measures one groove per frame",
+                    self.select.name()
+                ),
+            ));
+        }
+        self.limits.check(self.min_depth)?;
         self.criteria.check()
     }
 }
@@ -250,6 +370,9 @@ pub struct GrooveFit {
     pub status: GrooveStatus,
     /// What was fitted.
     pub model: FitModel,
+    /// The groove's place among the frame's grooves, from the left (0 = leftmost); −1 when
+    /// no groove was found.
+    pub groove: i32,
 }
 
 impl GrooveFit {
@@ -268,6 +391,7 @@ impl GrooveFit {
             n_used: n_used as u32,
             status,
             model: FitModel::None,
+            groove: -1,
         }
     }
 }

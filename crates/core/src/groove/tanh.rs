@@ -399,6 +399,8 @@ pub(super) fn fit_tanh_detailed(
         n_used: m as u32,
         status,
         model: FitModel::Tanh,
+        // The template measures the one groove of its window.
+        groove: 0,
     };
     (fit, Some((frame, p)))
 }
