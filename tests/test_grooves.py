@@ -195,12 +195,114 @@ def test_paper_template_fitted_alpha():
 
 @pytest.mark.parametrize("method", ["auto", "tanh"])
 def test_window_excludes_a_neighboring_groove(method):
-    z = template(X, 0.05, 0.0, 0.3, 0.48) + template(X, 1.6, 0.0, 0.3, 0.48)
-    both = machscan.fit_grooves(X, z[None, :], template=method)
-    assert both.status[0] == GrooveStatus.TWO_GROOVES
+    z = template(X, 0.05, 0.0, 0.3, 0.48) + template(X, 1.6, 0.0, 0.31, 0.48)
     narrow = machscan.fit_grooves(X, z[None, :], window=100, template=method)
     assert narrow.status[0] == GrooveStatus.CONVERGED
     assert abs(narrow.x0[0] - 0.05) < 1e-3
+    both = machscan.fit_grooves(X, z[None, :], template=method)
+    if method == "tanh":  # the paper's pipeline measures one groove per window
+        assert both.status[0] == GrooveStatus.TWO_GROOVES
+    else:  # the section models find both and measure the deepest
+        assert both.status[0] == GrooveStatus.CONVERGED and both.groove[0] == 1
+        assert abs(both.x0[0] - 1.6) < 1e-3
+
+
+def _matched(fits, truth):
+    """Each measured row's truth groove (the nearest center in its frame): errors of width,
+    depth (relative) and center, and how many grooves each frame had found."""
+    found = np.zeros(len(truth.z), dtype=int)
+    errors = []
+    for r in np.flatnonzero(fits.ok):
+        k = fits.frame[r]
+        c = truth.center[k, : truth.count[k]]
+        j = int(np.argmin(np.abs(c - fits.x0[r])))
+        found[k] += 1
+        errors.append(
+            (fits.width[r] - truth.width[k, j], (fits.depth[r] - truth.depth[k, j]) / truth.depth[k, j], fits.x0[r] - c[j])
+        )
+    return np.abs(np.array(errors)), found
+
+
+def test_every_groove_of_frames_with_several_is_measured():
+    # Frames with 2-4 grooves of every shape, a quarter of them sharing a corner with their
+    # neighbour (seed not used elsewhere). Measured against BENCHMARKS.md: 97.5 % of frames
+    # with every groove found, medians 5.6 µm / 0.71 % / 2.5 µm.
+    g = synth.multi_groove_frames(400, seed=31)
+    fits = machscan.fit_grooves(g.x, g.z, select="all")
+    errors, found = _matched(fits, g)
+    assert np.mean(found == g.count) >= 0.94
+    assert np.mean(found > g.count) <= 0.01  # never more grooves than there are
+    w, d, c = np.median(errors, axis=0)
+    assert w <= 0.010 and d <= 0.015 and c <= 0.010, (w, d, c)
+    # Rows run left to right within each frame, numbered from 0.
+    for k in range(len(g.z)):
+        rows = np.flatnonzero(fits.frame == k)
+        assert np.all(np.diff(fits.x0[rows]) > 0) or len(rows) == 1
+        assert list(fits.groove[rows]) == list(range(len(rows)))
+
+
+def test_the_selection_picks_the_groove_asked_for():
+    g = synth.multi_groove_frames(200, seed=32, shared=0.0)
+    every = machscan.fit_grooves(g.x, g.z, select="all")
+    frames = [np.flatnonzero((every.frame == k) & every.ok) for k in range(len(g.z))]
+    whole = [k for k, rows in enumerate(frames) if len(rows) == g.count[k]]
+    assert len(whole) >= 190
+    for select, kwargs, pick in [
+        ("deepest", {}, lambda rows: rows[np.argmax(every.depth[rows])]),
+        ("left", {"index": 1}, lambda rows: rows[1]),
+        ("right", {}, lambda rows: rows[-1]),
+        ("nearest", {"near": 1.0}, lambda rows: rows[np.argmin(np.abs(every.x0[rows] - 1.0))]),
+    ]:
+        one = machscan.fit_grooves(g.x, g.z, select=select, **kwargs)
+        assert len(one) == len(g.z) and list(one.frame) == list(range(len(g.z)))
+        agree = [one.groove[k] == every.groove[pick(frames[k])] for k in whole]
+        # Deepest and nearest may differ where two grooves are as deep, or as near, to a few µm.
+        assert np.mean(agree) >= 0.97, (select, np.mean(agree))
+        same = [one.width[k] == every.width[pick(frames[k])] for k in whole if one.groove[k] == every.groove[pick(frames[k])]]
+        assert all(same)  # a groove is measured the same alone or among the others
+
+
+def test_validity_limits_pass_over_grooves_outside_them():
+    g = synth.multi_groove_frames(100, seed=33, shared=0.0)
+    every = machscan.fit_grooves(g.x, g.z, select="all")
+    limited = machscan.fit_grooves(g.x, g.z, select="all", min_width=0.5, max_depth=0.3)
+    ok = limited.ok
+    assert ok.any() and np.all(limited.width[ok] >= 0.5) and np.all(limited.depth[ok] <= 0.3)
+    inside = every.ok & (every.width >= 0.5) & (every.depth <= 0.3)
+    assert ok.sum() == inside.sum()
+    deepest = machscan.fit_grooves(g.x, g.z, max_depth=0.3)
+    for k in np.flatnonzero(deepest.ok):
+        rows = np.flatnonzero((every.frame == k) & every.ok & (every.depth <= 0.3))
+        assert deepest.depth[k] == pytest.approx(every.depth[rows].max(), abs=1e-12) or len(rows) == 0
+
+
+def test_selection_mistakes_are_refused_by_name():
+    z = template(X, 0.0, 0.0, 0.3, 0.48)[None, :]
+    for kwargs, name in [
+        ({"select": "nearest"}, "near"),
+        ({"select": "left", "near": 1.0}, "near"),
+        ({"index": 2}, "index"),
+        ({"select": "widest"}, "select"),
+        ({"select": "all", "template": "tanh"}, "select"),
+        ({"min_width": -0.1}, "min_width"),
+        ({"min_width": 0.6, "max_width": 0.5}, "max_width"),
+        ({"max_depth": 0.01}, "max_depth"),
+        ({"index": -1, "select": "left"}, "index"),
+    ]:
+        with pytest.raises(ValueError, match=f"^{name}:"):
+            machscan.fit_grooves(X, z, **kwargs)
+
+
+def test_all_grooves_in_dask_chunks_equal_in_memory():
+    g = synth.multi_groove_frames(60, seed=34)
+    import dask.array as da
+
+    import machscan.dask as mdask
+
+    lazy = mdask.fit_grooves(g.x, da.from_array(g.z, chunks=(25, -1)), select="all").compute(scheduler="synchronous")
+    eager = machscan.fit_grooves(g.x, g.z, select="all")
+    assert list(lazy.frame) == list(eager.frame) and list(lazy.groove) == list(eager.groove)
+    np.testing.assert_array_equal(lazy.width, eager.width)
 
 
 @pytest.mark.parametrize("method", ["auto", "tanh"])

@@ -291,6 +291,8 @@ class _GrooveFitArrays(TypedDict):
     n_used: NDArray[np.int32]
     status: NDArray[np.uint8]
     model: NDArray[np.uint8]
+    groove: NDArray[np.int32]
+    frame: NDArray[np.int32]
 
 class _FrameViewArrays(TypedDict):
     x: _F64
@@ -301,6 +303,7 @@ class _FrameViewArrays(TypedDict):
     fit: _GrooveFitArrays
 
 _Template = Literal["auto", "trapezoid", "v", "round", "u", "tanh"]
+_Select = Literal["deepest", "left", "right", "nearest", "all"]
 
 class _GrooveOptions(TypedDict):
     template: _Template
@@ -318,6 +321,12 @@ class _GrooveOptions(TypedDict):
     gradient_tolerance: float | None
     sentinel: float | None
     valid_range: tuple[float, float] | None
+    select: _Select
+    index: int
+    near: float | None
+    min_width: float | None
+    max_width: float | None
+    max_depth: float | None
 
 class _Criteria(TypedDict):
     max_iterations: int

@@ -113,20 +113,27 @@ def _valid_readings(block: np.ndarray, profiler: Profiler) -> np.ndarray:
 
 
 def _fit_block(
-    block: np.ndarray, x: np.ndarray, options: _grooves.GrooveOptions, dtype: np.dtype, threads: int | None
+    block: np.ndarray,
+    x: np.ndarray,
+    options: _grooves.GrooveOptions,
+    dtype: np.dtype,
+    threads: int | None,
+    block_info: dict[Any, Any] | None = None,
 ) -> np.ndarray:
     with thread_limit(threads):
         fits = _grooves.fit_grooves(x, block, options=options)
     out = np.empty(len(fits), dtype=dtype)
     for name in dtype.names or ():
         out[name] = getattr(fits, name)
+    # The rows' frames counted from the whole array's first frame, not the chunk's.
+    out["frame"] += block_info[0]["array-location"][0][0] if block_info else 0
     return out
 
 
 @dataclass(frozen=True, eq=False, repr=False)
 class DaskGrooveFits:
-    """The lazy result of :func:`fit_grooves`: one record per frame in ``records`` (a Dask array
-    chunked as the frames), each :class:`machscan.GrooveFits` field as a Dask array
+    """The lazy result of :func:`fit_grooves`: one record per frame (with ``select="all"`` per
+    groove) in ``records`` (a Dask array chunked as the frames), each :class:`machscan.GrooveFits` field as a Dask array
     (``fits.width``, ``fits.status``, ...), and :meth:`compute` for the in-memory result."""
 
     records: da.Array
@@ -215,7 +222,9 @@ def fit_grooves(
     options = _grooves.groove_options(options, changes, "machscan.dask.fit_grooves")
     dtype = _groove_dtype(x.shape[0], options)
     fit = functools.partial(_fit_block, x=x, options=options, dtype=dtype, threads=threads)
-    records = frames.map_blocks(fit, dtype=dtype, drop_axis=1, meta=np.empty((0,), dtype))
+    # A row per groove: how many a chunk gives is known only once it is fitted.
+    rows = ((np.nan,) * frames.numblocks[0],) if options.select == "all" else None
+    records = frames.map_blocks(fit, dtype=dtype, drop_axis=1, chunks=rows, meta=np.empty((0,), dtype))
     return DaskGrooveFits(records, options.template)
 
 
@@ -291,6 +300,7 @@ def scan_to_wcs(
 
 
 # ---- voxel grid ------------------------------------------------------------------------------
+
 
 def _voxel_split(points: np.ndarray, first: int, origin: np.ndarray, voxel: float, partitions: int) -> list[tuple]:
     """One chunk's points as `partitions` groups by voxel key: (keys, global indices, points)."""
@@ -571,4 +581,3 @@ def map_files(
         with ProgressBar(out=sys.stderr):
             return list(dask.compute(*tasks, scheduler=scheduler))
     return list(dask.compute(*tasks, scheduler=scheduler))
-

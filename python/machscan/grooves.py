@@ -37,6 +37,7 @@ __all__ = [
     "GrooveOptions",
     "GrooveStatus",
     "LevelledFrame",
+    "Select",
     "Template",
     "fit_grooves",
     "level_groove_frame",
@@ -53,6 +54,10 @@ PROGRESS_BLOCK = 2000
 #: How a frame's groove is measured: "auto" (the best section model per frame), one section
 #: model ("trapezoid", "v", "round", "u"), or the paper's "tanh" template.
 Template = Literal["auto", "trapezoid", "v", "round", "u", "tanh"]
+
+#: Which of a frame's grooves are measured: the deepest, the ``index``-th from the left or
+#: right, the one nearest ``near``, or all of them (a row per groove).
+Select = Literal["deepest", "left", "right", "nearest", "all"]
 
 
 @dataclass(frozen=True)
@@ -123,6 +128,23 @@ class GrooveOptions:
         by the same rule as :func:`machscan.scan_to_wcs` and :meth:`machscan.Profiler.valid_mask`.
     valid_range : (float, float), optional
         The profiler's measuring range ``(lo, hi)``, mm.
+    select : {"deepest", "left", "right", "nearest", "all"}
+        Which grooves of a frame are measured (section models; the tanh template measures the
+        one groove of its window). Every dip deeper than ``min_depth`` and 4× the surface noise
+        is a groove, its extent walked out from its bottom to the surface or to a corner it
+        shares with a neighbour; one surface line is fitted without any of them. "deepest":
+        the deepest; "left" / "right": the ``index``-th from that side (0 = the outermost);
+        "nearest": the one whose bottom is nearest ``near``; "all": every groove, a row each
+        (:attr:`GrooveFits.frame`, :attr:`GrooveFits.groove`). Grooves measured outside the
+        validity limits do not count.
+    index : int
+        For "left" / "right": which groove from that side, counting grooves within the limits.
+    near : float, optional
+        For "nearest": the x (frame coordinates, mm) the groove's bottom should be nearest.
+    min_width, max_width, max_depth : float, optional
+        Validity limits, mm: a groove measured outside them is not one of the part's (a
+        scratch, a neighbouring feature) and is passed over (``min_depth`` is the lower depth
+        limit).
 
     Examples
     --------
@@ -143,6 +165,12 @@ class GrooveOptions:
     criteria: FitCriteria = field(default_factory=lambda: FitCriteria())
     sentinel: float | None = DEFAULTS["sentinel"]
     valid_range: tuple[float, float] | None = DEFAULTS["valid_range"]
+    select: Select = DEFAULTS["select"]
+    index: int = DEFAULTS["index"]
+    near: float | None = DEFAULTS["near"]
+    min_width: float | None = DEFAULTS["min_width"]
+    max_width: float | None = DEFAULTS["max_width"]
+    max_depth: float | None = DEFAULTS["max_depth"]
 
     def __post_init__(self) -> None:
         if not isinstance(self.criteria, FitCriteria):
@@ -179,7 +207,8 @@ class GrooveStatus(IntEnum):
     TOO_FEW_VALID = 3
     """Too few valid readings in the window."""
     TWO_GROOVES = 4
-    """A second dip at least half as deep lies in the window: narrow the window."""
+    """The tanh template only: a second dip at least half as deep lies in the window (narrow
+    the window, or use the section models, which find every groove: ``select``)."""
     CLIPPED = 5
     """The groove reaches the window edge: fewer than 3 surface readings on one side."""
     FAILED = 6
@@ -206,7 +235,9 @@ class GrooveModel(IntEnum):
 
 @dataclass(frozen=True, eq=False, repr=False)
 class GrooveFits:
-    """Per-frame groove measurements: every array has one entry per frame.
+    """Groove measurements: every array has one entry per row — a row per frame, or with
+    ``select="all"`` a row per groove (and one for a frame without any), ``frame`` and
+    ``groove`` saying which.
 
     Frames that could not be measured hold NaN in the float arrays and say why in ``status``
     (:class:`GrooveStatus`); use ``ok`` to select the converged ones.
@@ -234,6 +265,11 @@ class GrooveFits:
         :class:`GrooveStatus` codes.
     model : ndarray of uint8 (F,)
         :class:`GrooveModel` codes: what was fitted to each frame.
+    groove : ndarray of int32 (F,)
+        The groove's place among its frame's grooves, from the left (0 = leftmost; −1: none
+        found).
+    frame : ndarray of int32 (F,)
+        The frame of each row.
     template : str
         The ``template`` option used.
     """
@@ -251,6 +287,8 @@ class GrooveFits:
     n_used: NDArray[np.int32]
     status: NDArray[np.uint8]
     model: NDArray[np.uint8]
+    groove: NDArray[np.int32]
+    frame: NDArray[np.int32]
     template: str = DEFAULTS["template"]
 
     def __len__(self) -> int:
@@ -283,7 +321,9 @@ class GrooveFits:
         """Width and depth statistics over the converged frames, the models fitted and the
         status counts."""
         ok = self.ok
-        lines = [f"{len(self)} frames, {int(ok.sum())} fitted"]
+        frames = len(np.unique(self.frame))
+        rows = f"{frames} frames" if frames == len(self) else f"{len(self)} grooves in {frames} frames"
+        lines = [f"{rows}, {int(ok.sum())} fitted"]
         if ok.any():
             for name in ("width", "depth", "rms"):
                 v = getattr(self, name)[ok]
@@ -296,7 +336,7 @@ class GrooveFits:
         return "\n".join(lines)
 
     def __repr__(self) -> str:
-        return f"GrooveFits({len(self)} frames, {int(self.ok.sum())} converged)"
+        return f"GrooveFits({len(self)} rows, {int(self.ok.sum())} converged)"
 
 
 def fit_grooves(
@@ -378,8 +418,10 @@ def fit_grooves(
     parts = []
     with _progress.bar(len(z), "frames", True, "groove fits") as shown:
         for start in range(0, len(z), step):
-            parts.append(_core.fit_grooves(x, z[start : start + step], options))
-            shown.update(len(parts[-1]["status"]))
+            part = _core.fit_grooves(x, z[start : start + step], options)
+            part["frame"] += start
+            parts.append(part)
+            shown.update(len(z[start : start + step]))
     merged: dict[str, Any] = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}  # type: ignore[literal-required]
     return GrooveFits(**merged, template=options.template)
 

@@ -542,6 +542,13 @@ def inspect_grooves(
         polylines = _as_polylines(cad_contours)
     if groove.window is not None and groove.window > scan.n_readings:
         raise ValueError(f"window: {groove.window} readings, but the frames have only {scan.n_readings}")
+    if groove.select == "all":
+        # Each frame's groove is matched to the contour the scan path follows; several lines
+        # per frame, each matched to its own contour, are not built yet.
+        raise ValueError(
+            'select: "all" is not supported by inspect_grooves (one groove per frame); '
+            'use "deepest", "left", "right" or "nearest"'
+        )
     if min_cluster_frames < 1:
         raise ValueError(f"min_cluster_frames: must be at least 1, got {min_cluster_frames}")
     if bending_degree < 0:

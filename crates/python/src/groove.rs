@@ -4,7 +4,8 @@
 use super::convert::{count, count_opt, enter, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::groove::{
-    fit_frames, view_frame, FitCriteria, GrooveFit, GrooveOptions, TemplateKind, SECTION_CRITERIA, TANH_CRITERIA,
+    fit_frames, view_frame, FitCriteria, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, TemplateKind,
+    SECTION_CRITERIA, TANH_CRITERIA,
 };
 use machscan_core::kinematics::ValidReadings;
 use pyo3::exceptions::PyValueError;
@@ -36,6 +37,12 @@ struct Options {
     criteria: Criteria,
     sentinel: Option<f64>,
     valid_range: Option<(f64, f64)>,
+    select: String,
+    index: i64,
+    near: Option<f64>,
+    min_width: Option<f64>,
+    max_width: Option<f64>,
+    max_depth: Option<f64>,
 }
 
 impl Options {
@@ -58,6 +65,8 @@ impl Options {
                 gradient_tolerance: c.gradient_tolerance,
             },
             valid: ValidReadings::new(self.valid_range, self.sentinel).py()?,
+            select: GrooveSelect::parse(&self.select, count("index", self.index)?, self.near).py()?,
+            limits: GrooveLimits { min_width: self.min_width, max_width: self.max_width, max_depth: self.max_depth },
         })
     }
 }
@@ -93,6 +102,16 @@ fn groove_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("sentinel", o.valid.sentinel)?;
     let range = (o.valid.lo, o.valid.hi);
     d.set_item("valid_range", (range.0.is_finite() || range.1.is_finite()).then_some(range))?;
+    d.set_item("select", o.select.name())?;
+    let index = match o.select {
+        GrooveSelect::Left(k) | GrooveSelect::Right(k) => k,
+        _ => 0,
+    };
+    d.set_item("index", index)?;
+    d.set_item("near", None::<f64>)?;
+    d.set_item("min_width", o.limits.min_width)?;
+    d.set_item("max_width", o.limits.max_width)?;
+    d.set_item("max_depth", o.limits.max_depth)?;
     Ok(d)
 }
 
@@ -117,8 +136,8 @@ fn fit_criteria_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(out)
 }
 
-/// Sets the per-frame arrays of `fits` into `d` (the `_GrooveFitArrays` keys).
-fn fit_arrays(py: Python<'_>, d: &Bound<'_, PyDict>, fits: &[GrooveFit]) -> PyResult<()> {
+/// Sets the per-row arrays of `fits` and their `frames` into `d` (the `_GrooveFitArrays` keys).
+fn fit_arrays(py: Python<'_>, d: &Bound<'_, PyDict>, fits: &[GrooveFit], frames: &[u32]) -> PyResult<()> {
     let f = fits.len();
     let column = |get: fn(&GrooveFit) -> f64| fits.iter().map(get).collect::<Vec<f64>>();
     d.set_item("x0", to_numpy(py, column(|g| g.x0), &[f])?)?;
@@ -134,6 +153,8 @@ fn fit_arrays(py: Python<'_>, d: &Bound<'_, PyDict>, fits: &[GrooveFit]) -> PyRe
     d.set_item("n_used", to_numpy(py, fits.iter().map(|g| g.n_used as i32).collect::<Vec<_>>(), &[f])?)?;
     d.set_item("status", to_numpy(py, fits.iter().map(|g| g.status as u8).collect::<Vec<_>>(), &[f])?)?;
     d.set_item("model", to_numpy(py, fits.iter().map(|g| g.model.code()).collect::<Vec<_>>(), &[f])?)?;
+    d.set_item("groove", to_numpy(py, fits.iter().map(|g| g.groove).collect::<Vec<_>>(), &[f])?)?;
+    d.set_item("frame", to_numpy(py, frames.iter().map(|&v| v as i32).collect::<Vec<_>>(), &[f])?)?;
     Ok(())
 }
 
@@ -151,9 +172,9 @@ fn fit_grooves<'py>(
     let n = xa.shape()[0];
     let za = F64Array::extract(z, "z", &[Dim::Any("F"), Dim::Is(n)], "(one column per x, mm)")?;
     let (xs, zs) = (xa.values()?, za.values()?);
-    let fits = enter(py, || fit_frames(xs, zs, &o))?;
+    let rows = enter(py, || fit_frames(xs, zs, &o))?;
     let d = PyDict::new(py);
-    fit_arrays(py, &d, &fits)?;
+    fit_arrays(py, &d, &rows.fits, &rows.frame)?;
     Ok(d)
 }
 
@@ -182,7 +203,7 @@ fn view_groove_frame<'py>(
     d.set_item("shape_z", to_numpy(py, view.shape_z, &[k])?)?;
     d.set_item("tilt", view.tilt)?;
     let fit = PyDict::new(py);
-    fit_arrays(py, &fit, &[view.fit])?;
+    fit_arrays(py, &fit, &[view.fit], &[0])?;
     d.set_item("fit", fit)?;
     Ok(d)
 }

@@ -1,7 +1,8 @@
 """Synthetic scans and parts with exact ground truth, for tests, demos and benchmarks.
 
 * :mod:`machscan.synth.grooves`: paper 000 groove plate scans (:func:`groove_scan`) with their truth;
-  :mod:`machscan.synth.frames`: single groove frames (:func:`groove_frames`);
+  :mod:`machscan.synth.frames`: single groove frames (:func:`groove_frames`) and frames across several
+  (:func:`multi_groove_frames`);
   :mod:`machscan.synth.pocket`: a pocketed plate for the octree simplification (:func:`pocket_plate`).
 * :mod:`machscan.synth.blade`: paper 003 turbine blade (:class:`Blade`) and touch-probe simulator
   (:class:`TouchProbe`, :func:`misplacement`).
@@ -13,7 +14,7 @@ it tests.
 """
 
 from machscan.synth.blade import Blade, TouchProbe, misplacement
-from machscan.synth.frames import GROOVE_SHAPES, GrooveFrames, groove_frames
+from machscan.synth.frames import GROOVE_SHAPES, GrooveFrames, MultiGrooveFrames, groove_frames, multi_groove_frames
 from machscan.synth.grinding import AllowanceCloud, WavyPanel, blade_allowance
 from machscan.synth.grooves import (
     DEFAULT_C2_OFFSET,
@@ -46,6 +47,7 @@ __all__ = [
     "Deflection",
     "GrooveFrames",
     "GrooveTruth",
+    "MultiGrooveFrames",
     "PeriodicProfile",
     "SphereTruth",
     "SurfaceError",
@@ -57,6 +59,7 @@ __all__ = [
     "groove_frames",
     "groove_scan",
     "misplacement",
+    "multi_groove_frames",
     "pocket_plate",
     "sphere_scan",
     "surface_error",

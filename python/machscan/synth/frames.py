@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["GROOVE_SHAPES", "GrooveFrames", "groove_frames"]
+__all__ = ["GROOVE_SHAPES", "GrooveFrames", "MultiGrooveFrames", "groove_frames", "multi_groove_frames"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -237,3 +237,127 @@ def groove_frames(
     return GrooveFrames(x=x, z=z, width=width, depth=depth, center=center, tilt=tilt, shape=shape)
 
 
+@dataclass(frozen=True, eq=False, repr=False)
+class MultiGrooveFrames:
+    """Profiler frames each across several grooves, with their exact truth
+    (:func:`multi_groove_frames`). Per-groove arrays are (F, K), left to right, NaN past a
+    frame's ``count``.
+
+    Attributes
+    ----------
+    x : ndarray (N,)
+        Reading abscissae, mm.
+    z : ndarray (F, N)
+        Readings, mm; NaN where a reading was lost.
+    count : ndarray of int (F,)
+        Grooves in each frame.
+    width, depth : ndarray (F, K)
+        Each groove's width between its flanks at the surface line and its deepest point below
+        it, mm (as :class:`GrooveFrames`).
+    center : ndarray (F, K)
+        x of the midpoint of each groove's two crossings, mm.
+    """
+
+    x: np.ndarray
+    z: np.ndarray
+    count: np.ndarray
+    width: np.ndarray
+    depth: np.ndarray
+    center: np.ndarray
+
+    def __repr__(self) -> str:
+        return f"MultiGrooveFrames({len(self.z)} frames x {len(self.x)} readings, {int(self.count.sum())} grooves)"
+
+
+def multi_groove_frames(
+    n: int,
+    seed: int = 0,
+    *,
+    grooves: tuple[int, int] = (2, 4),
+    shapes: tuple[str, ...] = GROOVE_SHAPES,
+    noise: float = 0.008,
+    readings: int = 400,
+    pitch: float = 0.025,
+    max_tilt: float = 0.05,
+    lips: float = 0.03,
+    dropout: float = 0.02,
+    shared: float = 0.25,
+) -> MultiGrooveFrames:
+    """Frames across 2–4 grooves each (``grooves``, inclusive), of random ``shapes`` (as
+    :func:`groove_frames` draws them), with exact truth: the engraved lines that cross one
+    profile. Grooves lie left to right with gaps of 0.2–1.5 mm, or, with probability
+    ``shared``, share a corner with their left neighbour (their flanks meet below the surface,
+    up to a tenth of the shallower depth); recast lips on free edges, a tilt up to
+    ``max_tilt`` rad (a shear ``z += tan(tilt)·x``), noise and dropouts as :func:`groove_frames`.
+    """
+    rng = np.random.default_rng(seed)
+    lo, hi = grooves
+    if not 1 <= lo <= hi:
+        raise ValueError(f"grooves: expected (lo, hi) with 1 <= lo <= hi, got {grooves}")
+    x = (np.arange(readings) - readings // 2) * pitch
+    z = np.empty((n, readings))
+    count = np.empty(n, dtype=np.int64)
+    width, depth, center = (np.full((n, hi), np.nan) for _ in range(3))
+    for f in range(n):
+        k = int(rng.integers(lo, hi + 1))
+        sections = [(_groove_polyline(str(rng.choice(list(shapes))), rng)) for _ in range(k)]
+        # Left to right: a gap, or a corner shared with the left neighbour at a depth of 0–10 %
+        # of the shallower of the two (the overlap found by bisection on the union). Laid out
+        # from 0 first; gaps shrunk if the grooves would not fit in the frame.
+        share = [False] + [bool(rng.random() < shared) for _ in range(k - 1)]
+        steps: list[float] = []
+        edge = 0.0
+        centers: list[float] = []
+        for j, (poly, w) in enumerate(sections):
+            step = 0.0
+            if share[j]:
+                prev_poly, prev_w = sections[j - 1]
+                corner = rng.uniform(0.0, 0.1) * min(-poly[:, 1].min(), -prev_poly[:, 1].min())
+
+                def ridge(overlap, poly=poly, w=w, prev_poly=prev_poly, prev_c=centers[-1], edge=edge):
+                    c = edge - overlap + w / 2
+                    uu = np.linspace(prev_c, c, 400)
+                    a = np.interp(uu, prev_poly[:, 0] + prev_c, prev_poly[:, 1], left=0.0, right=0.0)
+                    b = np.interp(uu, poly[:, 0] + c, poly[:, 1], left=0.0, right=0.0)
+                    return -np.minimum(a, b).max()
+
+                lo_o, hi_o = 0.0, 0.5 * min(w, prev_w)
+                for _ in range(40):
+                    mid = 0.5 * (lo_o + hi_o)
+                    lo_o, hi_o = (mid, hi_o) if ridge(mid) < corner else (lo_o, mid)
+                step = -lo_o
+            elif j > 0:
+                step = rng.uniform(0.2, 1.5)
+            steps.append(step)
+            edge += step
+            centers.append(edge + w / 2)
+            edge += w
+        room = (x[-1] - 0.6) - (x[0] + 0.6)
+        gaps = sum(st for st in steps if st > 0)
+        scale = 1.0 if edge <= room or gaps <= 0 else max(0.0, 1 - (edge - room) / gaps)
+        start = x[0] + 0.6 + rng.uniform(0, max(0.0, room - (edge - (1 - scale) * gaps)))
+        centers, edge = [], start
+        for st, (_, w) in zip(steps, sections):
+            edge += st * scale if st > 0 else st
+            centers.append(edge + w / 2)
+            edge += w
+        u = np.linspace(x[0] - 1, x[-1] + 1, 20 * readings)
+        v = np.zeros_like(u)
+        for (poly, _), c in zip(sections, centers):
+            v = np.minimum(v, np.interp(u, poly[:, 0] + c, poly[:, 1], left=0.0, right=0.0))
+        for j, ((poly, w), c) in enumerate(zip(sections, centers)):
+            for side, free in ((-1, not share[j]), (1, j + 1 == k or not share[j + 1])):
+                if free and lips > 0 and rng.random() < 0.75:
+                    h, half = rng.uniform(0.0, lips), 0.5 * rng.uniform(0.05, 0.15)
+                    crest = c + side * (w / 2 + half + rng.uniform(0.0, 0.02))
+                    tau = (u - crest) / half
+                    bead = h * np.where(np.abs(tau) < 1, (1 - tau * tau) ** 2, 0.0)
+                    v = np.where(v < 0, v, v + bead)
+            width[f, j], depth[f, j], center[f, j] = w, -poly[:, 1].min(), c
+        tilt = rng.uniform(-max_tilt, max_tilt)
+        zf = np.interp(x, u, v) + math.tan(tilt) * x + rng.uniform(-0.3, 0.3)
+        zf += noise * rng.standard_normal(readings)
+        zf[rng.random(readings) < dropout] = np.nan
+        z[f] = zf
+        count[f] = k
+    return MultiGrooveFrames(x=x, z=z, count=count, width=width, depth=depth, center=center)

@@ -641,11 +641,17 @@ struct Dip {
 
 /// Most grooves looked for in one frame.
 const MAX_DIPS: usize = 64;
+/// Fewest reading steps between a groove's ends (three readings below the surface).
+const MIN_DIP: usize = 4;
 
-/// From the bottom `ib`, out in direction `step`: the first reading with `v ≥ −thr` (the
-/// surface), or the top of a ridge the walk has passed — a fall of more than `drop` below the
-/// highest reading so far, or a reading `claimed` by another groove: a corner shared with a
-/// neighbour (second value true). None past the end of the frame.
+/// From the bottom `ib`, out in direction `step` over the 3-medians `v`: the first reading
+/// with `v ≥ −thr` (the surface), or the top of a ridge the walk has passed — a fall of more
+/// than `drop` (4σ: a noisy floor's 3-medians fall about 2.7σ at most from their running
+/// maximum) below the highest reading so far, or a reading `claimed` by another groove: a
+/// corner shared with a neighbour (second value true). None past the end of the frame.
+///
+/// The 5-means instead of the 3-medians for the ridge split 9–14 of 8000 single grooves (3
+/// with the 3-medians: wide trapezoid floors) and found fewer shared corners (`BENCHMARKS.md`).
 fn walk_dip(v: &[f64], ib: usize, step: isize, thr: f64, drop: f64, claimed: &[bool]) -> (Option<usize>, bool) {
     let (mut top, mut at) = (v[ib], ib);
     let mut i = ib as isize + step;
@@ -690,19 +696,74 @@ fn find_dips(v5: &[f64], v3: &[f64], first: usize, sigma: f64, deep_enough: f64)
             break;
         }
         let thr = (EDGE_SIGMAS * sigma).max(EDGE_FRACTION * depth0);
-        let drop = (DEPTH_SIGMAS * sigma).max(RIDGE_FRACTION * depth0);
+        let drop = DEPTH_SIGMAS * sigma;
         let (il, sl) = walk_dip(v3, ib, -1, thr, drop, &claimed);
         let (ir, sr) = walk_dip(v3, ib, 1, thr, drop, &claimed);
         claimed[il.unwrap_or(0)..=ir.unwrap_or(n - 1)].iter_mut().for_each(|c| *c = true);
-        dips.push(Dip { ib, il, ir, shared: (sl, sr), depth0 });
+        // A dip of one or two readings between its ends is noise or a spike's remains: no
+        // section can be fitted to it.
+        if !matches!((il, ir), (Some(l), Some(r)) if r < l + MIN_DIP) {
+            dips.push(Dip { ib, il, ir, shared: (sl, sr), depth0 });
+        }
         next = deepest_unclaimed(v5, v3, &claimed);
     }
     dips
 }
 
-/// A shared corner is this far (as a share of the depth) above the lower side at least: a
-/// ridge lower than that between two bottoms is noise on one floor.
-const RIDGE_FRACTION: f64 = 0.1;
+/// Grooves whose bottoms lie within this share of the deepest's depth (or 3σ) of it are all
+/// measured for `select` = deepest: the deepest reading is not the deepest point of a V.
+const DEEPEST_MARGIN: f64 = 0.1;
+
+/// The surface line fitted to the readings outside every groove and its lips (trimmed at 3σ),
+/// the frame levelled on it, and the surface noise σ and slope.
+fn surface_without(
+    px: &[f64],
+    pz: &[f64],
+    lv: &Levelled,
+    dips: &[Dip],
+    scratch: &mut Vec<i64>,
+) -> Option<(Levelled, f64, f64)> {
+    let n = lv.u.len();
+    let extent = |d: &Dip| (lv.u[d.il.unwrap_or(0)], lv.u[d.ir.unwrap_or(n - 1)]);
+    let outside = |u: f64, margin: f64| {
+        dips.iter().all(|d| {
+            let (l, r) = extent(d);
+            u < l - margin || u > r + margin
+        })
+    };
+    let mut surface: Vec<bool> = lv.u.iter().map(|&u| outside(u, LIP_MARGIN)).collect();
+    if surface.iter().filter(|&&s| s).count() < 6 {
+        surface = lv.u.iter().map(|&u| outside(u, 0.0)).collect();
+    }
+    let (sx, sz) = select_pairs(px, pz, |i| surface[i]);
+    if sx.len() < 6 {
+        return None;
+    }
+    let (mut k2, mut b2) = fit_line(sx.iter().copied().zip(sz.iter().copied()))?;
+    // Up to three trims at 3σ of the first line's residuals (σ by MAD: robust already, so it is
+    // not re-estimated per trim); once the kept readings stay the same, so does the line. σ is
+    // then the MAD of the final line's residuals over all surface readings (the first one's
+    // when no reading was trimmed: most frames, and two selections saved).
+    let first_sigma = mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), scratch).max(1e-4);
+    let cut = 3.0 * first_sigma;
+    let first_line = (k2, b2);
+    let mut kept_before: Vec<bool> = vec![true; sx.len()];
+    for _ in 0..3 {
+        let keep: Vec<bool> = sx.iter().zip(&sz).map(|(&x, &z)| (z - (k2 * x + b2)).abs() < cut).collect();
+        if keep == kept_before || keep.iter().filter(|&&k| k).count() < 6 {
+            break;
+        }
+        let Some(line) = fit_line((0..sx.len()).filter(|&i| keep[i]).map(|i| (sx[i], sz[i]))) else { break };
+        (k2, b2) = line;
+        kept_before = keep;
+    }
+    let sigma = if (k2, b2) == first_line {
+        first_sigma
+    } else {
+        mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), scratch).max(1e-4)
+    };
+    Some((level(px, pz, k2, b2), sigma, k2))
+}
 
 /// The grooves `o.select` asks for in one frame (one fit, or a row per groove for `All`; one
 /// failed fit saying why when there is none) and the frame's [`Detail`].
@@ -744,78 +805,37 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
     if !(depth0 >= deep_enough) {
         return none(GrooveStatus::NoGroove, n, lv);
     }
-    let dips = find_dips(&v5, &v3, ib, sigma, deep_enough);
-    // 4. The surface again, without the grooves and their lips, trimmed at 3σ; level again.
-    let extent = |d: &Dip| (lv.u[d.il.unwrap_or(0)], lv.u[d.ir.unwrap_or(n - 1)]);
-    let outside = |u: f64, margin: f64| {
-        dips.iter().all(|d| {
-            let (l, r) = extent(d);
-            u < l - margin || u > r + margin
-        })
-    };
-    let mut surface: Vec<bool> = lv.u.iter().map(|&u| outside(u, LIP_MARGIN)).collect();
-    if surface.iter().filter(|&&s| s).count() < 6 {
-        surface = lv.u.iter().map(|&u| outside(u, 0.0)).collect();
-    }
-    let (sx, sz) = select_pairs(&px, &pz, |i| surface[i]);
-    if sx.len() < 6 {
-        return none(GrooveStatus::TooFewValid, n, lv);
-    }
-    let Some((mut k2, mut b2)) = fit_line(sx.iter().copied().zip(sz.iter().copied())) else {
-        return none(GrooveStatus::TooFewValid, n, lv);
-    };
-    // Up to three trims at 3σ of the first line's residuals (σ by MAD: robust already, so it is
-    // not re-estimated per trim); once the kept readings stay the same, so does the line. σ is
-    // then the MAD of the final line's residuals over all surface readings (the first one's
-    // when no reading was trimmed: most frames, and two selections saved).
-    let first_sigma = mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), &mut scratch).max(1e-4);
-    let cut = 3.0 * first_sigma;
-    let first_line = (k2, b2);
-    let mut kept_before: Vec<bool> = vec![true; sx.len()];
-    for _ in 0..3 {
-        let keep: Vec<bool> = sx.iter().zip(&sz).map(|(&x, &z)| (z - (k2 * x + b2)).abs() < cut).collect();
-        if keep == kept_before || keep.iter().filter(|&&k| k).count() < 6 {
-            break;
+    let mut dips = find_dips(&v5, &v3, ib, sigma, deep_enough);
+    // 4. The surface again, without the grooves and their lips, trimmed at 3σ; level again and
+    //    find the grooves again with the surface's own noise (the first estimate, away from the
+    //    deepest bottom, counts other grooves as noise when there are several). Grooves found
+    //    only now (shallow ones the first noise hid) were in the surface: it is fitted once more
+    //    without them.
+    let mut round = 0;
+    let (lv, sigma, k2, grooves) = loop {
+        round += 1;
+        let Some((lv2, sigma2, k2)) = surface_without(&px, &pz, &lv, &dips, &mut scratch) else {
+            return none(GrooveStatus::TooFewValid, n, lv);
+        };
+        let (v5, v3) = (mean5(&lv2.v), median3(&lv2.v));
+        let deep_enough = o.min_depth.max(DEPTH_SIGMAS * sigma2);
+        let found = match deepest_unclaimed(&v5, &v3, &vec![false; n]) {
+            Some(ib) => find_dips(&v5, &v3, ib, sigma2, deep_enough),
+            None => Vec::new(),
+        };
+        let new =
+            found.iter().any(|f| !dips.iter().any(|d| d.il.unwrap_or(0) <= f.ib && f.ib <= d.ir.unwrap_or(n - 1)));
+        if !new || round == 2 {
+            break (lv2, sigma2, k2, found);
         }
-        let Some(line) = fit_line((0..sx.len()).filter(|&i| keep[i]).map(|i| (sx[i], sz[i]))) else { break };
-        (k2, b2) = line;
-        kept_before = keep;
-    }
-    let sigma = if (k2, b2) == first_line {
-        first_sigma
-    } else {
-        mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), &mut scratch).max(1e-4)
+        dips = found;
     };
-    let lv = level(&px, &pz, k2, b2);
-    let v3 = median3(&lv.v);
-    let deep_enough = o.min_depth.max(DEPTH_SIGMAS * sigma);
-    // Each groove again on the new level, its ends walked out again (the other grooves'
-    // readings as found before are theirs), left to right.
-    let mut grooves: Vec<Dip> = Vec::with_capacity(dips.len());
-    let mut order: Vec<usize> = (0..dips.len()).collect();
-    order.sort_by_key(|&i| dips[i].ib);
-    for &i in &order {
-        let d = dips[i];
-        let depth0 = -v3[d.ib];
-        if !(depth0 >= deep_enough) {
-            continue;
-        }
-        let mut claimed = vec![false; n];
-        for (j, other) in dips.iter().enumerate() {
-            if j != i {
-                let (l, r) = (other.il.unwrap_or(0), other.ir.unwrap_or(n - 1));
-                claimed[l..=r].iter_mut().for_each(|c| *c = true);
-            }
-        }
-        let thr = (EDGE_SIGMAS * sigma).max(EDGE_FRACTION * depth0);
-        let drop = (DEPTH_SIGMAS * sigma).max(RIDGE_FRACTION * depth0);
-        let (il, sl) = walk_dip(&v3, d.ib, -1, thr, drop, &claimed);
-        let (ir, sr) = walk_dip(&v3, d.ib, 1, thr, drop, &claimed);
-        grooves.push(Dip { ib: d.ib, il, ir, shared: (sl, sr), depth0 });
-    }
     if grooves.is_empty() {
         return none(GrooveStatus::NoGroove, n, lv);
     }
+    // Left to right.
+    let mut grooves = grooves;
+    grooves.sort_by_key(|d| d.ib);
     // 5.–7. The grooves asked for, fitted; the candidates in the order the selection prefers.
     let mut candidates: Vec<usize> = (0..grooves.len()).collect();
     match o.select {
@@ -834,7 +854,16 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
     let mut found: Vec<(GrooveFit, Option<(Pieces, f64)>)> = Vec::new();
     let mut first_failure: Option<GrooveFit> = None;
     let mut admitted = 0;
+    // Deepest: the grooves whose bottom readings are about as deep as the deepest's (the first
+    // admitted) are all measured, and the deepest measured kept.
+    let mut deepest: Option<(GrooveFit, Option<(Pieces, f64)>)> = None;
+    let mut tie = f64::NEG_INFINITY;
     for &c in &candidates {
+        if let Some(best) = &deepest {
+            if grooves[c].depth0 < tie {
+                return (vec![best.0], Detail::of(lv, best.1));
+            }
+        }
         // The readings this groove may use: up to its neighbours' ends.
         let lo = if c > 0 { grooves[c - 1].ir.unwrap_or(0) } else { 0 };
         let hi = grooves.get(c + 1).map_or(n - 1, |g| g.il.unwrap_or(n - 1));
@@ -856,10 +885,23 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
             found.push((fit, shape));
             continue;
         }
+        if o.select == GrooveSelect::Deepest {
+            if deepest.is_none() {
+                let d0 = grooves[c].depth0;
+                tie = d0 - (3.0 * sigma).max(DEEPEST_MARGIN * d0);
+            }
+            if deepest.as_ref().is_none_or(|(best, _)| fit.depth > best.depth) {
+                deepest = Some((fit, shape));
+            }
+            continue;
+        }
         if admitted == wanted {
             return (vec![fit], Detail::of(lv, shape));
         }
         admitted += 1;
+    }
+    if let Some((fit, shape)) = deepest {
+        return (vec![fit], Detail::of(lv, shape));
     }
     if found.is_empty() {
         let fit = first_failure.unwrap_or_else(|| GrooveFit::failed(GrooveStatus::NoGroove, n));
