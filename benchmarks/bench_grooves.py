@@ -19,10 +19,15 @@
    and >= 40,000 frames/s.
    Then the default call and the tanh template on the frames issue #3 set the target on
    (tanh-shaped grooves; --only issue3).
-3. ``euclidean_clusters`` on >= 500,000 groove-center-like points against Open3D
+3. Several grooves per frame (``synth.multi_groove_frames``: 2–4 grooves of every shape per
+   frame, 400 readings, with and without corners shared between neighbours; seed 7): share of
+   frames whose every groove is found with ``select="all"`` and none extra, per-groove median
+   errors against the truth, how often ``select="deepest"`` measures the truly deepest groove,
+   and the rates (frames/s) of the default call and of ``select="all"`` (--only multi).
+4. ``euclidean_clusters`` on >= 500,000 groove-center-like points against Open3D
    ``cluster_dbscan(eps, min_points=1)``, same points, same partition checked. Target: >= 2x.
 
-    python benchmarks/bench_grooves.py [--only accuracy|speed|issue3|clusters] [--frames 20000]
+    python benchmarks/bench_grooves.py [--only accuracy|speed|issue3|multi|clusters] [--frames 20000]
         [--scipy-frames 1000] [--points 500000]
 """
 
@@ -218,6 +223,37 @@ def bench_issue3_frames(n_frames: int) -> None:
         print(f"  fit_grooves(template={template!r}): {n_frames / t:10,.0f} frames/s  ({int(fits.ok.sum())} converged)")
 
 
+# ---- several grooves per frame --------------------------------------------------------------
+
+
+def bench_multi(n: int, n_speed: int, seed: int = 7) -> None:
+    print(f"\nseveral grooves per frame, synth.multi_groove_frames (2-4 grooves, 400 readings), {n} frames, seed {seed}")
+    print(f"  {'corners shared':<15} {'all found':>9} {'extra':>6} {'|width| µm':>11} {'|depth| %':>10} {'|center| µm':>12}"
+          f" {'deepest right':>14}")
+    for shared in (0.0, 0.25):
+        g = synth.multi_groove_frames(n, seed=seed, shared=shared)
+        every = machscan.fit_grooves(g.x, g.z, select="all")
+        found = np.zeros(n, dtype=int)
+        errors = []
+        for r in np.flatnonzero(every.ok):
+            k = every.frame[r]
+            c = g.center[k, : g.count[k]]
+            j = int(np.argmin(np.abs(c - every.x0[r])))
+            found[k] += 1
+            errors.append((every.width[r] - g.width[k, j], (every.depth[r] - g.depth[k, j]) / g.depth[k, j], every.x0[r] - c[j]))
+        w, d, c = np.median(np.abs(np.array(errors)), axis=0)
+        deepest = machscan.fit_grooves(g.x, g.z)
+        truth = np.array([g.center[k, np.nanargmax(g.depth[k])] for k in range(n)])
+        right = np.mean(np.abs(deepest.x0 - truth)[deepest.ok] < 0.05)
+        print(f"  {shared:<15.2f} {100 * np.mean(found == g.count):8.1f}% {100 * np.mean(found > g.count):5.1f}%"
+              f" {1000 * w:11.1f} {100 * d:10.2f} {1000 * c:12.1f} {100 * right:13.1f}%")
+    g = synth.multi_groove_frames(2000, seed=21)
+    z = np.tile(g.z, (-(-n_speed // 2000), 1))[:n_speed]
+    for select in ("deepest", "all"):
+        t, _, fits = timed(lambda z=z, select=select: machscan.fit_grooves(g.x, z, select=select), 3)
+        print(f"  fit_grooves(select={select!r}): {n_speed / t:10,.0f} frames/s, {len(fits) / t:10,.0f} grooves/s")
+
+
 # ---- clustering -----------------------------------------------------------------------------
 
 
@@ -253,7 +289,7 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=20000)
     ap.add_argument("--scipy-frames", type=int, default=1000)
     ap.add_argument("--points", type=int, default=500000)
-    ap.add_argument("--only", choices=["accuracy", "speed", "issue3", "clusters"], help="run one part")
+    ap.add_argument("--only", choices=["accuracy", "speed", "issue3", "multi", "clusters"], help="run one part")
     args = ap.parse_args()
     if args.only in (None, "accuracy"):
         bench_accuracy(args.accuracy_frames, args.accuracy_seed)
@@ -261,6 +297,8 @@ def main() -> None:
         bench_speed(args.frames, args.scipy_frames)
     if args.only in (None, "issue3"):
         bench_issue3_frames(args.frames)
+    if args.only in (None, "multi"):
+        bench_multi(args.accuracy_frames, args.frames)
     if args.only in (None, "clusters"):
         bench_clusters(args.points)
 
