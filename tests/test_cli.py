@@ -57,6 +57,17 @@ def test_grooves_command_equals_the_library(small):
     np.testing.assert_allclose(rows["error_mean_mm"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
 
 
+def test_grooves_command_selects_the_groove_asked_for(small):
+    d, scan, truth = small
+    args = ["--select", "nearest", "--near", "0.0", "--max-width", "0.7"]
+    assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), *args, "--out", str(d / "near")]) == 0
+    ref = inspect_grooves(scan, truth.nominal_polylines, select="nearest", near=0.0, max_width=0.7)
+    rows = np.genfromtxt(d / "near" / "contour_errors.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(rows["error_mean_mm"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
+    with pytest.raises(SystemExit):  # one groove per frame: "all" is not a choice here
+        main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--select", "all"])
+
+
 def test_grooves_command_fits_the_template_asked_for(small):
     d, scan, truth = small
     out = d / "out_tanh"

@@ -215,7 +215,7 @@ def _scan_arguments(p: argparse.ArgumentParser, *, optional: bool = False) -> No
 def _groove_arguments(p: argparse.ArgumentParser) -> None:
     """The groove inspection's options, shared by `grooves` and `batch grooves`; the defaults are
     InspectionOptions' (one source)."""
-    from machscan.grooves import Template
+    from machscan.grooves import Select, Template
     from machscan.inspection import InspectionOptions
 
     default = InspectionOptions()
@@ -244,6 +244,22 @@ def _groove_arguments(p: argparse.ArgumentParser) -> None:
         default=default.groove.nominal_width,
         help="tanh template only: starting groove width, mm (default: %(default)s)",
     )
+    p.add_argument(
+        "--select",
+        choices=[s for s in get_args(Select) if s != "all"],
+        default=default.groove.select,
+        help="which groove of a frame's window is measured: the deepest, the --index-th from the left or "
+        "right, or the one nearest --near (default: %(default)s)",
+    )
+    p.add_argument("--index", type=int, default=default.groove.index, help="with --select left/right: which one (0: outermost)")
+    p.add_argument("--near", type=float, default=default.groove.near, help="with --select nearest: x in the line, mm")
+    for name, what in (("min-width", "narrowest"), ("max-width", "widest"), ("max-depth", "deepest")):
+        p.add_argument(
+            f"--{name}",
+            type=float,
+            default=getattr(default.groove, name.replace("-", "_")),
+            help=f"validity limit: the {what} groove that counts, mm (default: no limit)",
+        )
     p.add_argument(
         "--max-se-ratio",
         type=float,
@@ -275,6 +291,12 @@ def _groove_options(args: argparse.Namespace) -> InspectionOptions:
             template=args.template,
             alpha=args.alpha,
             nominal_width=args.nominal_width,
+            select=args.select,
+            index=args.index,
+            near=args.near,
+            min_width=args.min_width,
+            max_width=args.max_width,
+            max_depth=args.max_depth,
             cluster_radius=args.cluster_radius,
             max_match_distance=args.max_match_distance,
             max_se_ratio=args.max_se_ratio,
