@@ -812,7 +812,7 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
     //    only now (shallow ones the first noise hid) were in the surface: it is fitted once more
     //    without them.
     let mut round = 0;
-    let (lv, sigma, k2, grooves) = loop {
+    let (lv, sigma, k2, grooves, v5) = loop {
         round += 1;
         let Some((lv2, sigma2, k2)) = surface_without(&px, &pz, &lv, &dips, &mut scratch) else {
             return none(GrooveStatus::TooFewValid, n, lv);
@@ -826,7 +826,7 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
         let new =
             found.iter().any(|f| !dips.iter().any(|d| d.il.unwrap_or(0) <= f.ib && f.ib <= d.ir.unwrap_or(n - 1)));
         if !new || round == 2 {
-            break (lv2, sigma2, k2, found);
+            break (lv2, sigma2, k2, found, v5);
         }
         dips = found;
     };
@@ -867,7 +867,7 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
         // The readings this groove may use: up to its neighbours' ends.
         let lo = if c > 0 { grooves[c - 1].ir.unwrap_or(0) } else { 0 };
         let hi = grooves.get(c + 1).map_or(n - 1, |g| g.il.unwrap_or(n - 1));
-        let (mut fit, shape) = fit_groove(&lv, &grooves[c], (lo, hi), sigma, k2, pitch, o);
+        let (mut fit, shape) = fit_groove(&lv, &v5, &grooves[c], (lo, hi), sigma, k2, pitch, o);
         fit.groove = c as i32;
         let measured = matches!(fit.status, GrooveStatus::Converged | GrooveStatus::MaxIterations);
         if measured && !o.limits.admit(fit.width, fit.depth) {
@@ -912,11 +912,13 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
 }
 
 /// Steps 5–7 for one groove of a levelled frame: start values, the section models fitted and
-/// chosen, width, depth and center. `within` = the readings it may use (its neighbours' ends).
+/// chosen, width, depth and center. `v5` = the 5-means of the levelled readings; `within` =
+/// the readings it may use (its neighbours' ends).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn fit_groove(
     lv: &Levelled,
+    v5: &[f64],
     dip: &Dip,
     within: (usize, usize),
     sigma: f64,
@@ -939,7 +941,6 @@ fn fit_groove(
     // 5. Start values (depth from the 5-reading mean: the deepest single reading of a flat
     //    floor lies about 2σ too deep) and the readings fitted: between the start edges (with
     //    the first surface reading on each side) and the walk-out ends, not past a neighbour's.
-    let v5 = mean5(&lv.v);
     let p0 = initial(&lv.u, &lv.v, ib, il, ir, (-v5[ib]).max(0.5 * depth0), thr);
     let (ul, ur) = (lv.u[il], lv.u[ir]);
     let (ulo, uhi) = (lv.u[within.0], lv.u[within.1]);
