@@ -64,8 +64,10 @@ def test_grooves_command_selects_the_groove_asked_for(small):
     ref = inspect_grooves(scan, truth.nominal_polylines, select="nearest", near=0.0, max_width=0.7)
     rows = np.genfromtxt(d / "near" / "contour_errors.csv", delimiter=",", names=True)
     np.testing.assert_allclose(rows["error_mean_mm"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
-    with pytest.raises(SystemExit):  # one groove per frame: "all" is not a choice here
-        main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--select", "all"])
+    # Every groove of the window: frames.csv gets a row per groove, its frame and groove named.
+    assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--select", "all", "--out", str(d / "all")]) == 0
+    rows = np.genfromtxt(d / "all" / "frames.csv", delimiter=",", names=True)
+    assert np.all(np.diff(rows["frame"]) >= 0) and rows["groove"].max() >= 0
 
 
 def test_grooves_command_fits_the_template_asked_for(small):

@@ -185,3 +185,28 @@ def test_the_bending_surface_is_the_least_squares_polynomial():
     at = _core.bending_surface_at(fit["exponents"], fit["coefficients"], fit["center"], fit["scale"], x[:5], y[:5])
     assert np.abs(at - a[:5] @ coef).max() < 1e-12
     assert _core.fit_bending_surface(x[:20], y[:20], dz[:20], degree=4)["degree"] == 2
+
+
+def test_several_lines_across_one_profile_each_matched_to_its_contour():
+    # Three slots side by side, their long sides 2-4 mm apart: a 10 mm laser line scanning one
+    # crosses the lines beside it too.
+    rings = [synth.ContourShape("slot", (100.0, 100.0 + 6.0 * k), (25.0, 2.0), 2.0) for k in range(3)]
+    scan, truth = synth.groove_scan(seed=4, contours=rings, readings=400, keep_every=60, bend=0.1)
+    # One groove per frame, the nearest the line centre (the contour followed): the reference.
+    one = inspect_grooves(scan, truth.nominal_polylines, window=200, select="nearest", near=0.0, cluster_radius=1.0)
+    every = inspect_grooves(scan, truth.nominal_polylines, select="all", cluster_radius=1.0)
+    assert [c.cad_index for c in every.contours] == [0, 1, 2] == [c.cad_index for c in one.contours]
+    f = every.fits
+    assert (np.bincount(f.frame[f.ok]) >= 2).mean() > 0.3  # the line sees several grooves
+    for a, b in zip(every.contours, one.contours):
+        # Each ring also seen from its neighbours' passes (those within half the line).
+        assert len(a.frames) > 1.4 * len(b.frames)
+        # Every center lies on its own ring, and the contour errors agree with the reference.
+        cad = machscan.resample_polyline(np.asarray(truth.nominal_polylines[a.cad_index]), 0.01, closed=True)
+        _, gap = machscan.nearest_neighbors(cad * [1, 1, 0], a.actual * [1, 1, 0])
+        assert gap.max() < 0.2
+        assert a.error.mean == pytest.approx(b.error.mean, abs=0.005)
+        np.testing.assert_allclose(np.median(a.width), np.median(b.width), atol=0.005)
+    # Every row says its frame and groove.
+    rows = every.width_depth_rows()
+    assert sum(r["frames"] for r in rows[:-1]) == sum(len(c.frames) for c in every.contours)

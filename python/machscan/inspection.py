@@ -48,7 +48,8 @@ class ContourResult:
     cluster : int
         Label of the cluster of groove centers.
     frames : ndarray of int64
-        Frames whose groove center belongs to this contour.
+        Frames whose groove center belongs to this contour (rows of ``fits`` with
+        ``select="all"``, in their order along the contour).
     theoretical : ndarray (a, 3)
         CAD contour points P (resampled), mm.
     actual : ndarray (b, 3)
@@ -119,7 +120,8 @@ class GrooveReport:
     Attributes
     ----------
     fits : GrooveFits
-        Per-frame groove fits in the SCS.
+        Per-frame groove fits in the SCS (with ``select="all"`` per groove: every per-frame
+        array below then has a row per groove, ``fits.frame`` and ``fits.groove`` saying whose).
     suspect : ndarray of bool (F,)
         Converged fits left out because their standard error of width or depth is more than
         ``max_se_ratio`` times the median (all False unless ``max_se_ratio`` is given).
@@ -302,7 +304,8 @@ class GrooveReport:
         return f"GrooveReport({len(self.fits)} frames, {int(self.fits.ok.sum())} fitted, {len(self.contours)} contours)"
 
     def to_csv(self, directory: str | os.PathLike[str]) -> list[Path]:
-        """Write ``frames.csv`` (per frame), ``widths.csv`` (table 1) and ``contour_errors.csv``
+        """Write ``frames.csv`` (per frame, or per groove with ``select="all"``; ``frame`` and
+        ``groove`` say which), ``widths.csv`` (table 1) and ``contour_errors.csv``
         (table 2 with the decomposition) into ``directory``; returns the paths. Every column of a
         length names its unit (``width_mm``, ``error_mean_mm``); in ``frames.csv`` ``status`` and
         ``model`` are the :class:`GrooveStatus` and :class:`GrooveModel` codes, empty cells are NaN."""
@@ -311,7 +314,8 @@ class GrooveReport:
         paths = []
         f = self.fits
         frame_cols = {
-            "frame": np.arange(len(f)),
+            "frame": f.frame,
+            "groove": f.groove,
             "status": f.status,
             "model": f.model,
             "suspect": self.suspect.astype(np.int64),
@@ -542,13 +546,6 @@ def inspect_grooves(
         polylines = _as_polylines(cad_contours)
     if groove.window is not None and groove.window > scan.n_readings:
         raise ValueError(f"window: {groove.window} readings, but the frames have only {scan.n_readings}")
-    if groove.select == "all":
-        # Each frame's groove is matched to the contour the scan path follows; several lines
-        # per frame, each matched to its own contour, are not built yet.
-        raise ValueError(
-            'select: "all" is not supported by inspect_grooves (one groove per frame); '
-            'use "deepest", "left", "right" or "nearest"'
-        )
     if min_cluster_frames < 1:
         raise ValueError(f"min_cluster_frames: must be at least 1, got {min_cluster_frames}")
     if bending_degree < 0:
@@ -566,8 +563,8 @@ def inspect_grooves(
             suspect |= converged & (se > max_se_ratio * np.median(se[converged]))
     ok = converged & ~suspect
 
-    # Centers to the WCS with each frame's pose.
-    t = scan.transforms()
+    # Centers to the WCS with each frame's pose (with select="all", a row per groove: its frame's).
+    t = scan.transforms()[fits.frame]
     local = np.column_stack([fits.x0, np.zeros(len(fits)), fits.z0])
     center = np.full((len(fits), 3), np.nan)
     center[ok] = np.einsum("fij,fj->fi", t[ok, :3, :3], local[ok]) + t[ok, :3, 3]
@@ -619,6 +616,12 @@ def inspect_grooves(
         count = 0
         for m, c in sorted(pairs):
             frames = np.nonzero(cluster == c)[0]
+            if groove.select == "all":
+                # Several lines per profile: a contour's centers come from the passes along
+                # it and from those crossing it, so scan order is not its order; they are put
+                # in the order of their nearest CAD points along the contour.
+                along, _ = nearest_neighbors(theoretical[m], center[frames])
+                frames = frames[np.argsort(along, kind="stable")]
             q = center[frames]
             p = theoretical[m]
             # The building block on the same inputs gives the same figure: machscan.contour_error(c.theoretical,

@@ -246,10 +246,10 @@ def _groove_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--select",
-        choices=[s for s in get_args(Select) if s != "all"],
+        choices=get_args(Select),
         default=default.groove.select,
-        help="which groove of a frame's window is measured: the deepest, the --index-th from the left or "
-        "right, or the one nearest --near (default: %(default)s)",
+        help="which grooves of a frame's window are measured: the deepest, the --index-th from the left or "
+        "right, the one nearest --near, or all (several lines across the profile) (default: %(default)s)",
     )
     p.add_argument("--index", type=int, default=default.groove.index, help="with --select left/right: which one (0: outermost)")
     p.add_argument("--near", type=float, default=default.groove.near, help="with --select nearest: x in the line, mm")
