@@ -64,6 +64,12 @@ def test_grooves_command_selects_the_groove_asked_for(small):
     ref = inspect_grooves(scan, truth.nominal_polylines, select="nearest", near=0.0, max_width=0.7)
     rows = np.genfromtxt(d / "near" / "contour_errors.csv", delimiter=",", names=True)
     np.testing.assert_allclose(rows["error_mean_mm"][:-1], [c.error.mean for c in ref.contours], rtol=1e-12)
+    # Tolerances: pass / fail per frame, in tolerance, Cp and Cpk per contour.
+    tol = ["--width-tolerance", "0.47", "0.49", "--depth-tolerance", "0.29", "0.33"]
+    assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), *tol, "--out", str(d / "tol")]) == 0
+    widths = np.genfromtxt(d / "tol" / "widths.csv", delimiter=",", names=True)
+    ref = inspect_grooves(scan, truth.nominal_polylines, width_tolerance=(0.47, 0.49), depth_tolerance=(0.29, 0.33))
+    np.testing.assert_allclose(widths["width_cpk"][:-1], [r["width_cpk"] for r in ref.width_depth_rows()[:-1]], rtol=1e-9)
     # Every groove of the window: frames.csv gets a row per groove, its frame and groove named.
     assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--select", "all", "--out", str(d / "all")]) == 0
     rows = np.genfromtxt(d / "all" / "frames.csv", delimiter=",", names=True)

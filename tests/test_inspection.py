@@ -210,3 +210,48 @@ def test_several_lines_across_one_profile_each_matched_to_its_contour():
     # Every row says its frame and groove.
     rows = every.width_depth_rows()
     assert sum(r["frames"] for r in rows[:-1]) == sum(len(c.frames) for c in every.contours)
+
+
+def test_tolerance_capability_is_the_textbook_formula():
+    rng = np.random.default_rng(5)
+    v = rng.normal(0.48, 0.01, 500)
+    tol = machscan.Tolerance(0.45, 0.52)
+    cap = tol.capability(v)
+    s = v.std(ddof=1)
+    assert cap["cp"] == pytest.approx(0.07 / (6 * s), rel=1e-12)
+    assert cap["cpk"] == pytest.approx(min(0.52 - v.mean(), v.mean() - 0.45) / (3 * s), rel=1e-12)
+    assert cap["in_tolerance"] == np.mean((v >= 0.45) & (v <= 0.52))
+    assert tol.nominal == pytest.approx(0.485)
+    assert np.isnan(tol.capability([0.5])["cp"])
+    for bad in [(0.5, 0.4), (0.4, np.nan), (0.4, 0.5, 0.6)]:
+        with pytest.raises(ValueError, match="tolerance"):
+            machscan.Tolerance(*bad)
+
+
+def test_tolerances_judge_frames_and_contours(run, tmp_path):
+    scan, truth, _ = run
+    depth = machscan.Tolerance(0.29, 0.33)
+    r = inspect_grooves(scan, truth.nominal_polylines, width_tolerance=(0.47, 0.49), depth_tolerance=depth)
+    assert isinstance(r.width_tolerance, machscan.Tolerance)
+    ok = r.fits.ok
+    np.testing.assert_array_equal(r.width_ok, ok & (r.fits.width >= 0.47) & (r.fits.width <= 0.49))
+    assert 0 < r.width_ok[ok].mean() < 1  # the limits cut into the measured spread
+    rows = r.width_depth_rows()
+    for row, c in zip(rows, r.contours):
+        ref = r.width_tolerance.capability(c.width)
+        assert row["width_cpk"] == ref["cpk"] and row["width_in_tolerance"] == ref["in_tolerance"]
+    assert "Cpk" in r.summary()
+    r.to_csv(tmp_path)
+    widths = np.genfromtxt(tmp_path / "widths.csv", delimiter=",", names=True)
+    assert {"width_cp", "width_cpk", "width_in_tolerance", "depth_cpk"} <= set(widths.dtype.names)
+    frames = np.genfromtxt(tmp_path / "frames.csv", delimiter=",", names=True)
+    np.testing.assert_array_equal(frames["width_ok"], r.width_ok.astype(int))
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    fig = machscan.plot.width_depth_along(r, contour=0)
+    labels = [line.get_label() for line in fig.axes[0].lines]
+    assert "limits 0.47–0.49 mm" in labels
+    with pytest.raises(ValueError, match="width_tolerance"):
+        inspect_grooves(scan, truth.nominal_polylines, width_tolerance=0.48)

@@ -74,7 +74,7 @@ from machscan.grooves import (
     fit_grooves,
     level_groove_frame,
 )
-from machscan.inspection import ContourResult, Decomposition, GrooveReport, InspectionOptions, inspect_grooves
+from machscan.inspection import ContourResult, Decomposition, GrooveReport, InspectionOptions, Tolerance, inspect_grooves
 from machscan.io import CloudFile, FileFormatError, TriangleMesh, read_mesh, read_points, write_mesh, write_points
 from machscan.kinematics import (
     SENTINEL,
@@ -170,6 +170,7 @@ __all__ = [
     "RemovalModel",
     "Scan",
     "SignedDistances",
+    "Tolerance",
     "TriangleMesh",
     "__version__",
     "ab_mirror_support_points",

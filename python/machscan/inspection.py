@@ -33,6 +33,7 @@ __all__ = [
     "Decomposition",
     "GrooveReport",
     "InspectionOptions",
+    "Tolerance",
     "inspect_grooves",
 ]
 
@@ -113,6 +114,53 @@ class Decomposition:
         return _poly_eval(self.exponents, self.coefficients, np.asarray(x, float), np.asarray(y, float), self.center, self.scale)
 
 
+@dataclass(frozen=True)
+class Tolerance:
+    """A groove dimension's specification: its lower and upper limits, mm, and its nominal
+    (default their middle).
+
+    Examples
+    --------
+    >>> report = machscan.inspect_grooves(scan, cad, width_tolerance=machscan.Tolerance(0.45, 0.51))
+    """
+
+    lower: float
+    upper: float
+    nominal: float | None = None
+
+    def __post_init__(self) -> None:
+        lo, hi = float(self.lower), float(self.upper)
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise ValueError(f"tolerance: expected finite limits with lower < upper, mm, got ({self.lower}, {self.upper})")
+        nominal = 0.5 * (lo + hi) if self.nominal is None else float(self.nominal)
+        if not lo <= nominal <= hi:
+            raise ValueError(f"tolerance: nominal {nominal} mm lies outside its limits ({lo}, {hi}) mm")
+        object.__setattr__(self, "lower", lo)
+        object.__setattr__(self, "upper", hi)
+        object.__setattr__(self, "nominal", nominal)
+
+    def holds(self, values: ArrayLike) -> NDArray[np.bool_]:
+        """Whether each value lies within the limits (NaN: False)."""
+        v = np.asarray(values, dtype=np.float64)
+        return (v >= self.lower) & (v <= self.upper)
+
+    def capability(self, values: ArrayLike) -> dict[str, float]:
+        """Process capability of a sample: ``cp`` = (upper − lower) / 6s, ``cpk`` =
+        min(upper − mean, mean − lower) / 3s (s the sample standard deviation, ddof 1; NaN with
+        fewer than two values or s = 0) and ``in_tolerance`` the share within the limits."""
+        v = np.asarray(values, dtype=np.float64)
+        v = v[np.isfinite(v)]
+        share = float(self.holds(v).mean()) if len(v) else float("nan")
+        if len(v) < 2 or not v.std(ddof=1) > 0:
+            return {"cp": float("nan"), "cpk": float("nan"), "in_tolerance": share}
+        mean, sd = float(v.mean()), float(v.std(ddof=1))
+        return {
+            "cp": (self.upper - self.lower) / (6 * sd),
+            "cpk": min(self.upper - mean, mean - self.lower) / (3 * sd),
+            "in_tolerance": share,
+        }
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class GrooveReport:
     """Everything :func:`inspect_grooves` measured.
@@ -147,6 +195,9 @@ class GrooveReport:
         nothing matched, it says how far off the CAD is (another unit, another origin).
     max_match_distance : float
         The matching limit used, mm.
+    width_tolerance, depth_tolerance : Tolerance or None
+        The specifications the frames and contours are judged against (:attr:`width_ok`,
+        :attr:`depth_ok`; Cp, Cpk and the share in tolerance per contour in the tables).
     """
 
     fits: GrooveFits
@@ -160,6 +211,24 @@ class GrooveReport:
     decomposition: Decomposition | None
     nearest_cad_distance: NDArray[np.float64]
     max_match_distance: float
+    width_tolerance: Tolerance | None = None
+    depth_tolerance: Tolerance | None = None
+
+    @property
+    def width_ok(self) -> NDArray[np.bool_]:
+        """Per frame (row): measured, and its width within ``width_tolerance`` when there is
+        one."""
+        return self._within(self.width_tolerance, self.fits.width)
+
+    @property
+    def depth_ok(self) -> NDArray[np.bool_]:
+        """Per frame (row): the depth within ``depth_tolerance`` (as :attr:`width_ok`)."""
+        return self._within(self.depth_tolerance, self.fits.depth)
+
+    def _within(self, tolerance: Tolerance | None, values: NDArray[np.float64]) -> NDArray[np.bool_]:
+        if tolerance is None:
+            return self.fits.ok.copy()
+        return self.fits.ok & tolerance.holds(values)
 
     def matching_problem(self) -> str | None:
         """Why no contour was matched, in words, or None when some were (or nothing was
@@ -181,32 +250,31 @@ class GrooveReport:
     # ---- the paper's tables ---------------------------------------------------------------
 
     def width_depth_rows(self) -> list[dict[str, float | int]]:
-        """Paper 000 table 1: groove width and depth per contour (mean, std), mm."""
+        """Paper 000 table 1: groove width and depth per contour (mean, std), mm; with a
+        tolerance, the share of frames within it and Cp, Cpk of the contour
+        (:meth:`Tolerance.capability`). The last row (contour −1) is overall."""
         rows: list[dict[str, float | int]] = []
+
+        def row(contour: int, w: NDArray[np.float64], d: NDArray[np.float64]) -> dict[str, float | int]:
+            r: dict[str, float | int] = {
+                "contour": contour,
+                "frames": len(w),
+                "width_mean": float(w.mean()),
+                "width_std": float(w.std()),
+                "depth_mean": float(d.mean()),
+                "depth_std": float(d.std()),
+            }
+            for name, tol, v in (("width", self.width_tolerance, w), ("depth", self.depth_tolerance, d)):
+                if tol is not None:
+                    cap = tol.capability(v)
+                    r |= {f"{name}_in_tolerance": cap["in_tolerance"], f"{name}_cp": cap["cp"], f"{name}_cpk": cap["cpk"]}
+            return r
+
         for c in self.contours:
-            rows.append(
-                {
-                    "contour": c.cad_index,
-                    "frames": len(c.frames),
-                    "width_mean": float(c.width.mean()),
-                    "width_std": float(c.width.std()),
-                    "depth_mean": float(c.depth.mean()),
-                    "depth_std": float(c.depth.std()),
-                }
-            )
+            rows.append(row(c.cad_index, c.width, c.depth))
         if self.contours:
-            w = np.concatenate([c.width for c in self.contours])
-            d = np.concatenate([c.depth for c in self.contours])
-            rows.append(
-                {
-                    "contour": -1,
-                    "frames": len(w),
-                    "width_mean": float(w.mean()),
-                    "width_std": float(w.std()),
-                    "depth_mean": float(d.mean()),
-                    "depth_std": float(d.std()),
-                }
-            )
+            w, d = (np.concatenate([getattr(c, n) for c in self.contours]) for n in ("width", "depth"))
+            rows.append(row(-1, w, d))
         return rows
 
     def contour_error_rows(self) -> list[dict[str, float | int]]:
@@ -251,13 +319,22 @@ class GrooveReport:
 
     def width_depth_table(self) -> str:
         """Table 1 as text."""
-        lines = ["contour  frames   width (mm)          depth (mm)", "-------  ------   -----------------   -----------------"]
+        tols = [(n, t) for n, t in (("width", self.width_tolerance), ("depth", self.depth_tolerance)) if t is not None]
+        head = "contour  frames   width (mm)          depth (mm)       "
+        rule = "-------  ------   -----------------   -----------------"
+        for n, t in tols:
+            head += f"  {n} {t.lower:g}–{t.upper:g} mm: in %, Cp, Cpk"
+            rule += "  " + "-" * (len(n) + 32)
+        lines = [head.rstrip(), rule]
         for r in self.width_depth_rows():
             name = "all" if r["contour"] == -1 else str(r["contour"])
-            lines.append(
+            line = (
                 f"{name:>7}  {r['frames']:>6}   {r['width_mean']:.4f} ± {r['width_std']:.4f}   "
                 f"{r['depth_mean']:.4f} ± {r['depth_std']:.4f}"
             )
+            for n, _ in tols:
+                line += f"  {100 * r[f'{n}_in_tolerance']:>{len(n) + 12}.1f}  {r[f'{n}_cp']:>6.2f}  {r[f'{n}_cpk']:>6.2f}"
+            lines.append(line)
         return "\n".join(lines)
 
     def contour_error_table(self) -> str:
@@ -332,6 +409,9 @@ class GrooveReport:
             "cluster": self.cluster,
             "contour": self.contour,
         }
+        for name, tol, ok in (("width", self.width_tolerance, self.width_ok), ("depth", self.depth_tolerance, self.depth_ok)):
+            if tol is not None:
+                frame_cols[f"{name}_ok"] = ok.astype(np.int64)
         path = out / "frames.csv"
         with open(path, "w", newline="") as fh:
             w = csv.writer(fh)
@@ -343,7 +423,8 @@ class GrooveReport:
             path = out / name
             with open(path, "w", newline="") as fh:
                 if rows:
-                    # Counts are counts; every other column is a length in mm, and says so.
+                    # Counts, shares (0–1) and Cp/Cpk have no unit; every other column is a length
+                    # in mm, and says so.
                     names = {k: k if k in _COUNTS else f"{k}_mm" for k in rows[0]}
                     table = csv.DictWriter(fh, fieldnames=list(names.values()))
                     table.writeheader()
@@ -352,8 +433,18 @@ class GrooveReport:
         return paths
 
 
-#: Columns of the tables that are counts or labels, not lengths.
-_COUNTS = ("contour", "frames", "points")
+#: Columns of the tables that are counts, labels, shares or indices, not lengths.
+_COUNTS = (
+    "contour",
+    "frames",
+    "points",
+    "width_in_tolerance",
+    "width_cp",
+    "width_cpk",
+    "depth_in_tolerance",
+    "depth_cp",
+    "depth_cpk",
+)
 
 
 def _cell(v: object) -> str | int:
@@ -408,6 +499,9 @@ class InspectionOptions:
         of 5 left out 43 frames of which 5 were off by more than 25 µm); it guards the tanh
         template, whose fit converges to a width the data do not fix when a groove lost its
         flank readings (5 is then a good value).
+    width_tolerance, depth_tolerance : Tolerance or (lower, upper), optional
+        Specifications the report judges frames (pass / fail) and contours (share in
+        tolerance, Cp, Cpk) against.
 
     Examples
     --------
@@ -424,8 +518,17 @@ class InspectionOptions:
     max_match_distance: float = 10.0
     bending_degree: int = 4
     max_se_ratio: float | None = None
+    width_tolerance: Tolerance | None = None
+    depth_tolerance: Tolerance | None = None
 
     def __post_init__(self) -> None:
+        for name in ("width_tolerance", "depth_tolerance"):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, Tolerance):
+                if isinstance(value, (tuple, list)) and len(value) in (2, 3):
+                    object.__setattr__(self, name, Tolerance(*value))
+                else:
+                    raise ValueError(f"{name}: expected a machscan.Tolerance or (lower, upper) mm, got {value!r}")
         if not isinstance(self.groove, GrooveOptions):
             raise ValueError(f"groove: expected a machscan.GrooveOptions, got {type(self.groove).__name__}")
 
@@ -679,6 +782,8 @@ def inspect_grooves(
         decomposition=decomposition,
         nearest_cad_distance=nearest_cad,
         max_match_distance=float(max_match_distance),
+        width_tolerance=options.width_tolerance,
+        depth_tolerance=options.depth_tolerance,
     )
 
 

@@ -172,6 +172,11 @@ def width_depth_along(
         start += length
     if not chosen:
         _empty(aw, "no contour matched")
+    limits = {}
+    for ax, tol in ((aw, report.width_tolerance), (ad, report.depth_tolerance)):
+        if tol is not None:
+            ax.axhline(tol.lower, color="tab:red", ls=":", lw=0.9, label=f"limits {tol.lower:g}–{tol.upper:g} mm")
+            limits[ax] = ax.axhline(tol.upper, color="tab:red", ls=":", lw=0.9)
     aw.set_ylabel("groove width w (mm)")
     ad.set_ylabel("groove depth d (mm)")
     for ax in (aw, ad):
@@ -186,7 +191,10 @@ def width_depth_along(
         for ax, name in ((aw, "width"), (ad, "depth")):
             v = np.concatenate([getattr(c, name) for c in chosen])
             mean = ax.axhline(float(v.mean()), color="0.2", ls="--", lw=0.8, label=f"mean {v.mean():.4f} mm")
-            ax.legend(handles=[mean], loc="upper right", fontsize="small")
+            tol = getattr(report, f"{name}_tolerance")
+            if tol is not None:
+                limits[ax].set_label(f"limits {tol.lower:g}–{tol.upper:g} mm")
+            ax.legend(handles=[mean, *([limits[ax]] if ax in limits else [])], loc="upper right", fontsize="small")
         aw.set_xlim(0.0, start)
         aw.set_title(f"Groove width and depth along {len(chosen)} contours (contour index on top)", pad=16)
     return fig

@@ -260,6 +260,15 @@ def _groove_arguments(p: argparse.ArgumentParser) -> None:
             default=getattr(default.groove, name.replace("-", "_")),
             help=f"validity limit: the {what} groove that counts, mm (default: no limit)",
         )
+    for name in ("width", "depth"):
+        p.add_argument(
+            f"--{name}-tolerance",
+            type=float,
+            nargs=2,
+            metavar=("LOWER", "UPPER"),
+            default=None,
+            help=f"groove {name} limits, mm: pass / fail per frame, in tolerance, Cp and Cpk per contour",
+        )
     p.add_argument(
         "--max-se-ratio",
         type=float,
@@ -300,6 +309,8 @@ def _groove_options(args: argparse.Namespace) -> InspectionOptions:
             cluster_radius=args.cluster_radius,
             max_match_distance=args.max_match_distance,
             max_se_ratio=args.max_se_ratio,
+            width_tolerance=tuple(args.width_tolerance) if args.width_tolerance else None,
+            depth_tolerance=tuple(args.depth_tolerance) if args.depth_tolerance else None,
         )
     )
 
