@@ -233,15 +233,8 @@ def bench_multi(n: int, n_speed: int, seed: int = 7) -> None:
     for shared in (0.0, 0.25):
         g = synth.multi_groove_frames(n, seed=seed, shared=shared)
         every = machscan.fit_grooves(g.x, g.z, select="all")
-        found = np.zeros(n, dtype=int)
-        errors = []
-        for r in np.flatnonzero(every.ok):
-            k = every.frame[r]
-            c = g.center[k, : g.count[k]]
-            j = int(np.argmin(np.abs(c - every.x0[r])))
-            found[k] += 1
-            errors.append((every.width[r] - g.width[k, j], (every.depth[r] - g.depth[k, j]) / g.depth[k, j], every.x0[r] - c[j]))
-        w, d, c = np.median(np.abs(np.array(errors)), axis=0)
+        errors, found = g.match(every)
+        w, d, c = np.median(np.abs(errors), axis=0)
         deepest = machscan.fit_grooves(g.x, g.z)
         truth = np.array([g.center[k, np.nanargmax(g.depth[k])] for k in range(n)])
         right = np.mean(np.abs(deepest.x0 - truth)[deepest.ok] < 0.05)

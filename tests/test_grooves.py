@@ -207,29 +207,14 @@ def test_window_excludes_a_neighboring_groove(method):
         assert abs(both.x0[0] - 1.6) < 1e-3
 
 
-def _matched(fits, truth):
-    """Each measured row's truth groove (the nearest center in its frame): errors of width,
-    depth (relative) and center, and how many grooves each frame had found."""
-    found = np.zeros(len(truth.z), dtype=int)
-    errors = []
-    for r in np.flatnonzero(fits.ok):
-        k = fits.frame[r]
-        c = truth.center[k, : truth.count[k]]
-        j = int(np.argmin(np.abs(c - fits.x0[r])))
-        found[k] += 1
-        errors.append(
-            (fits.width[r] - truth.width[k, j], (fits.depth[r] - truth.depth[k, j]) / truth.depth[k, j], fits.x0[r] - c[j])
-        )
-    return np.abs(np.array(errors)), found
-
-
 def test_every_groove_of_frames_with_several_is_measured():
     # Frames with 2-4 grooves of every shape, a quarter of them sharing a corner with their
     # neighbour (seed not used elsewhere). Measured against BENCHMARKS.md: 97.5 % of frames
     # with every groove found, medians 5.6 µm / 0.71 % / 2.5 µm.
     g = synth.multi_groove_frames(400, seed=31)
     fits = machscan.fit_grooves(g.x, g.z, select="all")
-    errors, found = _matched(fits, g)
+    errors, found = g.match(fits)
+    errors = np.abs(errors)
     assert np.mean(found == g.count) >= 0.94
     assert np.mean(found > g.count) <= 0.01  # never more grooves than there are
     w, d, c = np.median(errors, axis=0)

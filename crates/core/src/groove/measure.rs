@@ -812,7 +812,7 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
     //    only now (shallow ones the first noise hid) were in the surface: it is fitted once more
     //    without them.
     let mut round = 0;
-    let (lv, sigma, k2, grooves, v5) = loop {
+    let (lv, sigma, k2, mut grooves, v5) = loop {
         round += 1;
         let Some((lv2, sigma2, k2)) = surface_without(&px, &pz, &lv, &dips, &mut scratch) else {
             return none(GrooveStatus::TooFewValid, n, lv);
@@ -834,7 +834,6 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
         return none(GrooveStatus::NoGroove, n, lv);
     }
     // Left to right.
-    let mut grooves = grooves;
     grooves.sort_by_key(|d| d.ib);
     // 5.–7. The grooves asked for, fitted; the candidates in the order the selection prefers.
     let mut candidates: Vec<usize> = (0..grooves.len()).collect();
