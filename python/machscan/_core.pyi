@@ -286,6 +286,18 @@ class _GrooveFitArrays(TypedDict):
     rms: _F64
     se_depth: _F64
     se_width: _F64
+    flank_angle_left: _F64
+    flank_angle_right: _F64
+    area: _F64
+    bottom_radius: _F64
+    step: _F64
+    se_x0: _F64
+    se_z0: _F64
+    se_flank_angle_left: _F64
+    se_flank_angle_right: _F64
+    se_area: _F64
+    se_bottom_radius: _F64
+    se_step: _F64
     tilt: _F64
     iterations: NDArray[np.int32]
     n_used: NDArray[np.int32]

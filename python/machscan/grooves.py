@@ -256,7 +256,25 @@ class GrooveFits:
     rms : ndarray (F,)
         Residual RMS of the fit, mm (along the sensor beam for the section models).
     se_depth, se_width : ndarray (F,)
-        Standard errors of depth and width from the fit covariance ``σ̂² (JᵀJ)⁻¹``, mm.
+        Standard errors of depth and width from the fit covariance ``σ̂² (JᵀJ)⁻¹`` and the
+        surface line's, mm.
+    flank_angle_left, flank_angle_right : ndarray (F,)
+        Angle between each flank and the surface line where they meet, degrees (90: a
+        vertical wall; a circular U shallower than its radius: the arc's angle there). NaN for
+        the tanh template, as are the measures below.
+    area : ndarray (F,)
+        Cross-section area between the surface line and the section, mm².
+    bottom_radius : ndarray (F,)
+        Radius of the round bottom, mm: a U's, a round V's (for V's the Akaike-weighted mean
+        of the sharp V's 0 and the round V's, as the depth); NaN for a trapezoid's flat floor.
+    step : ndarray (F,)
+        Surface step across the groove: the right surface minus the left, along the surface
+        line's normal, mm (two parallel lines fitted to the surface readings beside the groove,
+        lips left out; NaN when a side has fewer than three, as beside a shared corner).
+    se_x0, se_z0, se_flank_angle_left, se_flank_angle_right, se_area, se_bottom_radius, se_step : ndarray (F,)
+        Standard errors of those measures, in their units (mm, degrees, mm²): from the fit's
+        covariance and the surface line's by the delta method; the step's from its own line
+        fit. The model choice is not in them (except for the V's depth and bottom radius).
     tilt : ndarray (F,)
         Surface slope angle used for levelling, rad.
     iterations, n_used : ndarray of int32 (F,)
@@ -282,6 +300,18 @@ class GrooveFits:
     rms: NDArray[np.float64]
     se_depth: NDArray[np.float64]
     se_width: NDArray[np.float64]
+    flank_angle_left: NDArray[np.float64]
+    flank_angle_right: NDArray[np.float64]
+    area: NDArray[np.float64]
+    bottom_radius: NDArray[np.float64]
+    step: NDArray[np.float64]
+    se_x0: NDArray[np.float64]
+    se_z0: NDArray[np.float64]
+    se_flank_angle_left: NDArray[np.float64]
+    se_flank_angle_right: NDArray[np.float64]
+    se_area: NDArray[np.float64]
+    se_bottom_radius: NDArray[np.float64]
+    se_step: NDArray[np.float64]
     tilt: NDArray[np.float64]
     iterations: NDArray[np.int32]
     n_used: NDArray[np.int32]

@@ -170,7 +170,9 @@ fn groove_fits(#[case] threads: usize) {
     }
     // Both methods; compared bit for bit (NaN fields included).
     let key = |f: &crate::groove::GrooveFit| {
-        [f.x0, f.z0, f.width, f.depth, f.alpha, f.rms, f.se_width, f.tilt].map(f64::to_bits).to_vec()
+        [f.x0, f.z0, f.width, f.depth, f.alpha, f.rms, f.se_width, f.tilt, f.area, f.se_area, f.step, f.se_step]
+            .map(f64::to_bits)
+            .to_vec()
     };
     for template in [crate::groove::TemplateKind::Auto, crate::groove::TemplateKind::Tanh] {
         let o = GrooveOptions { template, ..GrooveOptions::default() };

@@ -148,6 +148,18 @@ fn fit_arrays(py: Python<'_>, d: &Bound<'_, PyDict>, fits: &[GrooveFit], frames:
     d.set_item("rms", to_numpy(py, column(|g| g.rms), &[f])?)?;
     d.set_item("se_depth", to_numpy(py, column(|g| g.se_depth), &[f])?)?;
     d.set_item("se_width", to_numpy(py, column(|g| g.se_width), &[f])?)?;
+    d.set_item("flank_angle_left", to_numpy(py, column(|g| g.flank_angle_left), &[f])?)?;
+    d.set_item("flank_angle_right", to_numpy(py, column(|g| g.flank_angle_right), &[f])?)?;
+    d.set_item("area", to_numpy(py, column(|g| g.area), &[f])?)?;
+    d.set_item("bottom_radius", to_numpy(py, column(|g| g.bottom_radius), &[f])?)?;
+    d.set_item("step", to_numpy(py, column(|g| g.step), &[f])?)?;
+    d.set_item("se_x0", to_numpy(py, column(|g| g.se_x0), &[f])?)?;
+    d.set_item("se_z0", to_numpy(py, column(|g| g.se_z0), &[f])?)?;
+    d.set_item("se_flank_angle_left", to_numpy(py, column(|g| g.se_flank_angle_left), &[f])?)?;
+    d.set_item("se_flank_angle_right", to_numpy(py, column(|g| g.se_flank_angle_right), &[f])?)?;
+    d.set_item("se_area", to_numpy(py, column(|g| g.se_area), &[f])?)?;
+    d.set_item("se_bottom_radius", to_numpy(py, column(|g| g.se_bottom_radius), &[f])?)?;
+    d.set_item("se_step", to_numpy(py, column(|g| g.se_step), &[f])?)?;
     d.set_item("tilt", to_numpy(py, column(|g| g.tilt), &[f])?)?;
     d.set_item("iterations", to_numpy(py, fits.iter().map(|g| g.iterations as i32).collect::<Vec<_>>(), &[f])?)?;
     d.set_item("n_used", to_numpy(py, fits.iter().map(|g| g.n_used as i32).collect::<Vec<_>>(), &[f])?)?;

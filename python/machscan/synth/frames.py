@@ -21,9 +21,10 @@ __all__ = ["GROOVE_SHAPES", "GrooveFrames", "MultiGrooveFrames", "groove_frames"
 GROOVE_SHAPES = ("v", "u", "u_walls", "trapezoid")
 
 
-def _fillet_polyline(pts, radii, arc_step=0.002):
+def _fillet_polyline(pts, radii, arc_step=0.002, used=None):
     """The polyline through ``pts`` (K, 2) with interior vertex k rounded by a circular arc of
-    radius ``radii[k]`` (0: sharp; reduced where the arc would not fit its segments)."""
+    radius ``radii[k]`` (0: sharp; reduced where the arc would not fit its segments: the radii
+    drawn go to the list ``used``, when given)."""
     pts = np.asarray(pts, dtype=np.float64)
     out = [pts[0]]
     seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
@@ -34,9 +35,13 @@ def _fillet_polyline(pts, radii, arc_step=0.002):
         turn = math.acos(float(np.clip(a @ b, -1.0, 1.0)))
         if r <= 0 or turn < 1e-9:
             out.append(p)
+            if used is not None:
+                used.append(0.0)
             continue
         t = min(r * math.tan(turn / 2), 0.5 * min(seg[k - 1], seg[k]))
         r = t / math.tan(turn / 2)
+        if used is not None:
+            used.append(r)
         t1, t2 = p - a * t, p + b * t
         left = a[0] * b[1] - a[1] * b[0] > 0
         n = np.array([-a[1], a[0]]) if left else np.array([a[1], -a[0]])
@@ -56,9 +61,31 @@ def _fillet_polyline(pts, radii, arc_step=0.002):
     return np.vstack(dense)
 
 
-def _groove_polyline(shape: str, rng: np.random.Generator) -> tuple[np.ndarray, float]:
-    """A groove section over |u| ≤ 4 mm (surface v = 0) and its width between the flanks at
-    the surface (for a circular U, where the arc meets it)."""
+@dataclass(frozen=True)
+class _Section:
+    """One drawn groove section (surface v = 0) and its exact measures."""
+
+    poly: np.ndarray
+    width: float
+    flank_angles: tuple[float, float]
+    bottom_radius: float
+
+    @property
+    def depth(self) -> float:
+        return float(-self.poly[:, 1].min())
+
+    @property
+    def area(self) -> float:
+        """Area between the surface line and the section, mm² (the polyline's, by the
+        trapezoid rule on its densified vertices: exact for its straight pieces)."""
+        u, v = self.poly[:, 0], np.minimum(self.poly[:, 1], 0.0)
+        return float(-np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(u)))
+
+
+def _groove_polyline(shape: str, rng: np.random.Generator) -> _Section:
+    """A groove section over |u| ≤ 4 mm (surface v = 0), its width between the flanks at the
+    surface (for a circular U, where the arc meets it), flank angles (degrees) and bottom
+    radius (NaN for a flat floor)."""
     far = 4.0
     if shape == "v":
         while True:
@@ -68,7 +95,10 @@ def _groove_polyline(shape: str, rng: np.random.Generator) -> tuple[np.ndarray, 
         r_tip = 0.0 if rng.random() < 0.4 else rng.uniform(0.0, 0.05)
         r_top = 0.0 if rng.random() < 0.4 else rng.uniform(0.0, 0.03)
         pts = [(-far, 0), (-w / 2, 0), (0, -d), (w / 2, 0), (far, 0)]
-        return _fillet_polyline(pts, [0, r_top, r_tip, r_top, 0]), w
+        used: list[float] = []
+        poly = _fillet_polyline(pts, [0, r_top, r_tip, r_top, 0], used=used)
+        angle = math.degrees(math.atan2(d, w / 2))
+        return _Section(poly, w, (angle, angle), used[1])
     if shape == "trapezoid":
         while True:
             w, d, phi = rng.uniform(0.2, 1.2), rng.uniform(0.05, 0.5), rng.uniform(30, 80)
@@ -78,7 +108,7 @@ def _groove_polyline(shape: str, rng: np.random.Generator) -> tuple[np.ndarray, 
         r_bot = 0.0 if rng.random() < 0.4 else rng.uniform(0.0, 0.03)
         r_top = 0.0 if rng.random() < 0.4 else rng.uniform(0.0, 0.03)
         pts = [(-far, 0), (-w / 2, 0), (-w / 2 + run, -d), (w / 2 - run, -d), (w / 2, 0), (far, 0)]
-        return _fillet_polyline(pts, [0, r_top, r_bot, r_bot, r_top, 0]), w
+        return _Section(_fillet_polyline(pts, [0, r_top, r_bot, r_bot, r_top, 0]), w, (phi, phi), math.nan)
     if shape == "u":
         # A ball-end cutter: a circular arc of radius R, d ≤ R deep.
         while True:
@@ -91,7 +121,8 @@ def _groove_polyline(shape: str, rng: np.random.Generator) -> tuple[np.ndarray, 
         ang = np.linspace(-math.pi / 2 - a0, -math.pi / 2 + a0, 2000)
         arc = np.c_[radius * np.cos(ang), radius - d + radius * np.sin(ang)]
         arc[0], arc[-1] = (-w / 2, 0.0), (w / 2, 0.0)
-        return np.vstack([[(-far, 0)], arc, [(far, 0)]]), w
+        angle = math.degrees(math.acos((radius - d) / radius))
+        return _Section(np.vstack([[(-far, 0)], arc, [(far, 0)]]), w, (angle, angle), radius)
     if shape == "u_walls":
         # Walls (vertical, or drafted up to 5°) tangent to a round bottom.
         while True:
@@ -107,7 +138,8 @@ def _groove_polyline(shape: str, rng: np.random.Generator) -> tuple[np.ndarray, 
         r_top = 0.0 if rng.random() < 0.5 else rng.uniform(0.0, 0.03)
         left = _fillet_polyline(np.array([(-far, 0), (-w / 2, 0), tuple(arc[0]), tuple(arc[1])]), [0, r_top, 0, 0])[:-1]
         right = _fillet_polyline(np.array([tuple(arc[-2]), tuple(arc[-1]), (w / 2, 0), (far, 0)]), [0, 0, r_top, 0])[1:]
-        return np.vstack([left, arc[1:-1], right]), w
+        angle = 90.0 - math.degrees(draft)
+        return _Section(np.vstack([left, arc[1:-1], right]), w, (angle, angle), rho)
     raise ValueError(f"shape: expected one of {', '.join(GROOVE_SHAPES)}, got {shape!r}")
 
 
@@ -148,6 +180,14 @@ class GrooveFrames:
     tilt : ndarray (F,)
         Surface tilt, rad.
     shape : str
+    flank_angle : ndarray (F, 2)
+        Angle between the left and the right flank and the surface line where they meet,
+        degrees (a circular U: the arc's there; as the frame shows it, so a shear turns them).
+    area : ndarray (F,)
+        Area between the surface line and the section, mm² (unchanged by tilt and shear).
+    bottom_radius : ndarray (F,)
+        Radius of the round bottom (a U's arc, a rounded V tip; 0 for a sharp V; NaN for a
+        trapezoid's flat floor), mm.
     """
 
     x: np.ndarray
@@ -157,6 +197,9 @@ class GrooveFrames:
     center: np.ndarray
     tilt: np.ndarray
     shape: str
+    flank_angle: np.ndarray
+    area: np.ndarray
+    bottom_radius: np.ndarray
 
     def __repr__(self) -> str:
         return f"GrooveFrames({self.shape}: {len(self.z)} frames x {len(self.x)} readings)"
@@ -202,10 +245,14 @@ def groove_frames(
     x = (np.arange(readings) - readings // 2) * pitch
     z = np.empty((n, readings))
     width, depth, tilt, center = np.empty(n), np.empty(n), np.empty(n), np.empty((n, 2))
+    flank_angle, area, bottom_radius = np.empty((n, 2)), np.empty(n), np.empty(n)
     for k in range(n):
-        poly, w = _groove_polyline(shape, rng)
-        depth[k] = -poly[:, 1].min()
+        section = _groove_polyline(shape, rng)
+        poly, w = section.poly, section.width
+        depth[k] = section.depth
         width[k] = w
+        area[k] = section.area
+        bottom_radius[k] = section.bottom_radius
         u, v = poly[:, 0], poly[:, 1].copy()
         if lips > 0:
             for side in (-1, 1):
@@ -219,8 +266,18 @@ def groove_frames(
         if tilt_mode == "rotate":
             c, s = math.cos(theta), math.sin(theta)
             px, pz = xc + u * c - v * s, z_off + u * s + v * c
+            flank_angle[k] = section.flank_angles
         else:
             px, pz = xc + u, z_off + v + math.tan(theta) * u
+            # A flank of cotangent t (run per depth) against the sheared surface line: the
+            # angle from (1, k) to the sheared (t, k·t − 1) is atan2(1, t(1 + k²) − k), and
+            # mirrored on the right.
+            slope = math.tan(theta)
+            cot = [1 / math.tan(math.radians(a)) for a in section.flank_angles]
+            flank_angle[k] = [
+                math.degrees(math.atan2(1.0, cot[0] * (1 + slope * slope) - slope)),
+                math.degrees(math.atan2(1.0, cot[1] * (1 + slope * slope) + slope)),
+            ]
         zk = _topmost(px, pz, x)
         inside = np.abs(x - xc) < (w / 2) * math.cos(theta)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -234,7 +291,18 @@ def groove_frames(
         z[k] = zk
         tilt[k] = theta
         center[k] = (xc, z_off)
-    return GrooveFrames(x=x, z=z, width=width, depth=depth, center=center, tilt=tilt, shape=shape)
+    return GrooveFrames(
+        x=x,
+        z=z,
+        width=width,
+        depth=depth,
+        center=center,
+        tilt=tilt,
+        shape=shape,
+        flank_angle=flank_angle,
+        area=area,
+        bottom_radius=bottom_radius,
+    )
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -323,7 +391,8 @@ def multi_groove_frames(
     width, depth, center = (np.full((n, hi), np.nan) for _ in range(3))
     for f in range(n):
         k = int(rng.integers(lo, hi + 1))
-        sections = [(_groove_polyline(str(rng.choice(list(shapes))), rng)) for _ in range(k)]
+        drawn = (_groove_polyline(str(rng.choice(list(shapes))), rng) for _ in range(k))
+        sections = [(sec.poly, sec.width) for sec in drawn]
         # Left to right: a gap, or a corner shared with the left neighbour at a depth of 0–10 %
         # of the shallower of the two (the overlap found by bisection on the union). Laid out
         # from 0 first; gaps shrunk if the grooves would not fit in the frame.

@@ -70,6 +70,19 @@ struct Levelled {
     tilt: f64,
     /// Intercept of the surface line in the frame's own coordinates.
     b: f64,
+    /// The readings the surface line was fitted to: their count, mean x and `Σ(x − x̄)²`, for
+    /// the variance of the line's height (infinite until the surface is fitted without the
+    /// grooves).
+    spread: [f64; 3],
+}
+
+impl Levelled {
+    /// Variance of the surface line's height at frame abscissa x for readings of noise σ,
+    /// along the line's normal: `cos²θ·σ²(1/n + (x − x̄)²/Sxx)`.
+    fn line_variance(&self, x: f64, sigma: f64) -> f64 {
+        let [n, mx, sxx] = self.spread;
+        self.cos * self.cos * sigma * sigma * (1.0 / n + (x - mx) * (x - mx) / sxx)
+    }
 }
 
 fn level(x: &[f64], z: &[f64], k: f64, b: f64) -> Levelled {
@@ -82,6 +95,7 @@ fn level(x: &[f64], z: &[f64], k: f64, b: f64) -> Levelled {
         cos: c,
         tilt,
         b,
+        spread: [0.0, 0.0, f64::INFINITY],
     }
 }
 
@@ -518,8 +532,8 @@ fn initial(u: &[f64], v: &[f64], ib: usize, il: usize, ir: usize, d0: f64, thr: 
 /// top of a U, between two readings) is not determined by the data: continue the fillet arc (if
 /// ≥ 3 readings lie on it) to the surface or its vertical tangent, kept inside the gap between
 /// the last groove reading and the first surface reading; with no supported arc, the middle of
-/// the gap.
-fn edge_rule(p: &Pieces, fitted: &[f64], e: f64, side: f64, gap: (f64, f64)) -> f64 {
+/// the gap. Returns the edge and, when the rule placed it, the gap (low, high) it lies in.
+fn edge_rule(p: &Pieces, fitted: &[f64], e: f64, side: f64, gap: (f64, f64)) -> (f64, Option<(f64, f64)>) {
     let (al, ar) = (super::section::slant(p.tl), super::section::slant(p.tr));
     let (on_line, on_arc, c) = if side < 0.0 {
         let (lo, hi) = (p.xl.min(e), p.cl - p.r / al);
@@ -537,56 +551,296 @@ fn edge_rule(p: &Pieces, fitted: &[f64], e: f64, side: f64, gap: (f64, f64)) -> 
         )
     };
     if on_line > 0 {
-        return e;
+        return (e, None);
     }
     let (a, b) = if gap.0 <= gap.1 { gap } else { (gap.1, gap.0) };
     if on_arc >= 3 && p.r > 0.0 {
         let reach = if p.hc <= 0.0 { (p.r * p.r - p.hc * p.hc).max(0.0).sqrt() } else { p.r };
-        return (c + side * reach).clamp(a, b);
+        return ((c + side * reach).clamp(a, b), Some((a, b)));
     }
-    0.5 * (a + b)
+    (0.5 * (a + b), Some((a, b)))
 }
 
-/// Standard errors of width and depth from `σ̂² (JᵀJ)⁺` of a fit, by the delta method (they do
-/// not include the uncertainty of the model choice).
-fn standard_errors(fit: &ModelFit, m: usize) -> (f64, f64) {
+/// A flank the data do not fix, placed by [`edge_rule`] at `edge` in the gap `(a, b)`: its angle
+/// (degrees) is the line's from the edge to the fillet's tangent point (fixed by the fillet's
+/// readings; leaning by `gamma`), and its variance that of an edge anywhere in the gap
+/// (uniform: the angles at the gap's ends, spread²/12). `side` −1 left, +1 right. None when
+/// the flank has no length (the arc meets the surface); also the tangent point's depth.
+fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)) -> Option<(f64, f64, f64)> {
+    let (al, ar) = (super::section::slant(p.tl), super::section::slant(p.tr));
+    let (htl, htr) = (p.hc + p.r * p.tl / al, p.hc + p.r * p.tr / ar);
+    let (ut, ht) = if side < 0.0 { (p.cl - p.r / al, htl) } else { (p.cr + p.r / ar, htr) };
+    if !(ht > 1e-9) {
+        return None;
+    }
+    let ut = ut - gamma * ht;
+    let angle = |e: f64| ht.atan2(side * (e - ut)).to_degrees();
+    let spread = angle(a) - angle(b);
+    Some((angle(edge), spread * spread / 12.0, ht))
+}
+
+/// The measures read from a section, in the order of [`section_measures`].
+const WIDTH: usize = 0;
+const DEPTH: usize = 1;
+const CENTER: usize = 2;
+const ANGLE_LEFT: usize = 3;
+const ANGLE_RIGHT: usize = 4;
+const AREA: usize = 5;
+const RADIUS: usize = 6;
+const MEASURES: usize = 7;
+
+/// Width, depth, center u, flank angles (degrees), area and bottom radius of `model` at `q`
+/// leaning by `gamma`, with the surface line raised by `delta` (the section fixed in space:
+/// the flank lines then cross it at `xL − tL·δ` and `xR + tR·δ`, the bottom lies δ deeper, and
+/// the fillet radius `s·(w − T·D)/K` stays as it was). The trapezoid's bottom radius is NaN: a
+/// flat floor has none (its fillets are corners, not a bottom).
+fn section_measures(model: SectionModel, q: &[f64], gamma: f64, delta: f64) -> [f64; MEASURES] {
+    let mut p = model.to_p(q);
+    p[0] -= p[2] * delta;
+    p[1] += p[3] * delta;
+    p[4] += delta;
+    let pieces = Pieces::new(p);
+    let (l, r) = pieces.crossings();
+    let (al, ar) = pieces.flank_angles(gamma);
+    let radius = if model == SectionModel::Trapezoid { f64::NAN } else { pieces.r };
+    // A lean shifts the points at the raised surface (depth −δ) by γδ.
+    [r - l, pieces.d, 0.5 * (l + r) + gamma * delta, al, ar, pieces.area(), radius]
+}
+
+/// Standard errors of the [`section_measures`] of a fit by the delta method: the parameters'
+/// covariance `σ̂² (JᵀJ)⁺` (σ̂² from the fit's residuals) and the variance `var_surface` of
+/// the surface line's height at the groove (fitted to other readings: independent). They do
+/// not include the uncertainty of the model choice.
+///
+/// A round V whose bottom arc spans less than the reading `pitch` rests on at most one reading:
+/// its depth is as undetermined by the readings as its rounding, and the linearisation at so
+/// small a radius says nothing of how far either can go. Its errors are then the sharp V's at
+/// its flanks (the rounding it might have is the Akaike spread's part, for V's).
+fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64) -> [f64; MEASURES] {
+    if fit.model == SectionModel::Round {
+        let p = fit.pieces();
+        let span = (p.cr + p.r / super::section::slant(p.tr)) - (p.cl - p.r / super::section::slant(p.tl));
+        if span < pitch {
+            let problem =
+                SectionFit { model: SectionModel::V, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma: fit.gamma };
+            let q = SVector::<f64, 4>::from_fn(|i, _| fit.q[i]);
+            let (a, _, cost) = LeastSquares::<4>::normal_equations(&problem, &q);
+            let mut sharp = ModelFit { model: SectionModel::V, cost, jtj: [[0.0; 6]; 6], ..*fit };
+            for i in 0..4 {
+                for j in 0..4 {
+                    sharp.jtj[i][j] = a[(i, j)];
+                }
+            }
+            return measure_errors(&sharp, r, var_surface, pitch);
+        }
+    }
+    let m = r.u.len();
     let np = fit.model.n_params();
-    let scale = (0..np).map(|i| fit.jtj[i][i]).fold(0.0, f64::max).max(1e-300);
-    // Cholesky when every pivot is clearly positive (the common case, a tenth of an SVD's
-    // work); else the pseudo-inverse: a parameter the data do not fix (a fillet of zero
-    // radius, a rounding at its bound) has no variance to give, rather than an infinite one.
+    // A parameter at a bound (a trapezoid's fillet at zero) is not estimated: it is held,
+    // and has no variance. The free ones' JᵀJ is inverted by Cholesky when every pivot is
+    // clearly positive (the common case, a tenth of an eigen-decomposition's work); else by its
+    // eigen-decomposition with each eigenvalue at least 1e-12 of the largest: a free
+    // combination the readings do not fix (a flank with one reading under a large fillet)
+    // then gives the measures that move with it a variance as large as that says, not none.
+    let (lo, hi) = fit.model.bounds(&fit.q);
+    let held = |i: usize| {
+        let tol = 1e-9 * fit.q[i].abs().max(1.0);
+        fit.q[i] <= lo[i] + tol || fit.q[i] >= hi[i] - tol
+    };
+    let free: [bool; 6] = std::array::from_fn(|i| i < np && !held(i));
+    let scale = (0..np).filter(|&i| free[i]).map(|i| fit.jtj[i][i]).fold(0.0, f64::max).max(1e-300);
     let a = nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, j| {
-        if i < np && j < np {
+        if free[i] && free[j] {
             fit.jtj[i][j]
         } else {
-            f64::from(u8::from(i == j))
+            f64::from(u8::from(i == j)) * scale
         }
     });
+    let zero_held = |mut inv: nalgebra::SMatrix<f64, 6, 6>| {
+        for i in (0..6).filter(|&i| !free[i]) {
+            inv.row_mut(i).fill(0.0);
+            inv.column_mut(i).fill(0.0);
+        }
+        inv
+    };
     let inv = match a.cholesky() {
-        Some(c) if (0..np).all(|i| c.l_dirty()[(i, i)].powi(2) > 1e-8 * scale) => c.inverse(),
+        Some(c) if (0..6).all(|i| c.l_dirty()[(i, i)].powi(2) > 1e-8 * scale) => zero_held(c.inverse()),
         _ => {
-            let Ok(inv) = a.pseudo_inverse(1e-10 * scale) else { return (f64::INFINITY, f64::INFINITY) };
-            inv
+            let e = a.symmetric_eigen();
+            let floor = 1e-12 * e.eigenvalues.max().max(1e-300);
+            let d = nalgebra::SVector::<f64, 6>::from_fn(|i, _| 1.0 / e.eigenvalues[i].max(floor));
+            zero_held(e.eigenvectors * nalgebra::SMatrix::<f64, 6, 6>::from_diagonal(&d) * e.eigenvectors.transpose())
         }
     };
     let sigma2 = 2.0 * fit.cost / (m.saturating_sub(np).max(1)) as f64;
-    let outputs = |q: &[f64]| {
-        let p = Pieces::of(fit.model, q);
-        let (l, r) = p.crossings();
-        (r - l, p.d)
-    };
-    let (mut gw, mut gd) = ([0.0; 6], [0.0; 6]);
+    // The readings' own residuals too (the sandwich A⁻¹·Σ J_iᵀJ_i·r_i²/(1 − h_i)²·A⁻¹, HC3 of
+    // MacKinnon & White 1985): where the section does not follow the groove (rounded top
+    // corners, lips, a tip between the models) the residuals there are larger than σ̂ and so is
+    // the variance of what those readings fix. Each measure takes the larger of the two: the
+    // classical alone covered the truth at k = 2 in 79–91 % of frames for flank angles and
+    // widths, the sandwich alone is noisy where a flank has three readings (BENCHMARKS.md).
+    let beams = Beams::new(fit.pieces(), r.sin, r.cos, fit.gamma);
+    let jq = pieces_jacobian(fit.model, &fit.q);
+    let mut meat = nalgebra::SMatrix::<f64, 6, 6>::zeros();
+    for (&u, &v) in r.u.iter().zip(r.v) {
+        let hit = beams.hit(u, v);
+        let mut row = nalgebra::SVector::<f64, 6>::zeros();
+        for &(k, gk) in &hit.grad {
+            if gk != 0.0 {
+                for c in 0..np {
+                    row[c] += gk * jq[k][c];
+                }
+            }
+        }
+        // Leverage h = J_i A⁻¹ J_iᵀ, below 1 for a reading whose residual the fit could not
+        // make zero alone; kept under 0.99 where it could.
+        let h = (row.transpose() * inv * row)[(0, 0)].min(0.99);
+        meat += row * row.transpose() * (hit.lambda * hit.lambda / ((1.0 - h) * (1.0 - h)));
+    }
+    let (classical, sandwich) = (inv * sigma2, inv * meat * inv);
+    let outputs = |q: &[f64], delta: f64| section_measures(fit.model, q, fit.gamma, delta);
+    // Central differences (the measures are smooth in the parameters away from a piece's
+    // boundary; closed-form derivatives of the area and the angles would add code, not accuracy).
+    let mut g = [[0.0; 6]; MEASURES];
     for c in 0..np {
         let h = 1e-7 * fit.q[c].abs().max(1.0);
         let (mut up, mut dn) = (fit.q, fit.q);
         up[c] += h;
         dn[c] -= h;
-        let (a, b) = (outputs(&up), outputs(&dn));
-        gw[c] = (a.0 - b.0) / (2.0 * h);
-        gd[c] = (a.1 - b.1) / (2.0 * h);
+        let (a, b) = (outputs(&up, 0.0), outputs(&dn, 0.0));
+        for k in 0..MEASURES {
+            g[k][c] = (a[k] - b[k]) / (2.0 * h);
+        }
     }
-    let quad = |g: &[f64]| (0..np).map(|i| (0..np).map(|j| g[i] * inv[(i, j)] * g[j]).sum::<f64>()).sum::<f64>();
-    ((sigma2 * quad(&gw)).max(0.0).sqrt(), (sigma2 * quad(&gd)).max(0.0).sqrt())
+    let h = 1e-7;
+    let (a, b) = (outputs(&fit.q, h), outputs(&fit.q, -h));
+    let mut se = [0.0; MEASURES];
+    for k in 0..MEASURES {
+        let gk = &g[k];
+        let quad_of = |c: &nalgebra::SMatrix<f64, 6, 6>| -> f64 {
+            (0..np).map(|i| (0..np).map(|j| gk[i] * c[(i, j)] * gk[j]).sum::<f64>()).sum()
+        };
+        let quad = quad_of(&classical).max(quad_of(&sandwich));
+        let gd = (a[k] - b[k]) / (2.0 * h);
+        // NaN (a measure the model does not have) stays NaN; `max` would make it 0.
+        let var = quad + gd * gd * var_surface;
+        se[k] = if var.is_nan() { f64::NAN } else { var.max(0.0).sqrt() };
+    }
+    se
+}
+
+/// The measures of the chosen fit and their standard errors. For V's, depth and bottom
+/// radius are the Akaike-weighted means of the sharp and the round-bottomed V (a tip rounded
+/// by about a reading spacing is barely visible); every standard error includes the spread of
+/// the other models fitted around the value given, by their Akaike weights (Burnham &
+/// Anderson 2002, §4.3: the unconditional variance), since the choice is uncertain too.
+fn measures_with_errors(
+    chosen: &ModelFit,
+    fits: &[ModelFit],
+    r: &Readings<'_>,
+    sigma: f64,
+    var_surface: f64,
+    pitch: f64,
+) -> ([f64; MEASURES], [f64; MEASURES]) {
+    let mut measures = section_measures(chosen.model, &chosen.q, chosen.gamma, 0.0);
+    let mut se = measure_errors(chosen, r, var_surface, pitch);
+    let weight = |f: &ModelFit| -0.5 * f.criterion(sigma);
+    let top = fits.iter().map(weight).fold(weight(chosen), f64::max);
+    let v_fit = fits.iter().find(|f| f.model == SectionModel::V);
+    let r_fit = fits.iter().find(|f| f.model == SectionModel::Round);
+    let mut averaged = false;
+    if let (true, Some(fv), Some(fr)) = (matches!(chosen.model, SectionModel::V | SectionModel::Round), v_fit, r_fit) {
+        averaged = true;
+        let (wv, wr) = ((weight(fv) - top).exp(), (weight(fr) - top).exp());
+        let (mv, mr) =
+            (section_measures(fv.model, &fv.q, fv.gamma, 0.0), section_measures(fr.model, &fr.q, fr.gamma, 0.0));
+        let (ev, er) = (measure_errors(fv, r, var_surface, pitch), measure_errors(fr, r, var_surface, pitch));
+        for k in [DEPTH, RADIUS] {
+            let mean = (wv * mv[k] + wr * mr[k]) / (wv + wr);
+            let (sv, sr) = (ev[k], er[k]);
+            measures[k] = mean;
+            se[k] = ((wv * (sv * sv + (mv[k] - mean).powi(2)) + wr * (sr * sr + (mr[k] - mean).powi(2))) / (wv + wr))
+                .sqrt();
+        }
+    }
+    let total: f64 = fits.iter().filter(|f| f.model != chosen.model).map(|f| (weight(f) - top).exp()).sum::<f64>()
+        + (weight(chosen) - top).exp();
+    let mut spread = [0.0; MEASURES];
+    for f in fits.iter().filter(|f| f.model != chosen.model) {
+        let w = (weight(f) - top).exp() / total;
+        let m = section_measures(f.model, &f.q, f.gamma, 0.0);
+        for k in 0..MEASURES {
+            let pair =
+                averaged && matches!(f.model, SectionModel::V | SectionModel::Round) && (k == DEPTH || k == RADIUS);
+            if !pair && m[k].is_finite() && measures[k].is_finite() {
+                spread[k] += w * (m[k] - measures[k]).powi(2);
+            }
+        }
+    }
+    for k in 0..MEASURES {
+        se[k] = (se[k] * se[k] + spread[k]).sqrt();
+    }
+    (measures, se)
+}
+
+/// Fewest surface readings on each side for a step across a groove.
+const STEP_READINGS: usize = 3;
+
+/// The surface step across a groove and its standard error, mm: two parallel lines
+/// `v = a + b·u + c·[right]` fitted by least squares to the surface readings left of `left_end`
+/// and right of `right_end` (in levelled u), each side from its end to a neighbour's end
+/// (`bounds`, None: the frame's end), lips left out by [`LIP_MARGIN`], then once more without
+/// readings beyond 4σ; the step is c along the lines' normal (parallel lines: one fitted slope,
+/// which a step would bias in a single line). NaN when a side has fewer than
+/// [`STEP_READINGS`] readings.
+fn surface_step(
+    lv: &Levelled,
+    left_end: f64,
+    right_end: f64,
+    bounds: (Option<f64>, Option<f64>),
+    sigma: f64,
+) -> (f64, f64) {
+    let lo = bounds.0.map_or(f64::NEG_INFINITY, |b| b + LIP_MARGIN);
+    let hi = bounds.1.map_or(f64::INFINITY, |b| b - LIP_MARGIN);
+    let side = |u: f64| {
+        if u >= lo && u <= left_end - LIP_MARGIN {
+            Some(0.0)
+        } else if u >= right_end + LIP_MARGIN && u <= hi {
+            Some(1.0)
+        } else {
+            None
+        }
+    };
+    let rows: Vec<(f64, f64, f64)> = lv.u.iter().zip(&lv.v).filter_map(|(&u, &v)| side(u).map(|h| (u, h, v))).collect();
+    let fit = |keep: &dyn Fn(&(f64, f64, f64)) -> bool| -> Option<([f64; 3], f64, f64, usize)> {
+        let kept = rows.iter().filter(|r| keep(r));
+        let (n, nr) = kept.clone().fold((0usize, 0usize), |(n, nr), r| (n + 1, nr + usize::from(r.1 > 0.0)));
+        if nr < STEP_READINGS || n - nr < STEP_READINGS {
+            return None;
+        }
+        let mu = kept.clone().map(|r| r.0).sum::<f64>() / n as f64;
+        let mut ata = nalgebra::Matrix3::<f64>::zeros();
+        let mut atb = nalgebra::Vector3::<f64>::zeros();
+        for &(u, h, v) in kept.clone() {
+            let x = nalgebra::Vector3::new(1.0, u - mu, h);
+            ata += x * x.transpose();
+            atb += x * v;
+        }
+        let inv = ata.try_inverse()?;
+        let c = inv * atb;
+        let rss: f64 = kept.map(|&(u, h, v)| (v - c[0] - c[1] * (u - mu) - c[2] * h).powi(2)).sum();
+        Some(([c[0] - c[1] * mu, c[1], c[2]], rss / (n - 3).max(1) as f64, inv[(2, 2)], n))
+    };
+    let Some(first) = fit(&|_| true) else { return (f64::NAN, f64::NAN) };
+    let (c, n) = (first.0, first.3);
+    let cut = 4.0 * sigma;
+    let within = |r: &(f64, f64, f64)| (r.2 - c[0] - c[1] * r.0 - c[2] * r.1).abs() <= cut;
+    let kept = rows.iter().filter(|r| within(r)).count();
+    let Some((c, s2, v22, _)) = (if kept < n { fit(&within) } else { Some(first) }) else {
+        return (f64::NAN, f64::NAN);
+    };
+    let normal = (1.0 + c[1] * c[1]).sqrt();
+    (c[2] / normal, (s2 * v22).sqrt() / normal)
 }
 
 /// Settings of the measurement (from `GrooveOptions`).
@@ -762,7 +1016,13 @@ fn surface_without(
     } else {
         mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), scratch).max(1e-4)
     };
-    Some((level(px, pz, k2, b2), sigma, k2))
+    let kept = (0..sx.len()).filter(|&i| kept_before[i]);
+    let count = kept.clone().count() as f64;
+    let mean = kept.clone().map(|i| sx[i]).sum::<f64>() / count;
+    let sxx = kept.map(|i| (sx[i] - mean) * (sx[i] - mean)).sum::<f64>();
+    let mut lv = level(px, pz, k2, b2);
+    lv.spread = [count, mean, sxx];
+    Some((lv, sigma, k2))
 }
 
 /// The grooves `o.select` asks for in one frame (one fit, or a row per groove for `All`; one
@@ -1004,27 +1264,50 @@ fn fit_groove(
     let p = chosen.pieces();
     let shape = Some((p, chosen.gamma));
     let (mut xl, mut xr) = p.crossings();
-    let mut depth = p.d;
-    let (se_width, mut se_depth) = standard_errors(&chosen, us.len());
-    let v_fit = fits.iter().find(|f| f.model == SectionModel::V);
-    let r_fit = fits.iter().find(|f| f.model == SectionModel::Round);
-    if let (true, Some(fv), Some(fr)) = (matches!(chosen.model, SectionModel::V | SectionModel::Round), v_fit, r_fit) {
-        // Akaike weights of the sharp and the round-bottomed V; the standard error of the
-        // averaged depth includes the spread between the two (Burnham & Anderson 2002, §4.3).
-        let (lv_, lr_) = (-0.5 * fv.criterion(sigma), -0.5 * fr.criterion(sigma));
-        let top = lv_.max(lr_);
-        let (wv, wr) = ((lv_ - top).exp(), (lr_ - top).exp());
-        let (dv, dr) = (fv.pieces().d, fr.pieces().d);
-        depth = (wv * dv + wr * dr) / (wv + wr);
-        let (sv, sr) = (standard_errors(fv, us.len()).1, standard_errors(fr, us.len()).1);
-        // A round V whose rounding sits at zero has a singular JᵀJ: its depth is the sharp V's.
-        let (sv, sr) = (if sv.is_finite() { sv } else { sr }, if sr.is_finite() { sr } else { sv });
-        se_depth = ((wv * (sv * sv + (dv - depth).powi(2)) + wr * (sr * sr + (dr - depth).powi(2))) / (wv + wr)).sqrt();
-    }
+    // The surface line's height at the groove is uncertain too (it moves every measure that
+    // is read at the surface: width, depth, area, center).
+    let x_center = lv.cos * 0.5 * (xl + xr) - lv.sin * lv.b * lv.cos;
+    let var_surface = lv.line_variance(x_center, sigma);
+    let (measures, mut se) = measures_with_errors(&chosen, &fits, &r, sigma, var_surface, pitch);
+    let (mut measures, mut var) = (measures, se.map(|e| e * e));
+    let depth = measures[DEPTH];
+    // Flanks the data do not fix (no reading on the flank line: a steep wall, or the top of
+    // a U, between two readings): the edge rule places the edge, the flank runs from it to the
+    // fillet, and each measure read at the edge carries the gap's uncertainty.
+    let gaps = [(lv.u[il], lv.u[(il + 1).min(n - 1)]), (lv.u[ir], lv.u[ir.saturating_sub(1)])];
     if matches!(chosen.model, SectionModel::Trapezoid | SectionModel::Round) {
-        xl = edge_rule(&p, &us, xl, -1.0, (lv.u[il], lv.u[(il + 1).min(n - 1)]));
-        xr = edge_rule(&p, &us, xr, 1.0, (lv.u[ir], lv.u[ir.saturating_sub(1)]));
+        for (side, gap, edge, angle) in [(-1.0, gaps[0], &mut xl, ANGLE_LEFT), (1.0, gaps[1], &mut xr, ANGLE_RIGHT)] {
+            let (placed, within) = edge_rule(&p, &us, *edge, side, gap);
+            let Some((a, b)) = within else { continue };
+            let var_edge = (b - a) * (b - a) / 12.0;
+            var[WIDTH] += var_edge;
+            var[CENTER] += 0.25 * var_edge;
+            if let Some((value, v, ht)) = flank_in_gap(&p, chosen.gamma, side, placed, (a, b)) {
+                // The triangle between the fitted flank and the placed one, to the tangent point.
+                measures[AREA] += 0.5 * side * (placed - *edge) * ht;
+                var[AREA] += 0.25 * ht * ht * var_edge;
+                (measures[angle], var[angle]) = (value, v);
+            }
+            *edge = placed;
+        }
+    } else if chosen.model == SectionModel::U && p.hc > 0.0 {
+        // A U with walls fixes them vertical; a drafted wall is the round V's (a U with free
+        // flanks), fitted from the U: the flank angles are read from it.
+        let free = fit_model(SectionModel::Round, &r, chosen.gamma, &[p.xl, p.xr, 0.0, 0.0, p.d], &o.criteria);
+        iterations += free.iterations;
+        let pf = free.pieces();
+        let m = section_measures(free.model, &free.q, free.gamma, 0.0);
+        let e = measure_errors(&free, &r, var_surface, pitch);
+        let (cl, cr) = pf.crossings();
+        for (side, gap, crossing, angle) in [(-1.0, gaps[0], cl, ANGLE_LEFT), (1.0, gaps[1], cr, ANGLE_RIGHT)] {
+            (measures[angle], var[angle]) = (m[angle], e[angle] * e[angle]);
+            let (placed, within) = edge_rule(&pf, &us, crossing, side, gap);
+            if let Some((value, v, _)) = within.and_then(|g| flank_in_gap(&pf, free.gamma, side, placed, g)) {
+                (measures[angle], var[angle]) = (value, v);
+            }
+        }
     }
+    se = var.map(f64::sqrt);
     let width = xr - xl;
     if !(chosen.q.iter().all(|v| v.is_finite()) && width > 0.0 && depth > 0.0) {
         return (GrooveFit::failed(GrooveStatus::Failed, us.len()), shape);
@@ -1037,15 +1320,31 @@ fn fit_groove(
         return (GrooveFit::failed(GrooveStatus::NoGroove, us.len()), shape);
     }
     let (uc, vc) = (0.5 * (xl + xr), lv.b * lv.cos);
+    let bound = |i: usize, end: usize| (i != end).then(|| lv.u[i]);
+    let (step, se_step) = surface_step(lv, lv.u[il], lv.u[ir], (bound(within.0, 0), bound(within.1, n - 1)), sigma);
+    // The center's u from the fit, its v from the surface line: x0 and z0 rotate them.
+    let (var_u, (s, c)) = (se[CENTER] * se[CENTER], (lv.sin, lv.cos));
     let fit = GrooveFit {
-        x0: lv.cos * uc - lv.sin * vc,
-        z0: lv.sin * uc + lv.cos * vc,
+        x0: c * uc - s * vc,
+        z0: s * uc + c * vc,
         depth,
         width,
         alpha: f64::NAN,
         rms: (2.0 * chosen.cost / us.len() as f64).sqrt(),
-        se_depth,
-        se_width,
+        se_depth: se[DEPTH],
+        se_width: se[WIDTH],
+        flank_angle_left: measures[ANGLE_LEFT],
+        flank_angle_right: measures[ANGLE_RIGHT],
+        area: measures[AREA],
+        bottom_radius: measures[RADIUS],
+        step,
+        se_x0: (c * c * var_u + s * s * var_surface).sqrt(),
+        se_z0: (s * s * var_u + c * c * var_surface).sqrt(),
+        se_flank_angle_left: se[ANGLE_LEFT],
+        se_flank_angle_right: se[ANGLE_RIGHT],
+        se_area: se[AREA],
+        se_bottom_radius: se[RADIUS],
+        se_step,
         tilt: lv.tilt,
         iterations: iterations as u32,
         n_used: us.len() as u32,

@@ -362,6 +362,25 @@ pub struct GrooveFit {
     /// Standard errors of depth and width from `σ̂² (JᵀJ)⁻¹`, mm.
     pub se_depth: f64,
     pub se_width: f64,
+    /// The section models' further measures (NaN for the tanh template): the angle between
+    /// each flank and the surface line, degrees (90 = a vertical wall); the cross-section
+    /// area between the surface line and the section, mm²; the radius of a round bottom, mm
+    /// (U and round V; 0 for a sharp V; NaN for a flat floor); the surface step across the
+    /// groove, right surface minus left along the surface line's normal, mm (NaN when a side
+    /// has fewer than three surface readings, as beside a shared corner).
+    pub flank_angle_left: f64,
+    pub flank_angle_right: f64,
+    pub area: f64,
+    pub bottom_radius: f64,
+    pub step: f64,
+    /// Their standard errors, and those of the center x0 and z0 (same units).
+    pub se_x0: f64,
+    pub se_z0: f64,
+    pub se_flank_angle_left: f64,
+    pub se_flank_angle_right: f64,
+    pub se_area: f64,
+    pub se_bottom_radius: f64,
+    pub se_step: f64,
     /// Surface slope angle θ used for levelling, rad.
     pub tilt: f64,
     pub iterations: u32,
@@ -376,23 +395,38 @@ pub struct GrooveFit {
 }
 
 impl GrooveFit {
+    /// Every measure NaN and no model: what a fit starts from and a failure keeps.
+    pub(super) const UNMEASURED: GrooveFit = GrooveFit {
+        x0: f64::NAN,
+        z0: f64::NAN,
+        depth: f64::NAN,
+        width: f64::NAN,
+        alpha: f64::NAN,
+        rms: f64::NAN,
+        se_depth: f64::NAN,
+        se_width: f64::NAN,
+        flank_angle_left: f64::NAN,
+        flank_angle_right: f64::NAN,
+        area: f64::NAN,
+        bottom_radius: f64::NAN,
+        step: f64::NAN,
+        se_x0: f64::NAN,
+        se_z0: f64::NAN,
+        se_flank_angle_left: f64::NAN,
+        se_flank_angle_right: f64::NAN,
+        se_area: f64::NAN,
+        se_bottom_radius: f64::NAN,
+        se_step: f64::NAN,
+        tilt: f64::NAN,
+        iterations: 0,
+        n_used: 0,
+        status: GrooveStatus::Failed,
+        model: FitModel::None,
+        groove: -1,
+    };
+
     pub(super) fn failed(status: GrooveStatus, n_used: usize) -> Self {
-        GrooveFit {
-            x0: f64::NAN,
-            z0: f64::NAN,
-            depth: f64::NAN,
-            width: f64::NAN,
-            alpha: f64::NAN,
-            rms: f64::NAN,
-            se_depth: f64::NAN,
-            se_width: f64::NAN,
-            tilt: f64::NAN,
-            iterations: 0,
-            n_used: n_used as u32,
-            status,
-            model: FitModel::None,
-            groove: -1,
-        }
+        GrooveFit { n_used: n_used as u32, status, ..GrooveFit::UNMEASURED }
     }
 }
 

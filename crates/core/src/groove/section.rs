@@ -248,6 +248,62 @@ impl Pieces {
         v.min(0.0)
     }
 
+    /// The angle between each flank and the surface line where they meet, degrees (90 = a
+    /// vertical wall, above 90 an overhang), for the section leaning by `gamma` (points at
+    /// depth h shifted sideways by −γh: the left flank's cotangent becomes `tL − γ`, the
+    /// right's `tR + γ`). Where the fillet arc meets the surface before its tangent point
+    /// (a circular U shallower than its radius) it is the arc's angle there; a lean shears the
+    /// arc, so its angle is then the sheared tangent's.
+    pub fn flank_angles(&self, gamma: f64) -> (f64, f64) {
+        let (htl, htr) = self.tangent_depths();
+        // The tangent at the surface crossing, as (run per unit depth) — the cotangent.
+        let arc_cot = || {
+            let q = (self.r * self.r - self.hc * self.hc).max(0.0).sqrt();
+            // Radius to the crossing: (∓q, hc) from the centre; the tangent is perpendicular.
+            if q > 0.0 {
+                -self.hc / q
+            } else {
+                0.0
+            }
+        };
+        let tl = if htl >= 0.0 { self.tl } else { arc_cot() };
+        let tr = if htr >= 0.0 { self.tr } else { arc_cot() };
+        let angle = |t: f64| 1.0f64.atan2(t).to_degrees();
+        (angle(tl - gamma), angle(tr + gamma))
+    }
+
+    /// Cross-section area between the surface line and the section, mm² (Green's theorem along
+    /// the pieces: `½∮(u dv − v du)`, the surface line adding nothing; exact for lines and arcs,
+    /// and unchanged by a lean, which is a shear).
+    pub fn area(&self) -> f64 {
+        let (htl, htr) = self.tangent_depths();
+        let (al, ar) = (slant(self.tl), slant(self.tr));
+        let q = (self.r * self.r - self.hc * self.hc).max(0.0).sqrt();
+        let chord = |(au, av): (f64, f64), (bu, bv): (f64, f64)| 0.5 * (au * bv - av * bu);
+        // Arc of centre (c, −hc) from angle t1 to t2 (counter-clockwise).
+        let arc = |c: f64, t1: f64, t2: f64| {
+            let r = self.r;
+            0.5 * (r * r * (t2 - t1) + c * r * (t2.sin() - t1.sin()) + self.hc * r * (t2.cos() - t1.cos()))
+        };
+        // The left arc runs up to the angle π − … of an overhang: counted from below, −π − ….
+        let from_below = |t: f64| if t > 0.0 { t - std::f64::consts::TAU } else { t };
+        let bottom = -std::f64::consts::FRAC_PI_2;
+        let (bl, br) = ((self.cl, -self.d), (self.cr, -self.d));
+        let mut area = chord(bl, br);
+        if htl >= 0.0 {
+            let t = from_below((-self.tl).atan2(-1.0));
+            area += chord((self.xl, 0.0), (self.cl - self.r / al, -htl)) + arc(self.cl, t, bottom);
+        } else {
+            area += arc(self.cl, from_below(self.hc.atan2(-q)), bottom);
+        }
+        if htr >= 0.0 {
+            area += arc(self.cr, bottom, (-self.tr).atan2(1.0)) + chord((self.cr + self.r / ar, -htr), (self.xr, 0.0));
+        } else {
+            area += arc(self.cr, bottom, self.hc.atan2(q));
+        }
+        area
+    }
+
     /// `∂π/∂p` (9 × 6), closed form.
     fn p_jacobian(p: &[f64; 6]) -> [[f64; 6]; 9] {
         let [xl, xr, tl, tr, d, s] = *p;
@@ -573,6 +629,62 @@ mod tests {
         let b = Beams::new(t, 0.0, 1.0, 0.0);
         assert!((b.hit(0.1, -0.31).lambda - 0.01).abs() < 1e-12);
         assert!((b.hit(0.9, 0.02).lambda + 0.02).abs() < 1e-12);
+    }
+
+    #[test]
+    fn area_and_flank_angles_equal_the_closed_forms() {
+        let deg = |t: f64| 1.0f64.atan2(t).to_degrees();
+        // Sharp V: a triangle.
+        let v = Pieces::of(SectionModel::V, &[-0.3, 0.2, 0.6, 0.4]);
+        assert!((v.area() - 0.5 * 0.5 * 0.5).abs() < 1e-14);
+        assert_eq!(v.flank_angles(0.0), (deg(0.6), deg(0.4)));
+        // Trapezoid without fillets: D·(2w − T·D)/2; with fillets of radius r each corner of
+        // interior angle β loses r²(cot(β/2) − (π − β)/2).
+        let t = Pieces::of(SectionModel::Trapezoid, &[-0.5, 0.5, 0.5, 0.25, 0.3, 0.0]);
+        assert!((t.area() - 0.3 * (2.0 - 0.75 * 0.3) / 2.0).abs() < 1e-14);
+        let tf = Pieces::of(SectionModel::Trapezoid, &[-0.5, 0.5, 0.5, 0.25, 0.3, 0.1]);
+        let corner = |tc: f64| {
+            let beta = std::f64::consts::PI - 1.0f64.atan2(tc);
+            tf.r * tf.r * (1.0 / (0.5 * beta).tan() - 0.5 * (std::f64::consts::PI - beta))
+        };
+        assert!(tf.r > 0.0);
+        assert!((tf.area() - (t.area() - corner(0.5) - corner(0.25))).abs() < 1e-13);
+        // A circular U shallower than its radius: a circular segment; the arc meets the
+        // surface at acos((R − D)/R).
+        let (rr, d) = (0.5, 0.2);
+        let u = Pieces::of(SectionModel::U, &[0.1, rr, d]);
+        let seg = rr * rr * ((rr - d) / rr).acos() - (rr - d) * (2.0 * rr * d - d * d).sqrt();
+        assert!((u.area() - seg).abs() < 1e-14, "{} {seg}", u.area());
+        let a = ((rr - d) / rr).acos().to_degrees();
+        let (l, r) = u.flank_angles(0.0);
+        assert!((l - a).abs() < 1e-10 && (r - a).abs() < 1e-10);
+        // A U with walls: a rectangle and a half disc; vertical walls.
+        let w = Pieces::of(SectionModel::U, &[0.1, 0.2, 0.5]);
+        assert!((w.area() - (0.4 * 0.3 + 0.5 * std::f64::consts::PI * 0.04)).abs() < 1e-14);
+        assert_eq!(w.flank_angles(0.0), (90.0, 90.0));
+        // A round V: the sharp V less the tip, r²(cot(β/2) − (π − β)/2) at the tip's angle β.
+        let rv = Pieces::of(SectionModel::Round, &[-0.3, 0.2, 0.6, 0.4, 0.35]);
+        let sharp = Pieces::of(SectionModel::V, &[-0.3, 0.2, 0.6, 0.4]);
+        let beta = std::f64::consts::PI - 1.0f64.atan2(0.6) - 1.0f64.atan2(0.4);
+        let tip = rv.r * rv.r * (1.0 / (0.5 * beta).tan() - 0.5 * (std::f64::consts::PI - beta));
+        assert!(rv.r > 0.0 && (rv.area() - (sharp.area() - tip)).abs() < 1e-13);
+        // Overhangs (a round V whose walls lean out by 5°): the area by polygon on a fine
+        // sampling of the section.
+        let o = Pieces::of(SectionModel::Round, &[-0.2, 0.2, -0.08, -0.05, 0.6]);
+        let (htl, htr) = o.tangent_depths();
+        assert!(htl > 0.0 && htr > 0.0 && o.tl < 0.0);
+        let mut poly = vec![(o.xl, 0.0), (o.cl - o.r / slant(o.tl), -htl)];
+        let (t0, t1) = ((-o.tl).atan2(-1.0) - std::f64::consts::TAU, (-o.tr).atan2(1.0));
+        for k in 0..=20000 {
+            let th = t0 + (t1 - t0) * k as f64 / 20000.0;
+            poly.push((o.cl + o.r * th.cos(), -o.hc + o.r * th.sin()));
+        }
+        poly.push((o.xr, 0.0));
+        let shoelace: f64 = poly.windows(2).map(|p| 0.5 * (p[0].0 * p[1].1 - p[0].1 * p[1].0)).sum();
+        assert!((o.area() - shoelace).abs() < 1e-8, "{} {shoelace}", o.area());
+        assert!(o.flank_angles(0.0).0 > 90.0);
+        // A lean γ turns the flanks: tL − γ and tR + γ.
+        assert_eq!(v.flank_angles(0.1), (deg(0.5), deg(0.5)));
     }
 
     #[test]
