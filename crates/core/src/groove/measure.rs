@@ -21,7 +21,7 @@
 //!    rounded by about a reading spacing is barely visible), center = the crossings' midpoint.
 use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
-use super::section::{pieces_jacobian, Beams, Pieces, SectionModel};
+use super::section::{pieces_jacobian, slant, Beams, Pieces, SectionModel};
 use crate::optim::{bounded_levenberg_marquardt, BoundedLeastSquares, BoundedLmOptions, LeastSquares};
 use nalgebra::{SMatrix, SVector};
 
@@ -780,7 +780,74 @@ fn measures_with_errors(
     for k in 0..MEASURES {
         se[k] = (se[k] * se[k] + spread[k]).sqrt();
     }
+    if averaged {
+        // The rounding the readings cannot rule out: a tip rounded over a reading or two
+        // changes χ² by less than the noise does, and a linearisation at a radius near zero
+        // (a bound) says nothing of it. The profile of χ² over the rounding (likelihood ratio,
+        // [`ROUNDING_CHI2`]) bounds the depth and the radius it allows; the k = 2 intervals
+        // are widened to hold them.
+        if let (Some(fv), Some(fr)) = (v_fit, r_fit) {
+            if let Some((depth_lo, radius_hi)) = rounding_bound(fv, fr, r, pitch) {
+                se[DEPTH] = se[DEPTH].max(0.5 * (measures[DEPTH] - depth_lo));
+                se[RADIUS] = se[RADIUS].max(0.5 * (radius_hi - measures[RADIUS]));
+            }
+        }
+    }
     (measures, se)
+}
+
+/// Tip radii (reading pitches) of the χ² profile over a V's rounding ([`rounding_bound`]).
+const ROUNDING_PROFILE: [f64; 8] = [0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0];
+/// Δχ² of the profile's bound: a rounding is one-sided (r ≥ 0), so its 95 % bound is the
+/// one-sided likelihood ratio's, 1.645². (Δχ² = 4, the two-sided bound, covered the depths of
+/// rounded V's in 96–99 % of frames: wider than k = 2 means.)
+const ROUNDING_CHI2: f64 = 2.706;
+
+/// The shallowest depth and the largest tip radius the readings allow a V (Δχ² ≤ 4 against
+/// the better of the sharp and the round V, σ̂² from the sharp V's residuals): the round V's
+/// χ² at radii on [`ROUNDING_PROFILE`] from the sharp V's flanks, each with its flanks moved by
+/// one Gauss–Newton step at that depth (the profile likelihood, to first order), the bound
+/// interpolated where it crosses. None when the flanks do not meet.
+fn rounding_bound(fv: &ModelFit, fr: &ModelFit, r: &Readings<'_>, pitch: f64) -> Option<(f64, f64)> {
+    let [xl, xr, tl, tr, ..] = fv.q;
+    let t = tl + tr;
+    let k = slant(tl) + slant(tr) - t;
+    let m = r.u.len();
+    let sigma2 = 2.0 * fv.cost / m.saturating_sub(4).max(1) as f64;
+    let best = fv.cost.min(fr.cost);
+    let problem = SectionFit { model: SectionModel::Round, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma: fv.gamma };
+    let depth_at = |radius: f64| ((xr - xl) - k * radius) / t;
+    let chi2_at = |radius: f64| -> f64 {
+        let q = SVector::<f64, 5>::from([xl, xr, tl, tr, depth_at(radius)]);
+        let (a, g, cost) = LeastSquares::<5>::normal_equations(&problem, &q);
+        // The flanks (the first four) move, the depth is held.
+        let a4 = a.fixed_view::<4, 4>(0, 0).into_owned();
+        let g4 = g.fixed_rows::<4>(0).into_owned();
+        let predicted = match a4.cholesky() {
+            Some(c) => (cost - 0.5 * g4.dot(&c.solve(&g4))).max(0.0),
+            None => cost,
+        };
+        2.0 * (predicted - best) / sigma2
+    };
+    if !(t > 0.0 && depth_at(0.0) > 0.0) {
+        return None;
+    }
+    let (mut prev_radius, mut prev_chi2) = (0.0, 2.0 * (fv.cost - best) / sigma2);
+    for f in ROUNDING_PROFILE {
+        let radius = f * pitch;
+        if !(depth_at(radius) > 0.0) {
+            break;
+        }
+        let chi2 = chi2_at(radius);
+        if chi2 > ROUNDING_CHI2 {
+            let share =
+                if chi2 > prev_chi2 { ((ROUNDING_CHI2 - prev_chi2) / (chi2 - prev_chi2)).clamp(0.0, 1.0) } else { 0.0 };
+            let bound = prev_radius + share * (radius - prev_radius);
+            return Some((depth_at(bound), bound));
+        }
+        (prev_radius, prev_chi2) = (radius, chi2);
+    }
+    Some((depth_at(prev_radius), prev_radius))
 }
 
 /// Fewest surface readings on each side for a step across a groove.

@@ -1,0 +1,147 @@
+"""Issue #35 §3: do the groove measures' standard errors say how far off they are?
+
+Monte Carlo: frames with exact truth, fitted by the default call; for every measure the share
+of converged frames whose k = 2 interval (value ± 2·se) holds the truth (target 93–97 %), the
+median |error| and the median standard error. Frame sets:
+
+- the generators' (``machscan.synth.groove_frames``: V, U, U with walls, trapezoid; 25 µm
+  pitch, 8 µm noise, lips, tilt, dropouts; the step's truth is 0);
+- shapes the generators do not make, drawn here: V's with unequal flanks (30–60° left, 45–75°
+  right), trapezoids with unequal flanks, and gap-and-flush profiles (a V gap with the right
+  surface 0–50 µm above or below the left: the step), at a 20 µm pitch with 5 µm noise;
+- laser-engraved V's with rounded bottoms (0–0.1 mm across: ``accuracy_rounded_grooves.py``).
+
+    python benchmarks/coverage_grooves.py [--frames 1000] [--seed 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+import machscan
+from machscan.synth import groove_frames
+from machscan.synth.frames import _fillet_polyline, _topmost
+
+MEASURES = ("width", "depth", "x0", "z0", "flank_angle_left", "flank_angle_right", "area", "bottom_radius", "step")
+UNITS = {"flank_angle_left": "°", "flank_angle_right": "°", "area": "mm²"}
+
+
+def polyline_area(poly: np.ndarray) -> float:
+    u, v = poly[:, 0], np.minimum(poly[:, 1], 0.0)
+    return float(-np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(u)))
+
+
+def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Frames of 250 readings at 20 µm, 5 µm noise, lips up to 20 µm, tilt ±0.05 rad (a
+    rotation), across one groove of ``kind``; the truth of every measure it defines (NaN
+    where it does not)."""
+    rng = np.random.default_rng(seed)
+    pitch, readings, far = 0.02, 250, 4.0
+    x = (np.arange(readings) - readings // 2) * pitch
+    z = np.empty((n, readings))
+    truth = {m: np.full(n, np.nan) for m in MEASURES}
+    for k in range(n):
+        step = 0.0
+        if kind == "asymmetric_v":
+            d = rng.uniform(0.08, 0.4)
+            a_l, a_r = rng.uniform(30, 60), rng.uniform(45, 75)
+            left, right = d / math.tan(math.radians(a_l)), d / math.tan(math.radians(a_r))
+            used: list[float] = []
+            poly = _fillet_polyline(
+                [(-far, 0), (-left, 0), (0, -d), (right, 0), (far, 0)],
+                [0, rng.uniform(0, 0.02), rng.uniform(0, 0.03), rng.uniform(0, 0.02), 0],
+                used=used,
+            )
+            truth["bottom_radius"][k] = used[1]
+        elif kind == "asymmetric_trapezoid":
+            d, floor = rng.uniform(0.08, 0.35), rng.uniform(0.15, 0.6)
+            a_l, a_r = rng.uniform(35, 80), rng.uniform(50, 85)
+            left, right = d / math.tan(math.radians(a_l)), d / math.tan(math.radians(a_r))
+            poly = _fillet_polyline(
+                [(-far, 0), (-floor / 2 - left, 0), (-floor / 2, -d), (floor / 2, -d), (floor / 2 + right, 0), (far, 0)],
+                [0, rng.uniform(0, 0.02), rng.uniform(0, 0.02), rng.uniform(0, 0.02), rng.uniform(0, 0.02), 0],
+            )
+            left, right = floor / 2 + left, floor / 2 + right
+        else:  # gap and flush: a V gap, the right surface `step` above the left
+            d, a = rng.uniform(0.1, 0.3), rng.uniform(40, 70)
+            step = rng.uniform(-0.05, 0.05)
+            run = 1 / math.tan(math.radians(a))
+            left = d * run
+            poly = np.array([(-far, 0.0), (-left, 0.0), (0.0, -d), ((d + step) * run, step), (far, step)])
+            truth["step"][k] = step
+        u, v = poly[:, 0], poly[:, 1].copy()
+        if kind != "gap_flush":
+            truth["width"][k], truth["depth"][k] = left + right, -v.min()
+            truth["flank_angle_left"][k], truth["flank_angle_right"][k] = a_l, a_r
+            truth["area"][k] = polyline_area(poly)
+        for side, edge in ((-1, -left), (1, poly[-2, 0] if kind == "gap_flush" else right)):
+            if rng.random() < 0.75:
+                h, half = rng.uniform(0, 0.02), 0.5 * rng.uniform(0.05, 0.12)
+                tau = (u - (edge + side * (half + rng.uniform(0, 0.02)))) / half
+                v += h * np.where(np.abs(tau) < 1, (1 - tau * tau) ** 2, 0.0)
+        tilt, xc, z_off = rng.uniform(-0.05, 0.05), rng.uniform(-1, 1), rng.uniform(-0.3, 0.3)
+        c, s = math.cos(tilt), math.sin(tilt)
+        # The groove's center (the midpoint of the crossings) in the frame, and the surface there.
+        mid = 0.5 * (right - left) if kind != "gap_flush" else np.nan
+        truth["x0"][k], truth["z0"][k] = xc + mid * c, z_off + mid * s
+        z[k] = _topmost(xc + u * c - v * s, z_off + u * s + v * c, x) + 0.005 * rng.standard_normal(readings)
+    if kind != "gap_flush":
+        truth["step"][:] = 0.0
+    return x, z, truth
+
+
+def generator_frames(shape: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    g = groove_frames(shape, n, seed=seed)
+    truth = {
+        "width": g.width,
+        "depth": g.depth,
+        "x0": g.center[:, 0],
+        "z0": g.center[:, 1],
+        "flank_angle_left": g.flank_angle[:, 0],
+        "flank_angle_right": g.flank_angle[:, 1],
+        "area": g.area,
+        "bottom_radius": g.bottom_radius,
+        "step": np.zeros(n),
+    }
+    return g.x, g.z, truth
+
+
+def engraved(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    from accuracy_rounded_grooves import engraved_frames
+
+    x, z, width, depth = engraved_frames(n, seed, (0.0, 0.1), "arc")
+    nan = np.full(n, np.nan)
+    return x, z, {m: nan for m in MEASURES} | {"width": width, "depth": depth, "step": np.zeros(n)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--frames", type=int, default=1000)
+    ap.add_argument("--seed", type=int, default=3)
+    args = ap.parse_args()
+    sets = [(f"synth {s}", lambda s=s: generator_frames(s, args.frames, args.seed)) for s in ("v", "u", "u_walls", "trapezoid")]
+    sets += [(k.replace("_", " "), lambda k=k: other_shapes(k, args.frames, args.seed))
+             for k in ("asymmetric_v", "asymmetric_trapezoid", "gap_flush")]
+    sets += [("engraved V, rounded 0-0.1 mm", lambda: engraved(args.frames, args.seed))]
+    print(f"k = 2 coverage of the groove measures, default call, {args.frames} frames per set (seed {args.seed})")
+    print(f"  {'set':<30} {'measure':<18} {'frames':>6} {'k=2 holds':>9} {'median |error|':>15} {'median se':>10}")
+    for name, make in sets:
+        x, z, truth = make()
+        f = machscan.fit_grooves(x, z)
+        for m in MEASURES:
+            t = truth[m]
+            est, se = getattr(f, m), getattr(f, "se_" + m)
+            keep = f.ok & np.isfinite(t) & np.isfinite(est)
+            if not keep.any():
+                continue
+            e, s = (est - t)[keep], se[keep]
+            scale, unit = (1.0, UNITS[m]) if m in UNITS else (1000.0, "µm")
+            print(f"  {name:<30} {m:<18} {keep.sum():6d} {100 * np.mean(np.abs(e) <= 2 * s):8.1f}%"
+                  f" {scale * np.median(np.abs(e)):11.4g} {unit:<3} {scale * np.median(s):8.4g} {unit}")
+
+
+if __name__ == "__main__":
+    main()
