@@ -21,7 +21,10 @@
 //!    rounded by about a reading spacing is barely visible), center = the crossings' midpoint.
 use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
-use super::section::{pieces_jacobian, slant, Beams, Pieces, SectionModel};
+use super::section::{
+    pieces_jacobian, slant, Beams, Measures, Pieces, SectionModel, ANGLE_LEFT, ANGLE_RIGHT, AREA, CENTER, DEPTH,
+    MEASURES, RADIUS, WIDTH,
+};
 use crate::optim::{bounded_levenberg_marquardt, BoundedLeastSquares, BoundedLmOptions, LeastSquares};
 use nalgebra::{SMatrix, SVector};
 
@@ -579,35 +582,7 @@ fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)
     Some((angle(edge), spread * spread / 12.0, ht))
 }
 
-/// The measures read from a section, in the order of [`section_measures`].
-const WIDTH: usize = 0;
-const DEPTH: usize = 1;
-const CENTER: usize = 2;
-const ANGLE_LEFT: usize = 3;
-const ANGLE_RIGHT: usize = 4;
-const AREA: usize = 5;
-const RADIUS: usize = 6;
-const MEASURES: usize = 7;
-
-/// Width, depth, center u, flank angles (degrees), area and bottom radius of `model` at `q`
-/// leaning by `gamma`, with the surface line raised by `delta` (the section fixed in space:
-/// the flank lines then cross it at `xL − tL·δ` and `xR + tR·δ`, the bottom lies δ deeper, and
-/// the fillet radius `s·(w − T·D)/K` stays as it was). The trapezoid's bottom radius is NaN: a
-/// flat floor has none (its fillets are corners, not a bottom).
-fn section_measures(model: SectionModel, q: &[f64], gamma: f64, delta: f64) -> [f64; MEASURES] {
-    let mut p = model.to_p(q);
-    p[0] -= p[2] * delta;
-    p[1] += p[3] * delta;
-    p[4] += delta;
-    let pieces = Pieces::new(p);
-    let (l, r) = pieces.crossings();
-    let (al, ar) = pieces.flank_angles(gamma);
-    let radius = if model == SectionModel::Trapezoid { f64::NAN } else { pieces.r };
-    // A lean shifts the points at the raised surface (depth −δ) by γδ.
-    [r - l, pieces.d, 0.5 * (l + r) + gamma * delta, al, ar, pieces.area(), radius]
-}
-
-/// Standard errors of the [`section_measures`] of a fit by the delta method: the parameters'
+/// Standard errors of the [`Measures`] of a fit by the delta method: the parameters'
 /// covariance `σ̂² (JᵀJ)⁺` (σ̂² from the fit's residuals) and the variance `var_surface` of
 /// the surface line's height at the groove (fitted to other readings: independent). They do
 /// not include the uncertainty of the model choice.
@@ -698,33 +673,16 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
         meat += row * row.transpose() * (hit.lambda * hit.lambda / ((1.0 - h) * (1.0 - h)));
     }
     let (classical, sandwich) = (inv * sigma2, inv * meat * inv);
-    let outputs = |q: &[f64], delta: f64| section_measures(fit.model, q, fit.gamma, delta);
-    // Central differences (the measures are smooth in the parameters away from a piece's
-    // boundary; closed-form derivatives of the area and the angles would add code, not accuracy).
-    let mut g = [[0.0; 6]; MEASURES];
-    for c in 0..np {
-        let h = 1e-7 * fit.q[c].abs().max(1.0);
-        let (mut up, mut dn) = (fit.q, fit.q);
-        up[c] += h;
-        dn[c] -= h;
-        let (a, b) = (outputs(&up, 0.0), outputs(&dn, 0.0));
-        for k in 0..MEASURES {
-            g[k][c] = (a[k] - b[k]) / (2.0 * h);
-        }
-    }
-    let h = 1e-7;
-    let (a, b) = (outputs(&fit.q, h), outputs(&fit.q, -h));
+    let measures = Measures::of(fit.model, &fit.q, fit.gamma);
     let mut se = [0.0; MEASURES];
     for k in 0..MEASURES {
-        let gk = &g[k];
+        let gk = &measures.grad[k];
         let quad_of = |c: &nalgebra::SMatrix<f64, 6, 6>| -> f64 {
             (0..np).map(|i| (0..np).map(|j| gk[i] * c[(i, j)] * gk[j]).sum::<f64>()).sum()
         };
-        let quad = quad_of(&classical).max(quad_of(&sandwich));
-        let gd = (a[k] - b[k]) / (2.0 * h);
+        let var = quad_of(&classical).max(quad_of(&sandwich)) + measures.surface[k].powi(2) * var_surface;
         // NaN (a measure the model does not have) stays NaN; `max` would make it 0.
-        let var = quad + gd * gd * var_surface;
-        se[k] = if var.is_nan() { f64::NAN } else { var.max(0.0).sqrt() };
+        se[k] = if measures.values[k].is_nan() { f64::NAN } else { var.max(0.0).sqrt() };
     }
     se
 }
@@ -742,7 +700,7 @@ fn measures_with_errors(
     var_surface: f64,
     pitch: f64,
 ) -> ([f64; MEASURES], [f64; MEASURES]) {
-    let mut measures = section_measures(chosen.model, &chosen.q, chosen.gamma, 0.0);
+    let mut measures = Measures::of(chosen.model, &chosen.q, chosen.gamma).values;
     let mut se = measure_errors(chosen, r, var_surface, pitch);
     let weight = |f: &ModelFit| -0.5 * f.criterion(sigma);
     let top = fits.iter().map(weight).fold(weight(chosen), f64::max);
@@ -752,8 +710,7 @@ fn measures_with_errors(
     if let (true, Some(fv), Some(fr)) = (matches!(chosen.model, SectionModel::V | SectionModel::Round), v_fit, r_fit) {
         averaged = true;
         let (wv, wr) = ((weight(fv) - top).exp(), (weight(fr) - top).exp());
-        let (mv, mr) =
-            (section_measures(fv.model, &fv.q, fv.gamma, 0.0), section_measures(fr.model, &fr.q, fr.gamma, 0.0));
+        let (mv, mr) = (Measures::of(fv.model, &fv.q, fv.gamma).values, Measures::of(fr.model, &fr.q, fr.gamma).values);
         let (ev, er) = (measure_errors(fv, r, var_surface, pitch), measure_errors(fr, r, var_surface, pitch));
         for k in [DEPTH, RADIUS] {
             let mean = (wv * mv[k] + wr * mr[k]) / (wv + wr);
@@ -768,7 +725,7 @@ fn measures_with_errors(
     let mut spread = [0.0; MEASURES];
     for f in fits.iter().filter(|f| f.model != chosen.model) {
         let w = (weight(f) - top).exp() / total;
-        let m = section_measures(f.model, &f.q, f.gamma, 0.0);
+        let m = Measures::of(f.model, &f.q, f.gamma).values;
         for k in 0..MEASURES {
             let pair =
                 averaged && matches!(f.model, SectionModel::V | SectionModel::Round) && (k == DEPTH || k == RADIUS);
@@ -1363,7 +1320,7 @@ fn fit_groove(
         let free = fit_model(SectionModel::Round, &r, chosen.gamma, &[p.xl, p.xr, 0.0, 0.0, p.d], &o.criteria);
         iterations += free.iterations;
         let pf = free.pieces();
-        let m = section_measures(free.model, &free.q, free.gamma, 0.0);
+        let m = Measures::of(free.model, &free.q, free.gamma).values;
         let e = measure_errors(&free, &r, var_surface, pitch);
         let (cl, cr) = pf.crossings();
         for (side, gap, crossing, angle) in [(-1.0, gaps[0], cl, ANGLE_LEFT), (1.0, gaps[1], cr, ANGLE_RIGHT)] {

@@ -274,32 +274,34 @@ impl Pieces {
 
     /// Cross-section area between the surface line and the section, mm² (Green's theorem along
     /// the pieces: `½∮(u dv − v du)`, the surface line adding nothing; exact for lines and arcs,
-    /// and unchanged by a lean, which is a shear).
+    /// and unchanged by a lean, which is a shear). An arc of centre (c, −hc) from angle t₁ to t₂
+    /// adds `½(r²(t₂ − t₁) + c·r(sin t₂ − sin t₁) + hc·r(cos t₂ − cos t₁))`, the sines and
+    /// cosines read from its end points.
     pub fn area(&self) -> f64 {
         let (htl, htr) = self.tangent_depths();
         let (al, ar) = (slant(self.tl), slant(self.tr));
-        let q = (self.r * self.r - self.hc * self.hc).max(0.0).sqrt();
+        let (r, hc) = (self.r, self.hc);
+        let q = (r * r - hc * hc).max(0.0).sqrt();
         let chord = |(au, av): (f64, f64), (bu, bv): (f64, f64)| 0.5 * (au * bv - av * bu);
-        // Arc of centre (c, −hc) from angle t1 to t2 (counter-clockwise).
-        let arc = |c: f64, t1: f64, t2: f64| {
-            let r = self.r;
-            0.5 * (r * r * (t2 - t1) + c * r * (t2.sin() - t1.sin()) + self.hc * r * (t2.cos() - t1.cos()))
+        // From end point (u₁, v₁) to (u₂, v₂), relative to the centre, at angles t₁, t₂.
+        let arc = |c: f64, (t1, u1, v1): (f64, f64, f64), (t2, u2, v2): (f64, f64, f64)| {
+            0.5 * (r * r * (t2 - t1) + c * (v2 - v1) + hc * (u2 - u1))
         };
         // The left arc runs up to the angle π − … of an overhang: counted from below, −π − ….
         let from_below = |t: f64| if t > 0.0 { t - std::f64::consts::TAU } else { t };
-        let bottom = -std::f64::consts::FRAC_PI_2;
-        let (bl, br) = ((self.cl, -self.d), (self.cr, -self.d));
-        let mut area = chord(bl, br);
+        let bottom = (-std::f64::consts::FRAC_PI_2, 0.0, -r);
+        let mut area = chord((self.cl, -self.d), (self.cr, -self.d));
         if htl >= 0.0 {
-            let t = from_below((-self.tl).atan2(-1.0));
-            area += chord((self.xl, 0.0), (self.cl - self.r / al, -htl)) + arc(self.cl, t, bottom);
+            let start = (from_below((-self.tl).atan2(-1.0)), -r / al, -r * self.tl / al);
+            area += chord((self.xl, 0.0), (self.cl - r / al, -htl)) + arc(self.cl, start, bottom);
         } else {
-            area += arc(self.cl, from_below(self.hc.atan2(-q)), bottom);
+            area += arc(self.cl, (from_below(hc.atan2(-q)), -q, hc), bottom);
         }
         if htr >= 0.0 {
-            area += arc(self.cr, bottom, (-self.tr).atan2(1.0)) + chord((self.cr + self.r / ar, -htr), (self.xr, 0.0));
+            let end = ((-self.tr).atan2(1.0), r / ar, -r * self.tr / ar);
+            area += arc(self.cr, bottom, end) + chord((self.cr + r / ar, -htr), (self.xr, 0.0));
         } else {
-            area += arc(self.cr, bottom, self.hc.atan2(q));
+            area += arc(self.cr, bottom, (hc.atan2(q), q, hc));
         }
         area
     }
@@ -365,6 +367,96 @@ pub fn pieces_jacobian(model: SectionModel, q: &[f64]) -> [[f64; 6]; 9] {
             })
         }
         SectionModel::U => jp.map(|row| [row[0] + row[1], row[1] - row[0], row[4], 0.0, 0.0, 0.0]),
+    }
+}
+
+/// The measures read from a section, in the order of [`Measures::values`].
+pub const WIDTH: usize = 0;
+pub const DEPTH: usize = 1;
+pub const CENTER: usize = 2;
+pub const ANGLE_LEFT: usize = 3;
+pub const ANGLE_RIGHT: usize = 4;
+pub const AREA: usize = 5;
+pub const RADIUS: usize = 6;
+pub const MEASURES: usize = 7;
+
+/// A section's measures — width, depth, center u, flank angles (degrees), area, bottom radius
+/// (NaN for the trapezoid: a flat floor has none) — with their derivatives by the model's
+/// parameters and by a raise δ of the surface line (the section fixed in space: the flank
+/// lines then cross it at `xL − tL·δ` and `xR + tR·δ`, the fillets stay, the bottom lies δ
+/// deeper; a lean γ shifts the crossings by γδ).
+#[derive(Debug, Clone, Copy)]
+pub struct Measures {
+    pub values: [f64; MEASURES],
+    /// `∂measure/∂q` (first `n_params` columns).
+    pub grad: [[f64; 6]; MEASURES],
+    /// `∂measure/∂δ`.
+    pub surface: [f64; MEASURES],
+}
+
+impl Measures {
+    /// The measures of `model` at `q` leaning by `gamma`. Closed form from `∂π/∂q`, but the
+    /// area's parameter derivatives, which are forward differences (written out, the area's
+    /// derivative through every piece is long and would not be more accurate than the fit).
+    pub fn of(model: SectionModel, q: &[f64], gamma: f64) -> Measures {
+        let p = Pieces::of(model, q);
+        let j = pieces_jacobian(model, q);
+        let np = model.n_params();
+        let (htl, htr) = p.tangent_depths();
+        let qa = (p.r * p.r - p.hc * p.hc).max(0.0).sqrt();
+        let row = |k: usize| j[k];
+        let lin =
+            |a: [f64; 6], x: f64, b: [f64; 6], y: f64| -> [f64; 6] { std::array::from_fn(|c| x * a[c] + y * b[c]) };
+        // d q_arc = (r dr − hc dhc)/q on an arc crossing.
+        let dq = || lin(row(R), p.r / qa, row(HC), -p.hc / qa);
+        let (xcl, dxcl, sxl, cot_l, dcot_l, scot_l) = if htl >= 0.0 {
+            (p.xl, row(XL), -p.tl + gamma, p.tl - gamma, row(TL), 0.0)
+        } else {
+            let d = dq();
+            let cot = -p.hc / qa;
+            let dcot: [f64; 6] = std::array::from_fn(|c| -row(HC)[c] / qa + p.hc * d[c] / (qa * qa));
+            (p.cl - qa, lin(row(CL), 1.0, d, -1.0), p.hc / qa + gamma, cot - gamma, dcot, -p.r * p.r / qa.powi(3))
+        };
+        let (xcr, dxcr, sxr, cot_r, dcot_r, scot_r) = if htr >= 0.0 {
+            (p.xr, row(XR), p.tr + gamma, p.tr + gamma, row(TR), 0.0)
+        } else {
+            let d = dq();
+            let cot = -p.hc / qa;
+            let dcot: [f64; 6] = std::array::from_fn(|c| -row(HC)[c] / qa + p.hc * d[c] / (qa * qa));
+            (p.cr + qa, lin(row(CR), 1.0, d, 1.0), -p.hc / qa + gamma, cot + gamma, dcot, -p.r * p.r / qa.powi(3))
+        };
+        let degrees = 180.0 / std::f64::consts::PI;
+        let angle = |cot: f64| 1.0f64.atan2(cot) * degrees;
+        let dangle = |cot: f64| -degrees / (1.0 + cot * cot);
+        let area = p.area();
+        let mut grad = [[0.0; 6]; MEASURES];
+        grad[WIDTH] = lin(dxcr, 1.0, dxcl, -1.0);
+        grad[DEPTH] = row(D);
+        grad[CENTER] = lin(dxcr, 0.5, dxcl, 0.5);
+        grad[ANGLE_LEFT] = dcot_l.map(|v| v * dangle(cot_l));
+        grad[ANGLE_RIGHT] = dcot_r.map(|v| v * dangle(cot_r));
+        grad[RADIUS] = row(R);
+        for c in 0..np {
+            let h = 1e-7 * q[c].abs().max(1.0);
+            let mut up = [0.0; 6];
+            up[..np].copy_from_slice(&q[..np]);
+            up[c] += h;
+            grad[AREA][c] = (Pieces::of(model, &up).area() - area) / h;
+        }
+        let radius = if model == SectionModel::Trapezoid { f64::NAN } else { p.r };
+        Measures {
+            values: [xcr - xcl, p.d, 0.5 * (xcl + xcr), angle(cot_l), angle(cot_r), area, radius],
+            grad,
+            surface: [
+                sxr - sxl,
+                1.0,
+                0.5 * (sxl + sxr),
+                scot_l * dangle(cot_l),
+                scot_r * dangle(cot_r),
+                xcr - xcl,
+                0.0,
+            ],
+        }
     }
 }
 
@@ -685,6 +777,70 @@ mod tests {
         assert!(o.flank_angles(0.0).0 > 90.0);
         // A lean γ turns the flanks: tL − γ and tR + γ.
         assert_eq!(v.flank_angles(0.1), (deg(0.5), deg(0.5)));
+    }
+
+    /// The measures with the surface raised by δ, by moving the section down and measuring at
+    /// v = 0 (as a user would see it): the reference of the δ derivatives.
+    fn raised(model: SectionModel, q: &[f64], gamma: f64, delta: f64) -> [f64; MEASURES] {
+        let mut p = model.to_p(q);
+        p[0] -= p[2] * delta;
+        p[1] += p[3] * delta;
+        p[4] += delta;
+        let pieces = Pieces::new(p);
+        let (l, r) = pieces.crossings();
+        let (al, ar) = pieces.flank_angles(gamma);
+        let radius = if model == SectionModel::Trapezoid { f64::NAN } else { pieces.r };
+        [r - l, pieces.d, 0.5 * (l + r) + gamma * delta, al, ar, pieces.area(), radius]
+    }
+
+    #[test]
+    fn measures_and_their_derivatives_equal_finite_differences() {
+        let mut cases: Vec<(SectionModel, Vec<f64>)> = SectionModel::ALL.iter().map(|&m| (m, q_of(m))).collect();
+        // A U with walls, and a round V with an overhang.
+        cases.push((SectionModel::U, vec![0.1, 0.2, 0.5]));
+        cases.push((SectionModel::Round, vec![-0.2, 0.2, -0.08, -0.05, 0.6]));
+        for (model, q) in cases {
+            for gamma in [0.0, 0.05] {
+                let m = Measures::of(model, &q, gamma);
+                let at = raised(model, &q, gamma, 0.0);
+                for k in 0..MEASURES {
+                    let both_nan = m.values[k].is_nan() && at[k].is_nan();
+                    assert!(
+                        both_nan || (m.values[k] - at[k]).abs() < 1e-12,
+                        "{model:?} {k}: {} vs {}",
+                        m.values[k],
+                        at[k]
+                    );
+                }
+                let h = 1e-6;
+                let (up, dn) = (raised(model, &q, gamma, h), raised(model, &q, gamma, -h));
+                for k in 0..MEASURES - 1 {
+                    let fd = (up[k] - dn[k]) / (2.0 * h);
+                    assert!(
+                        (fd - m.surface[k]).abs() < 1e-5 * fd.abs().max(1.0),
+                        "{model:?} γ {gamma} δ, measure {k}: {fd} vs {}",
+                        m.surface[k]
+                    );
+                }
+                for c in 0..model.n_params() {
+                    let (mut a, mut b) = (q.clone(), q.clone());
+                    a[c] += h;
+                    b[c] -= h;
+                    let (ma, mb) = (raised(model, &a, gamma, 0.0), raised(model, &b, gamma, 0.0));
+                    for k in 0..MEASURES {
+                        if model == SectionModel::Trapezoid && k == RADIUS {
+                            continue;
+                        }
+                        let fd = (ma[k] - mb[k]) / (2.0 * h);
+                        assert!(
+                            (fd - m.grad[k][c]).abs() < 1e-4 * fd.abs().max(1.0),
+                            "{model:?} γ {gamma} q{c}, measure {k}: {fd} vs {}",
+                            m.grad[k][c]
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
