@@ -700,8 +700,16 @@ fn measures_with_errors(
     var_surface: f64,
     pitch: f64,
 ) -> ([f64; MEASURES], [f64; MEASURES]) {
-    let mut measures = Measures::of(chosen.model, &chosen.q, chosen.gamma).values;
+    let mut measures = Measures::values(chosen.model, &chosen.q, chosen.gamma);
     let mut se = measure_errors(chosen, r, var_surface, pitch);
+    // The chosen fit is usually one of `fits` as it was: its errors are not taken twice.
+    let errors = |f: &ModelFit| {
+        if (f.model, f.q, f.gamma) == (chosen.model, chosen.q, chosen.gamma) {
+            se
+        } else {
+            measure_errors(f, r, var_surface, pitch)
+        }
+    };
     let weight = |f: &ModelFit| -0.5 * f.criterion(sigma);
     let top = fits.iter().map(weight).fold(weight(chosen), f64::max);
     let v_fit = fits.iter().find(|f| f.model == SectionModel::V);
@@ -710,8 +718,8 @@ fn measures_with_errors(
     if let (true, Some(fv), Some(fr)) = (matches!(chosen.model, SectionModel::V | SectionModel::Round), v_fit, r_fit) {
         averaged = true;
         let (wv, wr) = ((weight(fv) - top).exp(), (weight(fr) - top).exp());
-        let (mv, mr) = (Measures::of(fv.model, &fv.q, fv.gamma).values, Measures::of(fr.model, &fr.q, fr.gamma).values);
-        let (ev, er) = (measure_errors(fv, r, var_surface, pitch), measure_errors(fr, r, var_surface, pitch));
+        let (mv, mr) = (Measures::values(fv.model, &fv.q, fv.gamma), Measures::values(fr.model, &fr.q, fr.gamma));
+        let (ev, er) = (errors(fv), errors(fr));
         for k in [DEPTH, RADIUS] {
             let mean = (wv * mv[k] + wr * mr[k]) / (wv + wr);
             let (sv, sr) = (ev[k], er[k]);
@@ -725,7 +733,7 @@ fn measures_with_errors(
     let mut spread = [0.0; MEASURES];
     for f in fits.iter().filter(|f| f.model != chosen.model) {
         let w = (weight(f) - top).exp() / total;
-        let m = Measures::of(f.model, &f.q, f.gamma).values;
+        let m = Measures::values(f.model, &f.q, f.gamma);
         for k in 0..MEASURES {
             let pair =
                 averaged && matches!(f.model, SectionModel::V | SectionModel::Round) && (k == DEPTH || k == RADIUS);
@@ -1320,7 +1328,7 @@ fn fit_groove(
         let free = fit_model(SectionModel::Round, &r, chosen.gamma, &[p.xl, p.xr, 0.0, 0.0, p.d], &o.criteria);
         iterations += free.iterations;
         let pf = free.pieces();
-        let m = Measures::of(free.model, &free.q, free.gamma).values;
+        let m = Measures::values(free.model, &free.q, free.gamma);
         let e = measure_errors(&free, &r, var_surface, pitch);
         let (cl, cr) = pf.crossings();
         for (side, gap, crossing, angle) in [(-1.0, gaps[0], cl, ANGLE_LEFT), (1.0, gaps[1], cr, ANGLE_RIGHT)] {

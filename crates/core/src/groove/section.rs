@@ -399,6 +399,15 @@ impl Measures {
     /// area's parameter derivatives, which are forward differences (written out, the area's
     /// derivative through every piece is long and would not be more accurate than the fit).
     pub fn of(model: SectionModel, q: &[f64], gamma: f64) -> Measures {
+        Measures::at(model, q, gamma, true)
+    }
+
+    /// The measures alone (the area's derivatives, the costly part, are not taken).
+    pub fn values(model: SectionModel, q: &[f64], gamma: f64) -> [f64; MEASURES] {
+        Measures::at(model, q, gamma, false).values
+    }
+
+    fn at(model: SectionModel, q: &[f64], gamma: f64, area_gradient: bool) -> Measures {
         let p = Pieces::of(model, q);
         let j = pieces_jacobian(model, q);
         let np = model.n_params();
@@ -436,7 +445,7 @@ impl Measures {
         grad[ANGLE_LEFT] = dcot_l.map(|v| v * dangle(cot_l));
         grad[ANGLE_RIGHT] = dcot_r.map(|v| v * dangle(cot_r));
         grad[RADIUS] = row(R);
-        for c in 0..np {
+        for c in (0..np).filter(|_| area_gradient) {
             let h = 1e-7 * q[c].abs().max(1.0);
             let mut up = [0.0; 6];
             up[..np].copy_from_slice(&q[..np]);
