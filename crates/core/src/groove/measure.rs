@@ -591,7 +591,10 @@ fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)
 /// its depth is as undetermined by the readings as its rounding, and the linearisation at so
 /// small a radius says nothing of how far either can go. Its errors are then the sharp V's at
 /// its flanks (the rounding it might have is the Akaike spread's part, for V's).
-fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64) -> [f64; MEASURES] {
+///
+/// `sandwich` false: the classical covariance alone (for a model whose depth and radius only
+/// are averaged in, where the rounding's profile bounds them anyway).
+fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64, sandwich: bool) -> [f64; MEASURES] {
     if fit.model == SectionModel::Round {
         let p = fit.pieces();
         let span = (p.cr + p.r / super::section::slant(p.tr)) - (p.cl - p.r / super::section::slant(p.tl));
@@ -606,7 +609,7 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
                     sharp.jtj[i][j] = a[(i, j)];
                 }
             }
-            return measure_errors(&sharp, r, var_surface, pitch);
+            return measure_errors(&sharp, r, var_surface, pitch, sandwich);
         }
     }
     let m = r.u.len();
@@ -657,7 +660,7 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
     let beams = Beams::new(fit.pieces(), r.sin, r.cos, fit.gamma);
     let jq = pieces_jacobian(fit.model, &fit.q);
     let mut meat = nalgebra::SMatrix::<f64, 6, 6>::zeros();
-    for (&u, &v) in r.u.iter().zip(r.v) {
+    for (&u, &v) in r.u.iter().zip(r.v).filter(|_| sandwich) {
         let hit = beams.hit(u, v);
         let mut row = nalgebra::SVector::<f64, 6>::zeros();
         for &(k, gk) in &hit.grad {
@@ -673,6 +676,7 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
         meat += row * row.transpose() * (hit.lambda * hit.lambda / ((1.0 - h) * (1.0 - h)));
     }
     let (classical, sandwich) = (inv * sigma2, inv * meat * inv);
+    // (Without the pass, `sandwich` is zero and the classical stands.)
     let measures = Measures::of(fit.model, &fit.q, fit.gamma);
     let mut se = [0.0; MEASURES];
     for k in 0..MEASURES {
@@ -701,13 +705,13 @@ fn measures_with_errors(
     pitch: f64,
 ) -> ([f64; MEASURES], [f64; MEASURES]) {
     let mut measures = Measures::values(chosen.model, &chosen.q, chosen.gamma);
-    let mut se = measure_errors(chosen, r, var_surface, pitch);
+    let mut se = measure_errors(chosen, r, var_surface, pitch, true);
     // The chosen fit is usually one of `fits` as it was: its errors are not taken twice.
     let errors = |f: &ModelFit| {
         if (f.model, f.q, f.gamma) == (chosen.model, chosen.q, chosen.gamma) {
             se
         } else {
-            measure_errors(f, r, var_surface, pitch)
+            measure_errors(f, r, var_surface, pitch, false)
         }
     };
     let weight = |f: &ModelFit| -0.5 * f.criterion(sigma);
@@ -761,8 +765,39 @@ fn measures_with_errors(
     (measures, se)
 }
 
+/// The round V one Gauss–Newton step from a U with walls `p` (the step solved by Cholesky;
+/// none when the readings do not fix it), with its JᵀJ at the U and the cost the step predicts.
+fn round_from_u(r: &Readings<'_>, gamma: f64, p: &Pieces) -> ModelFit {
+    let problem = SectionFit { model: SectionModel::Round, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma };
+    let q0 = SVector::<f64, 5>::from([p.xl, p.xr, 0.0, 0.0, p.d]);
+    let (a, g, cost) = LeastSquares::<5>::normal_equations(&problem, &q0);
+    let (mut q, mut predicted) = (q0, cost);
+    if let Some(c) = a.cholesky() {
+        let step = c.solve(&g);
+        q -= step;
+        predicted = (cost - 0.5 * g.dot(&step)).max(0.0);
+        SectionModel::Round.project(q.as_mut_slice());
+    }
+    let mut fit = ModelFit {
+        model: SectionModel::Round,
+        q: [0.0; 6],
+        cost: predicted,
+        iterations: 0,
+        converged: true,
+        gamma,
+        jtj: [[0.0; 6]; 6],
+    };
+    fit.q[..5].copy_from_slice(q.as_slice());
+    for i in 0..5 {
+        for j in 0..5 {
+            fit.jtj[i][j] = a[(i, j)];
+        }
+    }
+    fit
+}
+
 /// Tip radii (reading pitches) of the χ² profile over a V's rounding ([`rounding_bound`]).
-const ROUNDING_PROFILE: [f64; 8] = [0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0];
+const ROUNDING_PROFILE: [f64; 5] = [0.5, 1.0, 2.0, 3.0, 5.0];
 /// Δχ² of the profile's bound: a rounding is one-sided (r ≥ 0), so its 95 % bound is the
 /// one-sided likelihood ratio's, 1.645². (Δχ² = 4, the two-sided bound, covered the depths of
 /// rounded V's in 96–99 % of frames: wider than k = 2 means.)
@@ -1324,12 +1359,14 @@ fn fit_groove(
         }
     } else if chosen.model == SectionModel::U && p.hc > 0.0 {
         // A U with walls fixes them vertical; a drafted wall is the round V's (a U with free
-        // flanks), fitted from the U: the flank angles are read from it.
-        let free = fit_model(SectionModel::Round, &r, chosen.gamma, &[p.xl, p.xr, 0.0, 0.0, p.d], &o.criteria);
-        iterations += free.iterations;
+        // flanks). One Gauss–Newton step of the round V from the U (which it contains: flanks
+        // of cotangent 0, the arc of radius w/2) gives the flank angles and their errors; a
+        // full fit from there cost a fifth of a U-with-walls frame and moved the angles by a
+        // small part of their standard error.
+        let free = round_from_u(&r, chosen.gamma, &p);
         let pf = free.pieces();
         let m = Measures::values(free.model, &free.q, free.gamma);
-        let e = measure_errors(&free, &r, var_surface, pitch);
+        let e = measure_errors(&free, &r, var_surface, pitch, true);
         let (cl, cr) = pf.crossings();
         for (side, gap, crossing, angle) in [(-1.0, gaps[0], cl, ANGLE_LEFT), (1.0, gaps[1], cr, ANGLE_RIGHT)] {
             (measures[angle], var[angle]) = (m[angle], e[angle] * e[angle]);
