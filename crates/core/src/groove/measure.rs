@@ -878,32 +878,41 @@ fn surface_step(
             None
         }
     };
-    let rows: Vec<(f64, f64, f64)> = lv.u.iter().zip(&lv.v).filter_map(|(&u, &v)| side(u).map(|h| (u, h, v))).collect();
-    let fit = |keep: &dyn Fn(&(f64, f64, f64)) -> bool| -> Option<([f64; 3], f64, f64, usize)> {
-        let kept = rows.iter().filter(|r| keep(r));
-        let (n, nr) = kept.clone().fold((0usize, 0usize), |(n, nr), r| (n + 1, nr + usize::from(r.1 > 0.0)));
-        if nr < STEP_READINGS || n - nr < STEP_READINGS {
-            return None;
-        }
-        let mu = kept.clone().map(|r| r.0).sum::<f64>() / n as f64;
+    // Sums of the normal equations (u about the first surface reading, for conditioning),
+    // over the readings `keep` admits.
+    let u0 = lv.u.first().copied().unwrap_or(0.0);
+    let fit = |keep: &dyn Fn(f64, f64, f64) -> bool| -> Option<([f64; 3], f64, f64)> {
         let mut ata = nalgebra::Matrix3::<f64>::zeros();
         let mut atb = nalgebra::Vector3::<f64>::zeros();
-        for &(u, h, v) in kept.clone() {
-            let x = nalgebra::Vector3::new(1.0, u - mu, h);
+        let (mut vv, mut right) = (0.0, 0.0);
+        for (&u, &v) in lv.u.iter().zip(&lv.v) {
+            let Some(h) = side(u) else { continue };
+            if !keep(u, h, v) {
+                continue;
+            }
+            let x = nalgebra::Vector3::new(1.0, u - u0, h);
             ata += x * x.transpose();
             atb += x * v;
+            vv += v * v;
+            right += h;
+        }
+        let n = ata[(0, 0)];
+        if right < STEP_READINGS as f64 || n - right < STEP_READINGS as f64 {
+            return None;
         }
         let inv = ata.try_inverse()?;
         let c = inv * atb;
-        let rss: f64 = kept.map(|&(u, h, v)| (v - c[0] - c[1] * (u - mu) - c[2] * h).powi(2)).sum();
-        Some(([c[0] - c[1] * mu, c[1], c[2]], rss / (n - 3).max(1) as f64, inv[(2, 2)], n))
+        // Σr² = Σv² − cᵀAᵀb at the least-squares solution.
+        let rss = (vv - c.dot(&atb)).max(0.0);
+        Some(([c[0] - c[1] * u0, c[1], c[2]], rss / (n - 3.0).max(1.0), inv[(2, 2)]))
     };
-    let Some(first) = fit(&|_| true) else { return (f64::NAN, f64::NAN) };
-    let (c, n) = (first.0, first.3);
+    let Some(first) = fit(&|_, _, _| true) else { return (f64::NAN, f64::NAN) };
+    let c = first.0;
     let cut = 4.0 * sigma;
-    let within = |r: &(f64, f64, f64)| (r.2 - c[0] - c[1] * r.0 - c[2] * r.1).abs() <= cut;
-    let kept = rows.iter().filter(|r| within(r)).count();
-    let Some((c, s2, v22, _)) = (if kept < n { fit(&within) } else { Some(first) }) else {
+    let outside = |u: f64, h: f64, v: f64| (v - c[0] - c[1] * u - c[2] * h).abs() > cut;
+    let any_outside = lv.u.iter().zip(&lv.v).any(|(&u, &v)| side(u).is_some_and(|h| outside(u, h, v)));
+    let within = |u: f64, h: f64, v: f64| !outside(u, h, v);
+    let Some((c, s2, v22)) = (if any_outside { fit(&within) } else { Some(first) }) else {
         return (f64::NAN, f64::NAN);
     };
     let normal = (1.0 + c[1] * c[1]).sqrt();
@@ -1524,6 +1533,77 @@ mod tests {
             assert!(measured >= n * 98 / 100, "{name}: {measured} of {n} measured");
             assert!(w <= 0.010 && d <= 0.015 && c <= 0.010, "{name}: |w| {w:.4} mm, |d| {d:.4}, |c| {c:.4} mm");
         }
+    }
+
+    #[test]
+    fn flank_angles_area_radius_and_step_of_exact_sections() {
+        let deg = |t: f64| 1.0f64.atan2(t).to_degrees();
+        let cases = [
+            (Pieces::of(SectionModel::V, &[-0.25, 0.25, 0.8, 0.6]), deg(0.8), deg(0.6), 0.0),
+            (Pieces::of(SectionModel::Trapezoid, &[-0.45, 0.4, 0.5, 0.3, 0.25, 0.0]), deg(0.5), deg(0.3), f64::NAN),
+            (
+                Pieces::of(SectionModel::U, &[0.02, 0.45, 0.15]),
+                deg(0.3 / (0.45f64.powi(2) - 0.09).sqrt()),
+                f64::NAN,
+                0.45,
+            ),
+            (Pieces::of(SectionModel::U, &[0.0, 0.2, 0.4]), 90.0, 90.0, 0.2),
+        ];
+        for (k, (p, left, right, radius)) in cases.into_iter().enumerate() {
+            let right = if right.is_nan() { left } else { right };
+            let (x, z) = frame(&p, 0.03, 0.0, 0.0, &mut 1);
+            let f = fit_frame(&x, &z, &GrooveOptions::default());
+            assert_eq!(f.status, GrooveStatus::Converged, "case {k}");
+            assert!((f.flank_angle_left - left).abs() < 0.05, "case {k}: left {} vs {left}", f.flank_angle_left);
+            assert!((f.flank_angle_right - right).abs() < 0.05, "case {k}: right {} vs {right}", f.flank_angle_right);
+            assert!((f.area - p.area()).abs() < 2e-4 * p.area(), "case {k}: area {} vs {}", f.area, p.area());
+            // (A V's radius is the Akaike mean with the round V's, which on noiseless readings
+            // rounds the tip by a micrometre or two at no cost.)
+            let same = (radius.is_nan() && f.bottom_radius.is_nan()) || (f.bottom_radius - radius).abs() < 2e-3;
+            assert!(same, "case {k}: radius {} vs {radius}", f.bottom_radius);
+            assert!(f.step.abs() < 1e-6, "case {k}: step {}", f.step);
+            for se in [f.se_x0, f.se_z0, f.se_flank_angle_left, f.se_flank_angle_right, f.se_area, f.se_step] {
+                assert!(se.is_finite() && se >= 0.0, "case {k}: {se}");
+            }
+        }
+        // A step: the right surface 0.04 mm above the left, the V's right flank running up to
+        // it; the readings are noiseless, so the step is exact.
+        let v = Pieces::of(SectionModel::V, &[-0.25, 0.25, 0.8, 0.6]);
+        let x: Vec<f64> = (0..200).map(|i| (i as f64 - 100.0) * 0.025).collect();
+        let (s, c) = 0.02f64.sin_cos();
+        // Rotated by 0.02 rad: sample u along the reading's vertical line by bisection.
+        let height = |u: f64| if u < v.xr { v.value(u) } else { ((u - v.xr) / v.tr).min(0.04) };
+        let z: Vec<f64> = x
+            .iter()
+            .map(|&xi| {
+                let (mut lo, mut hi) = (xi - 1.0, xi + 1.0);
+                for _ in 0..80 {
+                    let m = 0.5 * (lo + hi);
+                    if c * m - s * height(m) < xi {
+                        lo = m;
+                    } else {
+                        hi = m;
+                    }
+                }
+                s * lo + c * height(lo)
+            })
+            .collect();
+        let f = fit_frame(&x, &z, &GrooveOptions::default());
+        assert!((f.step - 0.04).abs() < 1e-6, "step {}", f.step);
+        // Noise: the step's standard error is that of two means.
+        let mut seed = 9u64;
+        let steps: Vec<(f64, f64)> = (0..300)
+            .map(|_| {
+                let zn: Vec<f64> = z.iter().map(|&zi| zi + 0.008 * gauss(&mut seed)).collect();
+                let f = fit_frame(&x, &zn, &GrooveOptions::default());
+                (f.step, f.se_step)
+            })
+            .collect();
+        let mean = steps.iter().map(|s| s.0).sum::<f64>() / 300.0;
+        let sd = (steps.iter().map(|s| (s.0 - mean).powi(2)).sum::<f64>() / 299.0).sqrt();
+        let se = median(steps.iter().map(|s| s.1).collect());
+        assert!((mean - 0.04).abs() < 3.0 * sd / 300f64.sqrt() + 1e-5, "mean step {mean}");
+        assert!((sd / se - 1.0).abs() < 0.15, "scatter {sd} vs stated {se}");
     }
 
     /// A frame of 400 readings (pitch 0.025) across several V grooves, `(center, width, depth)`,
