@@ -173,9 +173,11 @@ def test_paper_template_noisy_statistics_and_standard_errors():
 
 
 def test_standard_errors_of_the_default_follow_the_scatter():
-    """One groove geometry, so the scatter of the errors is one distribution: the reported width
-    standard errors match it within 25 %; the depth's (the V/R average, the spread between the
-    two included) understate it by about a quarter, since they leave out the model choice."""
+    """One sharp V geometry, so the scatter of the errors is one distribution: the reported width
+    standard errors match it within 25 %. The depth's hold the truth at k = 2 in at least 95 %
+    of frames but are wider than the scatter (up to twice): a tip rounded over a reading or
+    two would fit the readings as well, and the stated uncertainty holds the depth that such a
+    rounding would give (issue #35 §1)."""
     rng = np.random.default_rng(4)
     x0 = rng.uniform(-0.3, 0.3, 2000)[:, None]
     u = np.abs(X - x0)
@@ -183,7 +185,78 @@ def test_standard_errors_of_the_default_follow_the_scatter():
     f = machscan.fit_grooves(X, z)
     assert f.ok.mean() > 0.99
     assert 0.75 < (f.width - 0.48)[f.ok].std() / np.median(f.se_width[f.ok]) < 1.25
-    assert 0.75 < (f.depth - 0.31)[f.ok].std() / np.median(f.se_depth[f.ok]) < 1.4
+    err = (f.depth - 0.31)[f.ok]
+    assert np.mean(np.abs(err) <= 2 * f.se_depth[f.ok]) >= 0.95
+    assert 0.5 < err.std() / np.median(f.se_depth[f.ok]) < 1.0
+
+
+def test_every_measure_states_its_uncertainty():
+    """A trapezoid with unequal flanks (no rounding for the models to argue over), 2000 noisy
+    frames: for width, depth, center, both flank angles, area and step the k = 2 interval holds
+    the truth in 93–97 % of frames (±1.5 %: three binomial standard deviations) and the stated
+    standard error is within 0.65–1.25 of the scatter (it includes the fillets the trapezoid may
+    have, which this one does not); a flat floor has no bottom radius."""
+    rng = np.random.default_rng(5)
+    n = 2000
+    x0 = rng.uniform(-0.3, 0.3, n)
+    w, d, tl, tr = 0.8, 0.25, 0.5, 0.3
+    u = X - x0[:, None]
+    section = np.maximum(np.maximum(-(u + w / 2) / tl, -(w / 2 - u) / tr), -d)
+    z = np.minimum(0.0, section) + rng.normal(0, 0.008, (n, 200))
+    f = machscan.fit_grooves(X, z)
+    ok = f.ok
+    assert ok.mean() > 0.99 and (f.model[ok] == GrooveModel.TRAPEZOID).all()
+    truth = {
+        "width": w,
+        "depth": d,
+        "x0": x0,
+        "z0": 0.0,
+        "flank_angle_left": np.degrees(np.arctan2(1, tl)),
+        "flank_angle_right": np.degrees(np.arctan2(1, tr)),
+        "area": d * (2 * w - (tl + tr) * d) / 2,
+        "step": 0.0,
+    }
+    for name, t in truth.items():
+        err, se = (getattr(f, name) - t)[ok], getattr(f, "se_" + name)[ok]
+        assert 0.915 <= np.mean(np.abs(err) <= 2 * se) <= 0.985, name
+        assert 0.65 < err.std() / np.median(se) < 1.25, name
+    assert np.isnan(f.bottom_radius[ok]).all() and np.isnan(f.se_bottom_radius[ok]).all()
+
+
+@pytest.mark.parametrize("shape", synth.GROOVE_SHAPES)
+def test_flank_angles_area_and_radius_against_the_generators_truth(shape):
+    """The generators' exact truth (flank angles as the frame shows them, the section's area, a
+    round bottom's radius): median errors a fraction of what 8 µm noise allows, and the k = 2
+    intervals hold the truth in most frames (the full table: benchmarks/coverage_grooves.py)."""
+    g = synth.groove_frames(shape, 400, seed=11)
+    f = machscan.fit_grooves(g.x, g.z)
+    ok = f.ok
+    assert ok.mean() > 0.99
+    # Near-vertical walls hold few readings (the sensor loses steep flanks): their angle is
+    # known to a few degrees (their standard errors say so: a median of 5-6°).
+    angle_tol = 3.0 if shape == "u_walls" else 1.5
+    for name, truth, tol in (
+        ("flank_angle_left", g.flank_angle[:, 0], angle_tol),
+        ("flank_angle_right", g.flank_angle[:, 1], angle_tol),
+        ("area", g.area, 0.0015),
+        ("bottom_radius", g.bottom_radius, 0.01),
+    ):
+        est, se = getattr(f, name)[ok], getattr(f, "se_" + name)[ok]
+        keep = np.isfinite(truth[ok]) & np.isfinite(est)
+        if name == "bottom_radius" and shape == "trapezoid":
+            assert not keep.any()
+            continue
+        err = (est - truth[ok])[keep]
+        assert np.median(np.abs(err)) < tol, name
+        assert np.mean(np.abs(err) <= 2 * se[keep]) > 0.85, name
+
+
+def test_the_paper_template_has_no_section_measures():
+    z = template(X, 0.05, 0.0, 0.3, 0.48)[None, :]
+    f = machscan.fit_grooves(X, z, template="tanh")
+    assert f.ok[0] and np.isfinite(f.se_width[0])
+    for name in ("flank_angle_left", "area", "bottom_radius", "step", "se_area", "se_step", "se_x0"):
+        assert np.isnan(getattr(f, name)[0]), name
 
 
 def test_paper_template_fitted_alpha():

@@ -590,12 +590,14 @@ fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)
 /// A round V whose bottom arc spans less than the reading `pitch` rests on at most one reading:
 /// its depth is as undetermined by the readings as its rounding, and the linearisation at so
 /// small a radius says nothing of how far either can go. Its errors are then the sharp V's at
-/// its flanks (the rounding it might have is the Akaike spread's part, for V's).
+/// its flanks (the rounding it might have is the Akaike spread's part, for V's). So are a
+/// trapezoid's whose floor and fillets span less than a pitch (at T·D = w it is a sharp V,
+/// and its depth, no longer free, had a variance of metres).
 ///
 /// `sandwich` false: the classical covariance alone (for a model whose depth and radius only
 /// are averaged in, where the rounding's profile bounds them anyway).
 fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64, sandwich: bool) -> [f64; MEASURES] {
-    if fit.model == SectionModel::Round {
+    if matches!(fit.model, SectionModel::Round | SectionModel::Trapezoid) {
         let p = fit.pieces();
         let span = (p.cr + p.r / super::section::slant(p.tr)) - (p.cl - p.r / super::section::slant(p.tl));
         if span < pitch {
@@ -615,42 +617,39 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
     let m = r.u.len();
     let np = fit.model.n_params();
     // A parameter at a bound (a trapezoid's fillet at zero) is not estimated: it is held,
-    // and has no variance. The free ones' JᵀJ is inverted by Cholesky when every pivot is
-    // clearly positive (the common case, a tenth of an eigen-decomposition's work); else by its
-    // eigen-decomposition with each eigenvalue at least 1e-12 of the largest: a free
-    // combination the readings do not fix (a flank with one reading under a large fillet)
-    // then gives the measures that move with it a variance as large as that says, not none.
+    // and has no variance. A free combination the readings do not fix (a flank with one
+    // reading under a large fillet, a flank that lost its readings) must give the measures
+    // that move with it a large variance, not none (as a pseudo-inverse would) and not metres
+    // (as the bare inverse of a nearly singular JᵀJ did): each free parameter gets a prior of
+    // the groove's own size (positions and depth within its width, a cotangent within 2 + |t|,
+    // the fillet fraction within 1). Its precision σ̂²/range² is some 10⁻⁵ of what a few
+    // readings give a parameter they fix, so it moves nothing the readings fix and bounds what
+    // they do not.
+    let sigma2 = 2.0 * fit.cost / (m.saturating_sub(np).max(1)) as f64;
     let (lo, hi) = fit.model.bounds(&fit.q);
     let held = |i: usize| {
         let tol = 1e-9 * fit.q[i].abs().max(1.0);
         fit.q[i] <= lo[i] + tol || fit.q[i] >= hi[i] - tol
     };
     let free: [bool; 6] = std::array::from_fn(|i| i < np && !held(i));
-    let scale = (0..np).filter(|&i| free[i]).map(|i| fit.jtj[i][i]).fold(0.0, f64::max).max(1e-300);
-    let a = nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, j| {
-        if free[i] && free[j] {
-            fit.jtj[i][j]
-        } else {
-            f64::from(u8::from(i == j)) * scale
-        }
+    let (l, r_) = fit.pieces().crossings();
+    let size = (r_ - l).abs().max(pitch);
+    let range = |i: usize| match (fit.model, i) {
+        (SectionModel::U, _) | (_, 0 | 1 | 4) => size,
+        (_, 2 | 3) => 2.0 + fit.q[i].abs(),
+        _ => 1.0,
+    };
+    let a = nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, j| match (free[i] && free[j], i == j) {
+        (true, true) => fit.jtj[i][i] + sigma2.max(1e-12) / (range(i) * range(i)),
+        (true, false) => fit.jtj[i][j],
+        (false, diagonal) => f64::from(u8::from(diagonal)),
     });
-    let zero_held = |mut inv: nalgebra::SMatrix<f64, 6, 6>| {
-        for i in (0..6).filter(|&i| !free[i]) {
-            inv.row_mut(i).fill(0.0);
-            inv.column_mut(i).fill(0.0);
-        }
-        inv
-    };
-    let inv = match a.cholesky() {
-        Some(c) if (0..6).all(|i| c.l_dirty()[(i, i)].powi(2) > 1e-8 * scale) => zero_held(c.inverse()),
-        _ => {
-            let e = a.symmetric_eigen();
-            let floor = 1e-12 * e.eigenvalues.max().max(1e-300);
-            let d = nalgebra::SVector::<f64, 6>::from_fn(|i, _| 1.0 / e.eigenvalues[i].max(floor));
-            zero_held(e.eigenvectors * nalgebra::SMatrix::<f64, 6, 6>::from_diagonal(&d) * e.eigenvectors.transpose())
-        }
-    };
-    let sigma2 = 2.0 * fit.cost / (m.saturating_sub(np).max(1)) as f64;
+    let Some(cholesky) = a.cholesky() else { return [f64::INFINITY; MEASURES] };
+    let mut inv = cholesky.inverse();
+    for i in (0..6).filter(|&i| !free[i]) {
+        inv.row_mut(i).fill(0.0);
+        inv.column_mut(i).fill(0.0);
+    }
     // The readings' own residuals too (the sandwich A⁻¹·Σ J_iᵀJ_i·r_i²/(1 − h_i)²·A⁻¹, HC3 of
     // MacKinnon & White 1985): where the section does not follow the groove (rounded top
     // corners, lips, a tip between the models) the residuals there are larger than σ̂ and so is
