@@ -95,6 +95,21 @@ def test_tables_and_csv(run, tmp_path):
     assert len(rows) == 12 and np.isfinite(rows["width_mean_mm"]).all()
     frames = np.genfromtxt(tmp_path / "frames.csv", delimiter=",", names=True)
     assert len(frames) == scan.n_frames
+    # Every measure with its standard error, each column named with its unit, as the fits hold
+    # them (to the CSV's printed digits).
+    for column, name in (
+        ("flank_angle_left_deg", "flank_angle_left"),
+        ("se_flank_angle_right_deg", "se_flank_angle_right"),
+        ("area_mm2", "area"),
+        ("se_area_mm2", "se_area"),
+        ("bottom_radius_mm", "bottom_radius"),
+        ("step_mm", "step"),
+        ("se_step_mm", "se_step"),
+        ("se_x0_mm", "se_x0"),
+        ("se_z0_mm", "se_z0"),
+    ):
+        np.testing.assert_allclose(frames[column], getattr(r.fits, name), rtol=1e-6, atol=1e-9, err_msg=column)
+    assert "flank_angle_left" in r.fits.summary() and "°" in r.fits.summary()
     # No NaN in a table: the per-contour tables are all numbers.
     errs = np.genfromtxt(tmp_path / "contour_errors.csv", delimiter=",", names=True)
     assert all(np.isfinite(errs[n]).all() for n in errs.dtype.names)

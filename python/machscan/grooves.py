@@ -358,6 +358,18 @@ class GrooveFits:
             for name in ("width", "depth", "rms"):
                 v = getattr(self, name)[ok]
                 lines.append(f"  {name:>5}: {v.mean():.4f} ± {v.std():.4f} mm (min {v.min():.4f}, max {v.max():.4f})")
+            # The section models' further measures (NaN for the tanh template: left out).
+            for name, unit, digits in (
+                ("flank_angle_left", "°", 2),
+                ("flank_angle_right", "°", 2),
+                ("area", " mm²", 5),
+                ("bottom_radius", " mm", 4),
+                ("step", " mm", 4),
+            ):
+                v = getattr(self, name)[ok]
+                v = v[np.isfinite(v)]
+                if len(v):
+                    lines.append(f"  {name}: {v.mean():.{digits}f} ± {v.std():.{digits}f}{unit} ({len(v)} fits)")
             models = {k: v for k, v in self.model_counts().items() if v}
             lines.append("  models: " + ", ".join(f"{k} {v}" for k, v in models.items()))
         bad = {k: v for k, v in self.counts().items() if v and k != "converged"}

@@ -384,7 +384,7 @@ class GrooveReport:
         """Write ``frames.csv`` (per frame, or per groove with ``select="all"``; ``frame`` and
         ``groove`` say which), ``widths.csv`` (table 1) and ``contour_errors.csv``
         (table 2 with the decomposition) into ``directory``; returns the paths. Every column of a
-        length names its unit (``width_mm``, ``error_mean_mm``); in ``frames.csv`` ``status`` and
+        length names its unit (``width_mm``, ``error_mean_mm``; angles ``_deg``, areas ``_mm2``); in ``frames.csv`` ``status`` and
         ``model`` are the :class:`GrooveStatus` and :class:`GrooveModel` codes, empty cells are NaN."""
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
@@ -405,6 +405,18 @@ class GrooveReport:
             "depth_mm": f.depth,
             "se_width_mm": f.se_width,
             "se_depth_mm": f.se_depth,
+            "se_x0_mm": f.se_x0,
+            "se_z0_mm": f.se_z0,
+            "flank_angle_left_deg": f.flank_angle_left,
+            "flank_angle_right_deg": f.flank_angle_right,
+            "se_flank_angle_left_deg": f.se_flank_angle_left,
+            "se_flank_angle_right_deg": f.se_flank_angle_right,
+            "area_mm2": f.area,
+            "se_area_mm2": f.se_area,
+            "bottom_radius_mm": f.bottom_radius,
+            "se_bottom_radius_mm": f.se_bottom_radius,
+            "step_mm": f.step,
+            "se_step_mm": f.se_step,
             "rms_mm": f.rms,
             "cluster": self.cluster,
             "contour": self.contour,

@@ -18,7 +18,11 @@
 //!    fit;
 //! 5. width = the chosen section's flank crossings with the surface line, depth = its deepest
 //!    point (for V's an Akaike-weighted mean of the sharp and the round-bottomed V, since a tip
-//!    rounded by about a reading spacing is barely visible), center = the crossings' midpoint.
+//!    rounded by about a reading spacing is barely visible), center = the crossings' midpoint;
+//!    flank angles, area, bottom radius (`section::Measures`) and the surface step beside the
+//!    groove; each with a standard error that holds what the fit leaves uncertain (the
+//!    surface line, the model choice, flanks without readings, a rounding too small to see:
+//!    [`measures_with_errors`]).
 use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
 use super::section::{
