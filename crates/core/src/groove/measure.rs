@@ -681,17 +681,19 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
     let (classical, sandwich) = (inv * sigma2, inv * meat * inv);
     // (Without the pass, `sandwich` is zero and the classical stands.)
     let measures = Measures::of(fit.model, &fit.q, fit.gamma);
-    let mut se = [0.0; MEASURES];
-    for k in 0..MEASURES {
+    std::array::from_fn(|k| {
         let gk = &measures.grad[k];
         let quad_of = |c: &nalgebra::SMatrix<f64, 6, 6>| -> f64 {
             (0..np).map(|i| (0..np).map(|j| gk[i] * c[(i, j)] * gk[j]).sum::<f64>()).sum()
         };
         let var = quad_of(&classical).max(quad_of(&sandwich)) + measures.surface[k].powi(2) * var_surface;
         // NaN (a measure the model does not have) stays NaN; `max` would make it 0.
-        se[k] = if measures.values[k].is_nan() { f64::NAN } else { var.max(0.0).sqrt() };
-    }
-    se
+        if measures.values[k].is_nan() {
+            f64::NAN
+        } else {
+            var.max(0.0).sqrt()
+        }
+    })
 }
 
 /// The measures of the chosen fit and their standard errors. For V's, depth and bottom

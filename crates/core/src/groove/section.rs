@@ -812,14 +812,9 @@ mod tests {
             for gamma in [0.0, 0.05] {
                 let m = Measures::of(model, &q, gamma);
                 let at = raised(model, &q, gamma, 0.0);
-                for k in 0..MEASURES {
-                    let both_nan = m.values[k].is_nan() && at[k].is_nan();
-                    assert!(
-                        both_nan || (m.values[k] - at[k]).abs() < 1e-12,
-                        "{model:?} {k}: {} vs {}",
-                        m.values[k],
-                        at[k]
-                    );
+                for (k, (value, want)) in m.values.iter().zip(at).enumerate() {
+                    let both_nan = value.is_nan() && want.is_nan();
+                    assert!(both_nan || (value - want).abs() < 1e-12, "{model:?} {k}: {value} vs {want}");
                 }
                 let h = 1e-6;
                 let (up, dn) = (raised(model, &q, gamma, h), raised(model, &q, gamma, -h));
