@@ -272,11 +272,11 @@ def groove_frames(
             # A flank of cotangent t (run per depth) against the sheared surface line: the
             # angle from (1, k) to the sheared (t, k·t − 1) is atan2(1, t(1 + k²) − k), and
             # mirrored on the right.
-            slope = math.tan(theta)
+            shear = math.tan(theta)
             cot = [1 / math.tan(math.radians(a)) for a in section.flank_angles]
             flank_angle[k] = [
-                math.degrees(math.atan2(1.0, cot[0] * (1 + slope * slope) - slope)),
-                math.degrees(math.atan2(1.0, cot[1] * (1 + slope * slope) + slope)),
+                math.degrees(math.atan2(1.0, cot[0] * (1 + shear * shear) - shear)),
+                math.degrees(math.atan2(1.0, cot[1] * (1 + shear * shear) + shear)),
             ]
         zk = _topmost(px, pz, x)
         inside = np.abs(x - xc) < (w / 2) * math.cos(theta)
