@@ -541,7 +541,7 @@ fn initial(u: &[f64], v: &[f64], ib: usize, il: usize, ir: usize, d0: f64, thr: 
 /// the last groove reading and the first surface reading; with no supported arc, the middle of
 /// the gap. Returns the edge and, when the rule placed it, the gap (low, high) it lies in.
 fn edge_rule(p: &Pieces, fitted: &[f64], e: f64, side: f64, gap: (f64, f64)) -> (f64, Option<(f64, f64)>) {
-    let (al, ar) = (super::section::slant(p.tl), super::section::slant(p.tr));
+    let (al, ar) = (slant(p.tl), slant(p.tr));
     let (on_line, on_arc, c) = if side < 0.0 {
         let (lo, hi) = (p.xl.min(e), p.cl - p.r / al);
         (
@@ -574,8 +574,8 @@ fn edge_rule(p: &Pieces, fitted: &[f64], e: f64, side: f64, gap: (f64, f64)) -> 
 /// (uniform: the angles at the gap's ends, spread²/12). `side` −1 left, +1 right. None when
 /// the flank has no length (the arc meets the surface); also the tangent point's depth.
 fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)) -> Option<(f64, f64, f64)> {
-    let (al, ar) = (super::section::slant(p.tl), super::section::slant(p.tr));
-    let (htl, htr) = (p.hc + p.r * p.tl / al, p.hc + p.r * p.tr / ar);
+    let (al, ar) = (slant(p.tl), slant(p.tr));
+    let (htl, htr) = p.tangent_depths();
     let (ut, ht) = if side < 0.0 { (p.cl - p.r / al, htl) } else { (p.cr + p.r / ar, htr) };
     if !(ht > 1e-9) {
         return None;
@@ -603,7 +603,7 @@ fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)
 fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64, sandwich: bool) -> [f64; MEASURES] {
     if matches!(fit.model, SectionModel::Round | SectionModel::Trapezoid) {
         let p = fit.pieces();
-        let span = (p.cr + p.r / super::section::slant(p.tr)) - (p.cl - p.r / super::section::slant(p.tl));
+        let span = (p.cr + p.r / slant(p.tr)) - (p.cl - p.r / slant(p.tl));
         if span < pitch {
             let problem =
                 SectionFit { model: SectionModel::V, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma: fit.gamma };
@@ -636,8 +636,8 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
         fit.q[i] <= lo[i] + tol || fit.q[i] >= hi[i] - tol
     };
     let free: [bool; 6] = std::array::from_fn(|i| i < np && !held(i));
-    let (l, r_) = fit.pieces().crossings();
-    let size = (r_ - l).abs().max(pitch);
+    let (left, right) = fit.pieces().crossings();
+    let size = (right - left).abs().max(pitch);
     let range = |i: usize| match (fit.model, i) {
         (SectionModel::U, _) | (_, 0 | 1 | 4) => size,
         (_, 2 | 3) => 2.0 + fit.q[i].abs(),

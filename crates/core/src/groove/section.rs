@@ -215,7 +215,7 @@ impl Pieces {
     }
 
     /// Depths where the left and right flank lines meet their fillet arcs (tangent points).
-    fn tangent_depths(&self) -> (f64, f64) {
+    pub(super) fn tangent_depths(&self) -> (f64, f64) {
         let (al, ar) = (slant(self.tl), slant(self.tr));
         (self.hc + self.r * self.tl / al, self.hc + self.r * self.tr / ar)
     }
