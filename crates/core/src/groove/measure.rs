@@ -195,29 +195,35 @@ impl<const P: usize> BoundedLeastSquares<P> for SectionFit<'_> {
 fn fit_sized<const P: usize>(problem: &SectionFit<'_>, q0: &[f64], options: &BoundedLmOptions) -> ModelFit {
     let x0 = SVector::<f64, P>::from_fn(|i, _| q0[i]);
     let r = bounded_levenberg_marquardt::<P, _>(problem, x0, options);
-    let mut q = [0.0; 6];
-    q[..P].copy_from_slice(r.x.as_slice());
-    let mut jtj = [[0.0; 6]; 6];
-    for (i, row) in jtj.iter_mut().take(P).enumerate() {
-        for (j, v) in row.iter_mut().take(P).enumerate() {
-            *v = r.jtj[(i, j)];
+    ModelFit { iterations: r.iterations, converged: r.converged, ..ModelFit::at(problem, &r.x, &r.jtj, r.cost) }
+}
+
+impl ModelFit {
+    /// `problem`'s model at `q` with its JᵀJ and cost (no iterations; converged).
+    fn at<const P: usize>(problem: &SectionFit<'_>, q: &SVector<f64, P>, jtj: &SMatrix<f64, P, P>, cost: f64) -> Self {
+        let mut fit = ModelFit {
+            model: problem.model,
+            q: [0.0; 6],
+            cost,
+            iterations: 0,
+            converged: true,
+            gamma: problem.gamma,
+            jtj: [[0.0; 6]; 6],
+        };
+        fit.q[..P].copy_from_slice(q.as_slice());
+        for (i, row) in fit.jtj.iter_mut().take(P).enumerate() {
+            for (j, v) in row.iter_mut().take(P).enumerate() {
+                *v = jtj[(i, j)];
+            }
         }
-    }
-    ModelFit {
-        model: problem.model,
-        q,
-        cost: r.cost,
-        iterations: r.iterations,
-        converged: r.converged,
-        gamma: problem.gamma,
-        jtj,
+        fit
     }
 }
 
 /// Fits `model` to the readings from `q0`.
 #[inline(always)]
 fn fit_model(model: SectionModel, r: &Readings<'_>, gamma: f64, q0: &[f64], options: &BoundedLmOptions) -> ModelFit {
-    let problem = SectionFit { model, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma };
+    let problem = r.problem(model, gamma);
     match model {
         SectionModel::Trapezoid => fit_sized::<6>(&problem, q0, options),
         SectionModel::Round => fit_sized::<5>(&problem, q0, options),
@@ -229,7 +235,7 @@ fn fit_model(model: SectionModel, r: &Readings<'_>, gamma: f64, q0: &[f64], opti
 /// The cost one Gauss–Newton step from `q0` predicts for `model` leaning by `gamma` (bounds
 /// ignored; −∞ when the step is undetermined).
 fn predicted_cost(model: SectionModel, r: &Readings<'_>, gamma: f64, q0: &[f64]) -> f64 {
-    let problem = SectionFit { model, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma };
+    let problem = r.problem(model, gamma);
     match model {
         SectionModel::Trapezoid => predicted_sized::<6>(&problem, q0),
         SectionModel::Round => predicted_sized::<5>(&problem, q0),
@@ -254,6 +260,13 @@ struct Readings<'a> {
     v: &'a [f64],
     sin: f64,
     cos: f64,
+}
+
+impl<'a> Readings<'a> {
+    /// The least-squares problem of `model` leaning by `gamma` on these readings.
+    fn problem(&self, model: SectionModel, gamma: f64) -> SectionFit<'a> {
+        SectionFit { model, u: self.u, v: self.v, sin: self.sin, cos: self.cos, gamma }
+    }
 }
 
 /// Algebraic (Kåsa) circle fit `u² + v² + a·u + b·v + c = 0`: (center u, center v, radius).
@@ -605,17 +618,10 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
         let p = fit.pieces();
         let span = (p.cr + p.r / slant(p.tr)) - (p.cl - p.r / slant(p.tl));
         if span < pitch {
-            let problem =
-                SectionFit { model: SectionModel::V, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma: fit.gamma };
+            let problem = r.problem(SectionModel::V, fit.gamma);
             let q = SVector::<f64, 4>::from_fn(|i, _| fit.q[i]);
             let (a, _, cost) = LeastSquares::<4>::normal_equations(&problem, &q);
-            let mut sharp = ModelFit { model: SectionModel::V, cost, jtj: [[0.0; 6]; 6], ..*fit };
-            for i in 0..4 {
-                for j in 0..4 {
-                    sharp.jtj[i][j] = a[(i, j)];
-                }
-            }
-            return measure_errors(&sharp, r, var_surface, pitch, sandwich);
+            return measure_errors(&ModelFit::at(&problem, &q, &a, cost), r, var_surface, pitch, sandwich);
         }
     }
     let m = r.u.len();
@@ -773,7 +779,7 @@ fn measures_with_errors(
 /// The round V one Gauss–Newton step from a U with walls `p` (the step solved by Cholesky;
 /// none when the readings do not fix it), with its JᵀJ at the U and the cost the step predicts.
 fn round_from_u(r: &Readings<'_>, gamma: f64, p: &Pieces) -> ModelFit {
-    let problem = SectionFit { model: SectionModel::Round, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma };
+    let problem = r.problem(SectionModel::Round, gamma);
     let q0 = SVector::<f64, 5>::from([p.xl, p.xr, 0.0, 0.0, p.d]);
     let (a, g, cost) = LeastSquares::<5>::normal_equations(&problem, &q0);
     let (mut q, mut predicted) = (q0, cost);
@@ -783,22 +789,7 @@ fn round_from_u(r: &Readings<'_>, gamma: f64, p: &Pieces) -> ModelFit {
         predicted = (cost - 0.5 * g.dot(&step)).max(0.0);
         SectionModel::Round.project(q.as_mut_slice());
     }
-    let mut fit = ModelFit {
-        model: SectionModel::Round,
-        q: [0.0; 6],
-        cost: predicted,
-        iterations: 0,
-        converged: true,
-        gamma,
-        jtj: [[0.0; 6]; 6],
-    };
-    fit.q[..5].copy_from_slice(q.as_slice());
-    for i in 0..5 {
-        for j in 0..5 {
-            fit.jtj[i][j] = a[(i, j)];
-        }
-    }
-    fit
+    ModelFit::at(&problem, &q, &a, predicted)
 }
 
 /// Tip radii (reading pitches) of the χ² profile over a V's rounding ([`rounding_bound`]).
@@ -808,7 +799,7 @@ const ROUNDING_PROFILE: [f64; 5] = [0.5, 1.0, 2.0, 3.0, 5.0];
 /// rounded V's in 96–99 % of frames: wider than k = 2 means.)
 const ROUNDING_CHI2: f64 = 2.706;
 
-/// The shallowest depth and the largest tip radius the readings allow a V (Δχ² ≤ 4 against
+/// The shallowest depth and the largest tip radius the readings allow a V (Δχ² ≤ [`ROUNDING_CHI2`] against
 /// the better of the sharp and the round V, σ̂² from the sharp V's residuals): the round V's
 /// χ² at radii on [`ROUNDING_PROFILE`] from the sharp V's flanks, each with its flanks moved by
 /// one Gauss–Newton step at that depth (the profile likelihood, to first order), the bound
@@ -820,7 +811,7 @@ fn rounding_bound(fv: &ModelFit, fr: &ModelFit, r: &Readings<'_>, pitch: f64) ->
     let m = r.u.len();
     let sigma2 = 2.0 * fv.cost / m.saturating_sub(4).max(1) as f64;
     let best = fv.cost.min(fr.cost);
-    let problem = SectionFit { model: SectionModel::Round, u: r.u, v: r.v, sin: r.sin, cos: r.cos, gamma: fv.gamma };
+    let problem = r.problem(SectionModel::Round, fv.gamma);
     let depth_at = |radius: f64| ((xr - xl) - k * radius) / t;
     let chi2_at = |radius: f64| -> f64 {
         let q = SVector::<f64, 5>::from([xl, xr, tl, tr, depth_at(radius)]);
