@@ -999,12 +999,21 @@ fn walk_dip(v: &[f64], ib: usize, step: isize, thr: f64, drop: f64, claimed: &[b
     (None, false)
 }
 
-/// The deepest reading not yet claimed: the deepest 5-reading mean, then the deepest 3-median
-/// within ±2 readings.
-fn deepest_unclaimed(v5: &[f64], v3: &[f64], claimed: &[bool]) -> Option<usize> {
-    let n = v5.len();
-    let ib = (0..n).filter(|&i| !claimed[i]).min_by(|&a, &b| v5[a].total_cmp(&v5[b]))?;
-    let (lo, hi) = (ib.saturating_sub(2), (ib + 3).min(n));
+/// The deepest reading not yet claimed: the deepest 5-reading mean (`open`: the 5-means with
+/// claimed readings at +∞, so that the search is one plain pass: it runs once per groove
+/// found, and had been a tenth of a frame of several grooves), then the deepest 3-median
+/// within ±2 readings. The first of equal minima.
+fn deepest_unclaimed(open: &[f64], v3: &[f64], claimed: &[bool]) -> Option<usize> {
+    let (mut ib, mut least) = (0, f64::INFINITY);
+    for (i, &v) in open.iter().enumerate() {
+        if v < least {
+            (ib, least) = (i, v);
+        }
+    }
+    if least == f64::INFINITY {
+        return None;
+    }
+    let (lo, hi) = (ib.saturating_sub(2), (ib + 3).min(open.len()));
     Some((lo..hi).filter(|&i| !claimed[i]).min_by(|&a, &b| v3[a].total_cmp(&v3[b])).unwrap_or(ib))
 }
 
@@ -1014,6 +1023,7 @@ fn deepest_unclaimed(v5: &[f64], v3: &[f64], claimed: &[bool]) -> Option<usize> 
 fn find_dips(v5: &[f64], v3: &[f64], first: usize, sigma: f64, deep_enough: f64) -> Vec<Dip> {
     let n = v3.len();
     let mut claimed = vec![false; n];
+    let mut open = v5.to_vec();
     let mut dips = Vec::new();
     let mut next = Some(first);
     while let Some(ib) = next {
@@ -1025,13 +1035,15 @@ fn find_dips(v5: &[f64], v3: &[f64], first: usize, sigma: f64, deep_enough: f64)
         let drop = DEPTH_SIGMAS * sigma;
         let (il, sl) = walk_dip(v3, ib, -1, thr, drop, &claimed);
         let (ir, sr) = walk_dip(v3, ib, 1, thr, drop, &claimed);
-        claimed[il.unwrap_or(0)..=ir.unwrap_or(n - 1)].iter_mut().for_each(|c| *c = true);
+        let ends = il.unwrap_or(0)..=ir.unwrap_or(n - 1);
+        claimed[ends.clone()].fill(true);
+        open[ends].fill(f64::INFINITY);
         // A dip of one or two readings between its ends is noise or a spike's remains: no
         // section can be fitted to it.
         if !matches!((il, ir), (Some(l), Some(r)) if r < l + MIN_DIP) {
             dips.push(Dip { ib, il, ir, shared: (sl, sr), depth0 });
         }
-        next = deepest_unclaimed(v5, v3, &claimed);
+        next = deepest_unclaimed(&open, v3, &claimed);
     }
     dips
 }
