@@ -276,7 +276,7 @@ mod tests {
                 assert!(keep.iter().all(|&k| k));
                 continue;
             }
-            for i in 0..n {
+            for (i, &kept) in keep.iter().enumerate() {
                 let l = (i >= 2).then(|| missed(&x, &z, i, i - 1, i - 2));
                 let r = (i + 2 < n).then(|| missed(&x, &z, i, i + 1, i + 2));
                 let (l, r) = match (l, r) {
@@ -290,7 +290,7 @@ mod tests {
                     continue;
                 }
                 let spike = l.abs() > 0.05 && r.abs() > 0.05 && l.signum() == r.signum();
-                assert_eq!(keep[i], !spike, "reading {i} of {n}: misses {l} {r}");
+                assert_eq!(kept, !spike, "reading {i} of {n}: misses {l} {r}");
                 spikes += usize::from(spike);
             }
         }
