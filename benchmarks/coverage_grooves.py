@@ -5,7 +5,8 @@ of converged frames whose k = 2 interval (value ± 2·se) holds the truth (targe
 median |error| and the median standard error. Frame sets:
 
 - the generators' (``machscan.synth.groove_frames``: V, U, U with walls, trapezoid; 25 µm
-  pitch, 8 µm noise, lips, tilt, dropouts; the step's truth is 0);
+  pitch, 8 µm noise, lips, tilt, dropouts; the step's truth is 0), and the U's tilted by a
+  shear instead of a rotation (their sections lean);
 - shapes the generators do not make, drawn here: V's with unequal flanks (30–60° left, 45–75°
   right), trapezoids with unequal flanks, and gap-and-flush profiles (a V gap with the right
   surface 0–50 µm above or below the left: the step), at a 20 µm pitch with 5 µm noise;
@@ -93,8 +94,10 @@ def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, 
     return x, z, truth
 
 
-def generator_frames(shape: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    g = groove_frames(shape, n, seed=seed)
+def generator_frames(
+    shape: str, n: int, seed: int, tilt_mode: str = "rotate"
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    g = groove_frames(shape, n, seed=seed, tilt_mode=tilt_mode)
     truth = {
         "width": g.width,
         "depth": g.depth,
@@ -123,6 +126,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=3)
     args = ap.parse_args()
     sets = [(f"synth {s}", lambda s=s: generator_frames(s, args.frames, args.seed)) for s in ("v", "u", "u_walls", "trapezoid")]
+    # Tilted by a shear (a groove cut square to the machine on a tilted surface): the arcs lean.
+    sets += [(f"synth {s}, sheared", lambda s=s: generator_frames(s, args.frames, args.seed, "shear"))
+             for s in ("u", "u_walls")]
     sets += [(k.replace("_", " "), lambda k=k: other_shapes(k, args.frames, args.seed))
              for k in ("asymmetric_v", "asymmetric_trapezoid", "gap_flush")]
     sets += [("engraved V, rounded 0-0.1 mm", lambda: engraved(args.frames, args.seed))]
