@@ -1325,25 +1325,22 @@ fn fit_groove(
     iterations += fits.iter().map(|f| f.iterations).sum::<usize>();
     let r = readings(&us, &vs, sin, cos);
     let mut chosen = fits[best];
-    // A frame tilted by adding k·x to z (a shear) rather than by a rotation shows, once
-    // levelled, a section leaning by k. The V and the trapezoid are immune: their flanks are
-    // independent, and a lean moves only the trapezoid's small fillets (refitting them changed
-    // no median error of the benchmark's trapezoids, and was a quarter of their work). The
-    // chosen round V or U is refitted leaning by k. Which of the two the frame is cannot be
-    // told on a shallow arc (the lean shifts and turns it much as noise does): taking the
-    // better one had left the centers and flank angles of tilted U's outside their k = 2
-    // intervals in 9–14 % of frames. So both are kept and the measures averaged by their
-    // Akaike weights (the same parameter count: by their costs), the spread in the errors.
-    // Only fitted when one Gauss–Newton step predicts it within LEAN_SCREEN of the choice: a
-    // rival beyond it would weigh under 5 %, and the refit was a quarter of the work on U's
-    // with walls.
+    // A frame tilted by adding k·x to z (a shear: a groove cut square to the machine on a
+    // surface tilted to it) rather than by a rotation shows, once levelled, a section leaning
+    // by k. The V and the trapezoid are immune: their flanks are independent, and a lean moves
+    // only the trapezoid's small fillets (refitting them changed no median error of the
+    // benchmark's trapezoids, and was a quarter of their work). A chosen round V or U is
+    // refitted leaning by k, and after a round V the U too (the true shape of a sheared arc,
+    // which upright may have lost to the round V's free flanks; not after a V: a leaning round
+    // V would beat a sharp V by its freedom alone). Which way the frame is cannot be told on a
+    // shallow arc (a lean shifts and turns it much as noise does): keeping the better fit had
+    // left the centres and flank angles of tilted U's outside their k = 2 intervals in 9–14 %
+    // of frames. So the fit kept has a rival, the same model the other way up, and every
+    // measure is averaged over the two below. A leaning fit is only tried where one
+    // Gauss–Newton step predicts an Akaike criterion within LEAN_SCREEN of the choice's (a
+    // rival beyond weighs under 5 %, and the refit was a quarter of the work on U's with walls).
     let mut lean_rival = None;
     if k2.abs() > 0.01 && matches!(chosen.model, SectionModel::Round | SectionModel::U) {
-        // The chosen model leaning, and, after a round V, the U leaning too: the U is the true
-        // shape of a sheared arc, but upright it may have lost to the round V, whose free
-        // flanks follow a lean. (Not after a V: a leaning round V would beat a sharp V by its
-        // freedom alone.) Each only where one Gauss–Newton step predicts an Akaike criterion
-        // within LEAN_SCREEN of the choice's.
         let bar = chosen.criterion(sigma) + LEAN_SCREEN;
         let mut leaning: Option<ModelFit> = None;
         let candidates = fits
@@ -1360,7 +1357,6 @@ fn fit_groove(
                 leaning = Some(sheared);
             }
         }
-        // The rival of the fit kept: the same model the other way up.
         if let Some(lean) = leaning {
             if lean.criterion(sigma) < chosen.criterion(sigma) {
                 lean_rival = fits.iter().find(|f| f.model == lean.model).copied();
