@@ -8,7 +8,8 @@ median |error| and the median standard error. Frame sets:
   pitch, 8 µm noise, lips, tilt, dropouts; the step's truth is 0), and the U's tilted by a
   shear instead of a rotation (their sections lean);
 - shapes the generators do not make, drawn here: V's with unequal flanks (30–60° left, 45–75°
-  right), trapezoids with unequal flanks, and gap-and-flush profiles (a V gap with the right
+  right), trapezoids with unequal flanks, half-ellipses cut below their axis (0.5–0.7 mm
+  across, 0.18–0.26 mm semi-axis down: a section no model has), and gap-and-flush profiles (a V gap with the right
   surface 0–50 µm above or below the left: the step), at a 20 µm pitch with 5 µm noise;
 - laser-engraved V's with rounded bottoms (0–0.1 mm across: ``accuracy_rounded_grooves.py``).
 
@@ -66,6 +67,19 @@ def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, 
                 [0, rng.uniform(0, 0.02), rng.uniform(0, 0.02), rng.uniform(0, 0.02), rng.uniform(0, 0.02), 0],
             )
             left, right = floor / 2 + left, floor / 2 + right
+        elif kind == "half_ellipse":
+            # An elliptic section cut below its axis (no model has it: a ball cutter on a tilted
+            # axis, or a beam's profile): semi-axes a across, b down.
+            a, b, cut = rng.uniform(0.25, 0.35), rng.uniform(0.18, 0.26), rng.uniform(0.0, 0.06)
+            left = right = a * math.sqrt(1 - (cut / b) ** 2)
+            uu = np.concatenate([[-far], np.linspace(-left, left, 4001), [far]])
+            vv = -(b * np.sqrt(np.clip(1 - (uu / a) ** 2, 0, 1)) - cut)
+            vv[[0, -1]] = 0.0
+            poly = np.c_[uu, vv]
+            # The flanks meet the surface at the ellipse's slope there; the bottom's radius of
+            # curvature is a²/b.
+            a_l = a_r = math.degrees(math.atan2(b * b * left, a * a * cut)) if cut > 0 else 90.0
+            truth["bottom_radius"][k] = a * a / b
         else:  # gap and flush: a V gap, the right surface `step` above the left
             d, a = rng.uniform(0.1, 0.3), rng.uniform(40, 70)
             step = rng.uniform(-0.05, 0.05)
@@ -130,7 +144,7 @@ def main() -> None:
     sets += [(f"synth {s}, sheared", lambda s=s: generator_frames(s, args.frames, args.seed, "shear"))
              for s in ("u", "u_walls")]
     sets += [(k.replace("_", " "), lambda k=k: other_shapes(k, args.frames, args.seed))
-             for k in ("asymmetric_v", "asymmetric_trapezoid", "gap_flush")]
+             for k in ("asymmetric_v", "asymmetric_trapezoid", "half_ellipse", "gap_flush")]
     sets += [("engraved V, rounded 0-0.1 mm", lambda: engraved(args.frames, args.seed))]
     print(f"k = 2 coverage of the groove measures, default call, {args.frames} frames per set (seed {args.seed})")
     print(f"  {'set':<30} {'measure':<18} {'frames':>6} {'k=2 holds':>9} {'median |error|':>15} {'median se':>10}")
