@@ -106,6 +106,11 @@ fn level(x: &[f64], z: &[f64], k: f64, b: f64) -> Levelled {
     }
 }
 
+/// The Akaike criterion of `model` fitted at `cost` (½Σλ²) to readings of noise `sigma`.
+fn akaike(cost: f64, model: SectionModel, sigma: f64) -> f64 {
+    2.0 * cost / (sigma * sigma) + KAPPA * model.n_params() as f64
+}
+
 /// One model fitted: its parameters (first `n_params`), cost ½Σλ², work and JᵀJ.
 #[derive(Debug, Clone, Copy)]
 struct ModelFit {
@@ -124,7 +129,7 @@ impl ModelFit {
     }
 
     fn criterion(&self, sigma: f64) -> f64 {
-        2.0 * self.cost / (sigma * sigma) + KAPPA * self.model.n_params() as f64
+        akaike(self.cost, self.model, sigma)
     }
 }
 
@@ -973,17 +978,18 @@ const MIN_DIP: usize = 4;
 /// From the bottom `ib`, out in direction `step` over the 3-medians `v`: the first reading
 /// with `v ≥ −thr` (the surface), or the top of a ridge the walk has passed — a fall of more
 /// than `drop` (4σ: a noisy floor's 3-medians fall about 2.7σ at most from their running
-/// maximum) below the highest reading so far, or a reading `claimed` by another groove: a
-/// corner shared with a neighbour (second value true). None past the end of the frame.
+/// maximum) below the highest reading so far, or a reading another groove claimed (`open`
+/// at +∞, [`find_dips`]): a corner shared with a neighbour (second value true). None past the
+/// end of the frame.
 ///
 /// The 5-means instead of the 3-medians for the ridge split 9–14 of 8000 single grooves (3
 /// with the 3-medians: wide trapezoid floors) and found fewer shared corners (`BENCHMARKS.md`).
-fn walk_dip(v: &[f64], ib: usize, step: isize, thr: f64, drop: f64, claimed: &[bool]) -> (Option<usize>, bool) {
+fn walk_dip(v: &[f64], ib: usize, step: isize, thr: f64, drop: f64, open: &[f64]) -> (Option<usize>, bool) {
     let (mut top, mut at) = (v[ib], ib);
     let mut i = ib as isize + step;
     while i >= 0 && (i as usize) < v.len() {
         let j = i as usize;
-        if claimed[j] {
+        if open[j] == f64::INFINITY {
             return (Some(at), true);
         }
         if v[j] >= -thr {
@@ -1001,9 +1007,9 @@ fn walk_dip(v: &[f64], ib: usize, step: isize, thr: f64, drop: f64, claimed: &[b
 
 /// The deepest reading not yet claimed: the deepest 5-reading mean (`open`: the 5-means with
 /// claimed readings at +∞, so that the search is one plain pass: it runs once per groove
-/// found, and had been a tenth of a frame of several grooves), then the deepest 3-median
-/// within ±2 readings. The first of equal minima.
-fn deepest_unclaimed(open: &[f64], v3: &[f64], claimed: &[bool]) -> Option<usize> {
+/// found, and had been a tenth of a frame of several grooves), then the deepest unclaimed
+/// 3-median within ±2 readings. The first of equal minima.
+fn deepest_unclaimed(open: &[f64], v3: &[f64]) -> Option<usize> {
     let (mut ib, mut least) = (0, f64::INFINITY);
     for (i, &v) in open.iter().enumerate() {
         if v < least {
@@ -1014,7 +1020,7 @@ fn deepest_unclaimed(open: &[f64], v3: &[f64], claimed: &[bool]) -> Option<usize
         return None;
     }
     let (lo, hi) = (ib.saturating_sub(2), (ib + 3).min(open.len()));
-    Some((lo..hi).filter(|&i| !claimed[i]).min_by(|&a, &b| v3[a].total_cmp(&v3[b])).unwrap_or(ib))
+    Some((lo..hi).filter(|&i| open[i] < f64::INFINITY).min_by(|&a, &b| v3[a].total_cmp(&v3[b])).unwrap_or(ib))
 }
 
 /// Every groove of a levelled frame, deepest first: from the deepest unclaimed reading, a walk
@@ -1022,7 +1028,7 @@ fn deepest_unclaimed(open: &[f64], v3: &[f64], claimed: &[bool]) -> Option<usize
 /// until no reading is `deep_enough` below the surface.
 fn find_dips(v5: &[f64], v3: &[f64], first: usize, sigma: f64, deep_enough: f64) -> Vec<Dip> {
     let n = v3.len();
-    let mut claimed = vec![false; n];
+    // The 5-means with the readings claimed by a groove found at +∞ (a 5-mean never is).
     let mut open = v5.to_vec();
     let mut dips = Vec::new();
     let mut next = Some(first);
@@ -1033,17 +1039,15 @@ fn find_dips(v5: &[f64], v3: &[f64], first: usize, sigma: f64, deep_enough: f64)
         }
         let thr = (EDGE_SIGMAS * sigma).max(EDGE_FRACTION * depth0);
         let drop = DEPTH_SIGMAS * sigma;
-        let (il, sl) = walk_dip(v3, ib, -1, thr, drop, &claimed);
-        let (ir, sr) = walk_dip(v3, ib, 1, thr, drop, &claimed);
-        let ends = il.unwrap_or(0)..=ir.unwrap_or(n - 1);
-        claimed[ends.clone()].fill(true);
-        open[ends].fill(f64::INFINITY);
+        let (il, sl) = walk_dip(v3, ib, -1, thr, drop, &open);
+        let (ir, sr) = walk_dip(v3, ib, 1, thr, drop, &open);
+        open[il.unwrap_or(0)..=ir.unwrap_or(n - 1)].fill(f64::INFINITY);
         // A dip of one or two readings between its ends is noise or a spike's remains: no
         // section can be fitted to it.
         if !matches!((il, ir), (Some(l), Some(r)) if r < l + MIN_DIP) {
             dips.push(Dip { ib, il, ir, shared: (sl, sr), depth0 });
         }
-        next = deepest_unclaimed(&open, v3, &claimed);
+        next = deepest_unclaimed(&open, v3);
     }
     dips
 }
@@ -1140,7 +1144,7 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
     // 3. The deepest bottom; the noise away from it; every groove.
     let v5 = mean5(&lv.v);
     let v3 = median3(&lv.v);
-    let Some(ib) = deepest_unclaimed(&v5, &v3, &vec![false; n]) else { return failed(GrooveStatus::TooFewValid, n) };
+    let Some(ib) = deepest_unclaimed(&v5, &v3) else { return failed(GrooveStatus::TooFewValid, n) };
     let depth0 = -v3[ib];
     let far = lv.u.iter().filter(|&&u| (u - lv.u[ib]).abs() > 0.7).count();
     let sigma = if far >= 10 {
@@ -1167,7 +1171,7 @@ pub fn measure_grooves(x: &[f64], z: &[f64], o: &MeasureSettings<'_>) -> (Vec<Gr
         };
         let (v5, v3) = (mean5(&lv2.v), median3(&lv2.v));
         let deep_enough = o.min_depth.max(DEPTH_SIGMAS * sigma2);
-        let found = match deepest_unclaimed(&v5, &v3, &vec![false; n]) {
+        let found = match deepest_unclaimed(&v5, &v3) {
             Some(ib) => find_dips(&v5, &v3, ib, sigma2, deep_enough),
             None => Vec::new(),
         };
@@ -1347,8 +1351,7 @@ fn fit_groove(
             .iter()
             .filter(|f| f.model == chosen.model || (chosen.model == SectionModel::Round && f.model == SectionModel::U));
         for f in candidates {
-            let predicted = predicted_cost(f.model, &r, k2, &f.q);
-            if 2.0 * predicted / (sigma * sigma) + KAPPA * f.model.n_params() as f64 >= bar {
+            if akaike(predicted_cost(f.model, &r, k2, &f.q), f.model, sigma) >= bar {
                 continue;
             }
             let sheared = fit_model(f.model, &r, k2, &f.q, &o.criteria);
@@ -1421,9 +1424,9 @@ fn fit_groove(
         }
     }
     if let Some(rival) = lean_rival {
-        // The rival's share of the two Akaike weights, exp(−Δχ²/2) each; the mixture's mean
+        // The rival's share of the two Akaike weights, exp(−AIC/2) each; the mixture's mean
         // and variance (their own errors taken as equal: the same model and readings).
-        let w = ((chosen.cost - rival.cost) / (sigma * sigma)).exp();
+        let w = (0.5 * (chosen.criterion(sigma) - rival.criterion(sigma))).exp();
         let share = w / (1.0 + w);
         let (mc, mr) = (
             Measures::values(chosen.model, &chosen.q, chosen.gamma),
