@@ -1010,15 +1010,21 @@ fn walk_dip(v: &[f64], ib: usize, step: isize, thr: f64, drop: f64, open: &[f64]
 /// found, and had been a tenth of a frame of several grooves), then the deepest unclaimed
 /// 3-median within ±2 readings. The first of equal minima.
 fn deepest_unclaimed(open: &[f64], v3: &[f64]) -> Option<usize> {
-    let (mut ib, mut least) = (0, f64::INFINITY);
-    for (i, &v) in open.iter().enumerate() {
-        if v < least {
-            (ib, least) = (i, v);
+    // The least value in four lanes (a comparison the compiler turns into packed minima; the
+    // loop carrying the index could not be), then its first position.
+    let mut lanes = [f64::INFINITY; 4];
+    let chunks = open.chunks_exact(4);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for (l, &v) in lanes.iter_mut().zip(c) {
+            *l = if v < *l { v } else { *l };
         }
     }
+    let least = lanes.into_iter().chain(rest.iter().copied()).fold(f64::INFINITY, |a, v| if v < a { v } else { a });
     if least == f64::INFINITY {
         return None;
     }
+    let ib = open.iter().position(|&v| v == least)?;
     let (lo, hi) = (ib.saturating_sub(2), (ib + 3).min(open.len()));
     Some((lo..hi).filter(|&i| open[i] < f64::INFINITY).min_by(|&a, &b| v3[a].total_cmp(&v3[b])).unwrap_or(ib))
 }
@@ -1071,21 +1077,26 @@ fn surface_without(
 ) -> Option<(Levelled, f64, f64)> {
     let n = lv.u.len();
     let extent = |d: &Dip| (lv.u[d.il.unwrap_or(0)], lv.u[d.ir.unwrap_or(n - 1)]);
-    let outside = |u: f64, margin: f64| {
-        dips.iter().all(|d| {
-            let (l, r) = extent(d);
-            u < l - margin || u > r + margin
-        })
+    // Each groove's extent widened by `margin`, once per call (not per reading).
+    let outside = |margin: f64| {
+        let spans: Vec<(f64, f64)> = dips
+            .iter()
+            .map(|d| {
+                let (l, r) = extent(d);
+                (l - margin, r + margin)
+            })
+            .collect();
+        lv.u.iter().map(|&u| spans.iter().all(|&(l, r)| u < l || u > r)).collect::<Vec<bool>>()
     };
-    let mut surface: Vec<bool> = lv.u.iter().map(|&u| outside(u, LIP_MARGIN)).collect();
+    let mut surface = outside(LIP_MARGIN);
     if surface.iter().filter(|&&s| s).count() < 6 {
-        surface = lv.u.iter().map(|&u| outside(u, 0.0)).collect();
+        surface = outside(0.0);
     }
     let (sx, sz) = select_pairs(px, pz, |i| surface[i]);
     if sx.len() < 6 {
         return None;
     }
-    let (mut k2, mut b2) = fit_line(sx.iter().copied().zip(sz.iter().copied()))?;
+    let (mut k2, mut b2, mut spread) = fit_line_spread(sx.iter().copied().zip(sz.iter().copied()))?;
     // Up to three trims at 3σ of the first line's residuals (σ by MAD: robust already, so it is
     // not re-estimated per trim); once the kept readings stay the same, so does the line. σ is
     // then the MAD of the final line's residuals over all surface readings (the first one's
@@ -1099,8 +1110,9 @@ fn surface_without(
         if keep == kept_before || keep.iter().filter(|&&k| k).count() < 6 {
             break;
         }
-        let Some(line) = fit_line((0..sx.len()).filter(|&i| keep[i]).map(|i| (sx[i], sz[i]))) else { break };
-        (k2, b2) = line;
+        let kept = (0..sx.len()).filter(|&i| keep[i]).map(|i| (sx[i], sz[i]));
+        let Some(line) = fit_line_spread(kept) else { break };
+        (k2, b2, spread) = line;
         kept_before = keep;
     }
     let sigma = if (k2, b2) == first_line {
@@ -1108,12 +1120,8 @@ fn surface_without(
     } else {
         mad_sigma(sx.iter().zip(&sz).map(|(&x, &z)| z - (k2 * x + b2)), scratch).max(1e-4)
     };
-    let kept = (0..sx.len()).filter(|&i| kept_before[i]);
-    let count = kept.clone().count() as f64;
-    let mean = kept.clone().map(|i| sx[i]).sum::<f64>() / count;
-    let sxx = kept.map(|i| (sx[i] - mean) * (sx[i] - mean)).sum::<f64>();
     let mut lv = level(px, pz, k2, b2);
-    lv.spread = [count, mean, sxx];
+    lv.spread = spread;
     Some((lv, sigma, k2))
 }
 

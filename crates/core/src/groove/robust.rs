@@ -182,6 +182,13 @@ pub(super) fn robust_line(x: &[f64], z: &[f64], scratch: &mut Vec<i64>) -> Optio
 /// Least-squares line `z = k x + b` (None when x is constant).
 #[inline(always)]
 pub(super) fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64)> {
+    fit_line_spread(x).map(|(k, b, _)| (k, b))
+}
+
+/// [`fit_line`] with the spread of the abscissae it was fitted to: their count, mean and
+/// `Σ(x − x̄)²` (the variance of the line's height needs them; they are the fit's own sums).
+#[inline(always)]
+pub(super) fn fit_line_spread(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64, [f64; 3])> {
     let (mut n, mut sx, mut sz) = (0.0, 0.0, 0.0);
     for (xi, zi) in x.clone() {
         n += 1.0;
@@ -201,7 +208,7 @@ pub(super) fn fit_line(x: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f
         return None;
     }
     let k = sxz / sxx;
-    Some((k, mz - k * mx))
+    Some((k, mz - k * mx, [n, mx, sxx]))
 }
 
 /// Keeps the pairs `(a[i], b[i])` where `keep[i]`, in place.
