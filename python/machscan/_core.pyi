@@ -314,7 +314,7 @@ class _FrameViewArrays(TypedDict):
     tilt: float
     fit: _GrooveFitArrays
 
-_Template = Literal["auto", "trapezoid", "v", "round", "u", "tanh"]
+_Template = Literal["auto", "trapezoid", "v", "round", "u", "ellipse", "tanh"]
 _Select = Literal["deepest", "left", "right", "nearest", "all"]
 
 class _GrooveOptions(TypedDict):

@@ -1,9 +1,10 @@
 """Groove cross-sections (SPEC G, paper 000 §2.1): width, depth and center of the groove in
 every profiler frame, as a result object.
 
-By default the groove's geometry is measured: four section models — trapezoid (flat floor),
-sharp V, round-bottomed V (also a circular-arc U and drafted walls with a round bottom) and U
-(circle with vertical walls) — are fitted to each frame and the best by AIC is kept. Width is
+By default the groove's geometry is measured: section models — trapezoid (flat floor), sharp
+V, round-bottomed V (also a circular-arc U and drafted walls with a round bottom), U (circle
+with vertical walls) and elliptic U (the U stretched across: a ball cutter's groove crossed
+obliquely) — are fitted to each frame and the best by AIC is kept. Width is
 the distance between the flanks where they meet the surface line, depth the deepest point below
 the surface line. The paper's tanh template stays available (``template="tanh"``), whose width
 and depth are the template's w and d.
@@ -52,8 +53,8 @@ CRITERIA_DEFAULTS = _core.fit_criteria_defaults()
 PROGRESS_BLOCK = 2000
 
 #: How a frame's groove is measured: "auto" (the best section model per frame), one section
-#: model ("trapezoid", "v", "round", "u"), or the paper's "tanh" template.
-Template = Literal["auto", "trapezoid", "v", "round", "u", "tanh"]
+#: model ("trapezoid", "v", "round", "u", "ellipse"), or the paper's "tanh" template.
+Template = Literal["auto", "trapezoid", "v", "round", "u", "ellipse", "tanh"]
 
 #: Which of a frame's grooves are measured: the deepest, the ``index``-th from the left or
 #: right, the one nearest ``near``, or all of them (a row per groove).
@@ -100,7 +101,7 @@ class GrooveOptions:
 
     Attributes
     ----------
-    template : {"auto", "trapezoid", "v", "round", "u", "tanh"}
+    template : {"auto", "trapezoid", "v", "round", "u", "ellipse", "tanh"}
         "auto": the best section model per frame; a model name: that model only; "tanh": the
         paper's template.
     alpha : float
@@ -231,6 +232,8 @@ class GrooveModel(IntEnum):
     """V whose bottom is one arc: a rounded V, a circular-arc U, drafted walls and a round bottom."""
     U = 5
     """Circle with vertical walls."""
+    ELLIPSE = 6
+    """Ellipse with vertical walls: the U stretched across (crossed obliquely, a tilted cutter)."""
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -401,8 +404,8 @@ def fit_grooves(
     width. Per frame: valid readings, spikes dropped (a two-sided extrapolation test that keeps
     V tips and wall corners); a robust surface line (least trimmed squares) and levelling; the
     groove's extent by a walk from its bottom out to the surface; the surface refitted without
-    the groove and its lips; then four section models — trapezoid, sharp V, round-bottomed V, U
-    — fitted by a bounded Levenberg–Marquardt with residuals along the sensor beam, the one
+    the groove and its lips; then the section models — trapezoid, sharp V, round-bottomed V, U,
+    and the U stretched into an ellipse where that promises a better fit — fitted by a bounded Levenberg–Marquardt with residuals along the sensor beam, the one
     with the smallest AIC kept (outliers against it dropped and the models refitted once; a
     frame tilted by shear rather than rotation tested with the section leaning by the tilt).
     The models are fitted in the order the groove's first outline suggests, and one that

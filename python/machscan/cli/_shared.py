@@ -229,7 +229,7 @@ def _groove_arguments(p: argparse.ArgumentParser) -> None:
         "--template",
         choices=get_args(Template),
         default=default.groove.template,
-        help="groove shape fitted: the best of the four section models (auto), one of them, or the "
+        help="groove shape fitted: the best of the section models (auto), one of them, or the "
         "paper's tanh template (default: %(default)s)",
     )
     p.add_argument(

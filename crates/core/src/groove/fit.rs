@@ -63,7 +63,7 @@ fn fit_frame_portable(x: &[f64], z: &[f64], o: &GrooveOptions) -> Vec<GrooveFit>
 /// The section models' settings from the options: the models `template` asks for (all four
 /// for `Auto`).
 fn section_settings(o: &GrooveOptions) -> MeasureSettings<'_> {
-    const ALL: [SectionModel; 4] = SectionModel::ALL;
+    const ALL: [SectionModel; 5] = SectionModel::ALL;
     let models: &[SectionModel] = match &o.template {
         TemplateKind::Section(m) => std::slice::from_ref(m),
         _ => &ALL,

@@ -26,8 +26,8 @@
 use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
 use super::section::{
-    pieces_jacobian, slant, Beams, Measures, Pieces, SectionModel, ANGLE_LEFT, ANGLE_RIGHT, AREA, CENTER, DEPTH,
-    MEASURES, RADIUS, WIDTH,
+    beam_gradient, pieces_jacobian, slant, Beams, Measures, Pieces, SectionModel, ANGLE_LEFT, ANGLE_RIGHT, AREA,
+    CENTER, DEPTH, MEASURES, RADIUS, WIDTH,
 };
 use crate::optim::{bounded_levenberg_marquardt, BoundedLeastSquares, BoundedLmOptions, LeastSquares};
 use nalgebra::{SMatrix, SVector};
@@ -158,14 +158,7 @@ impl<const P: usize> LeastSquares<P> for SectionFit<'_> {
         for (&u, &v) in self.u.iter().zip(self.v) {
             let hit = beams.hit(u, v);
             // Residual f = −λ (reading minus model along the beam); J = −∂λ/∂q.
-            let mut row = [0.0f64; P];
-            for &(k, gk) in &hit.grad {
-                if gk != 0.0 {
-                    for (r, j) in row.iter_mut().zip(&jq[k]) {
-                        *r += gk * j;
-                    }
-                }
-            }
+            let row: [f64; P] = beam_gradient(self.model, q, &hit, &jq);
             cost += 0.5 * hit.lambda * hit.lambda;
             for i in 0..P {
                 g[i] += row[i] * hit.lambda;
@@ -234,6 +227,7 @@ fn fit_model(model: SectionModel, r: &Readings<'_>, gamma: f64, q0: &[f64], opti
         SectionModel::Round => fit_sized::<5>(&problem, q0, options),
         SectionModel::V => fit_sized::<4>(&problem, q0, options),
         SectionModel::U => fit_sized::<3>(&problem, q0, options),
+        SectionModel::Ellipse => fit_sized::<4>(&problem, q0, options),
     }
 }
 
@@ -246,6 +240,7 @@ fn predicted_cost(model: SectionModel, r: &Readings<'_>, gamma: f64, q0: &[f64])
         SectionModel::Round => predicted_sized::<5>(&problem, q0),
         SectionModel::V => predicted_sized::<4>(&problem, q0),
         SectionModel::U => predicted_sized::<3>(&problem, q0),
+        SectionModel::Ellipse => predicted_sized::<4>(&problem, q0),
     }
 }
 
@@ -342,8 +337,8 @@ fn reading_pitch(x: &[f64]) -> f64 {
 /// medians within their scatter over seeds, a quarter to three fifths less fitting work.
 #[inline(always)]
 fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &BoundedLmOptions) -> Vec<ModelFit> {
-    use SectionModel::{Round, Trapezoid, U, V};
-    let mut want = [false; 4];
+    use SectionModel::{Ellipse, Round, Trapezoid, U, V};
+    let mut want = [false; 5];
     for &m in models {
         want[m.index()] = true;
     }
@@ -401,7 +396,7 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
             U => {
                 let u = fit_u(r, s, options);
                 if several && to_noise(u.cost) && u.cost <= t_cost && u.q[2] > u.q[1] {
-                    want = [false; 4];
+                    want = [false; 5];
                 }
                 if several && well(u.cost) {
                     want[Trapezoid.index()] = false;
@@ -447,8 +442,27 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 }
                 f
             }
+            Ellipse => continue,
         };
         fits.push(fit);
+    }
+    // The elliptic U, from the U (alone: from the U's start, the U not kept). Among several
+    // models only where the U was not ruled out and one Gauss–Newton step from it predicts an
+    // Akaike criterion below the best so far: a circle fits most U's as well as an ellipse
+    // can, and the stretch would only cost a parameter and a fit.
+    if want[Ellipse.index()] {
+        let u = match fits.iter().find(|f| f.model == U) {
+            Some(u) => Some(*u),
+            None if !several => Some(fit_u(r, s, options)),
+            None => None,
+        };
+        if let Some(u) = u {
+            let q0 = [u.q[0], u.q[1], u.q[2], 1.0];
+            let best = fits.iter().map(|f| f.criterion(s.sigma)).fold(f64::INFINITY, f64::min);
+            if !several || akaike(predicted_cost(Ellipse, r, 0.0, &q0), Ellipse, s.sigma) < best + ELLIPSE_SCREEN {
+                fits.push(fit_model(Ellipse, r, 0.0, &q0, options));
+            }
+        }
     }
     fits
 }
@@ -650,7 +664,7 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
     let (left, right) = fit.pieces().crossings();
     let size = (right - left).abs().max(pitch);
     let range = |i: usize| match (fit.model, i) {
-        (SectionModel::U, _) | (_, 0 | 1 | 4) => size,
+        (SectionModel::U, _) | (SectionModel::Ellipse, 0..=2) | (_, 0 | 1 | 4) => size,
         (_, 2 | 3) => 2.0 + fit.q[i].abs(),
         _ => 1.0,
     };
@@ -676,14 +690,7 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
     let mut meat = nalgebra::SMatrix::<f64, 6, 6>::zeros();
     for (&u, &v) in r.u.iter().zip(r.v).filter(|_| sandwich) {
         let hit = beams.hit(u, v);
-        let mut row = nalgebra::SVector::<f64, 6>::zeros();
-        for &(k, gk) in &hit.grad {
-            if gk != 0.0 {
-                for c in 0..np {
-                    row[c] += gk * jq[k][c];
-                }
-            }
-        }
+        let row = nalgebra::SVector::<f64, 6>::from(beam_gradient::<6>(fit.model, &fit.q, &hit, &jq));
         // Leverage h = J_i A⁻¹ J_iᵀ, below 1 for a reading whose residual the fit could not
         // make zero alone; kept under 0.99 where it could.
         let h = (row.transpose() * inv * row)[(0, 0)].min(0.99);
@@ -1058,6 +1065,10 @@ fn find_dips(v5: &[f64], v3: &[f64], first: usize, sigma: f64, deep_enough: f64)
     dips
 }
 
+/// Akaike criterion within which the elliptic U is fitted beside the U: a rival whose weight
+/// may reach exp(−2) ≈ 14 % (its spread then widens the U's errors where the data allow both).
+const ELLIPSE_SCREEN: f64 = 4.0;
+
 /// Akaike criterion within which a section leaning by the frame's slope is fitted as a rival
 /// of the upright choice (weight above exp(−3) ≈ 5 %).
 const LEAN_SCREEN: f64 = 6.0;
@@ -1341,10 +1352,10 @@ fn fit_groove(
     // surface tilted to it) rather than by a rotation shows, once levelled, a section leaning
     // by k. The V and the trapezoid are immune: their flanks are independent, and a lean moves
     // only the trapezoid's small fillets (refitting them changed no median error of the
-    // benchmark's trapezoids, and was a quarter of their work). A chosen round V or U is
-    // refitted leaning by k, and after a round V the U too (the true shape of a sheared arc,
-    // which upright may have lost to the round V's free flanks; not after a V: a leaning round
-    // V would beat a sharp V by its freedom alone). Which way the frame is cannot be told on a
+    // benchmark's trapezoids, and was a quarter of their work). A chosen round V, U or elliptic
+    // U is refitted leaning by k, and after a round V or an elliptic U the U too (the true
+    // shape of a sheared arc, which upright may have lost to the round V's free flanks or to
+    // the stretch; not after a V: a leaning round V would beat a sharp V by its freedom alone). Which way the frame is cannot be told on a
     // shallow arc (a lean shifts and turns it much as noise does): keeping the better fit had
     // left the centres and flank angles of tilted U's outside their k = 2 intervals in 9–14 %
     // of frames. So the fit kept has a rival, the same model the other way up, and every
@@ -1352,12 +1363,12 @@ fn fit_groove(
     // Gauss–Newton step predicts an Akaike criterion within LEAN_SCREEN of the choice's (a
     // rival beyond weighs under 5 %, and the refit was a quarter of the work on U's with walls).
     let mut lean_rival = None;
-    if k2.abs() > 0.01 && matches!(chosen.model, SectionModel::Round | SectionModel::U) {
+    if k2.abs() > 0.01 && matches!(chosen.model, SectionModel::Round | SectionModel::U | SectionModel::Ellipse) {
         let bar = chosen.criterion(sigma) + LEAN_SCREEN;
         let mut leaning: Option<ModelFit> = None;
         let candidates = fits
             .iter()
-            .filter(|f| f.model == chosen.model || (chosen.model == SectionModel::Round && f.model == SectionModel::U));
+            .filter(|f| f.model == chosen.model || (chosen.model != SectionModel::U && f.model == SectionModel::U));
         for f in candidates {
             if akaike(predicted_cost(f.model, &r, k2, &f.q), f.model, sigma) >= bar {
                 continue;

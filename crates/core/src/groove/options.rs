@@ -31,8 +31,8 @@ pub enum GrooveStatus {
 /// How a frame's groove is measured.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TemplateKind {
-    /// The default: the four section models (trapezoid, V, round-bottomed V, U) fitted, the
-    /// best by AIC chosen per frame; width and depth are the section's geometry.
+    /// The default: the section models (trapezoid, V, round-bottomed V, U, elliptic U) fitted,
+    /// the best by AIC chosen per frame; width and depth are the section's geometry.
     Auto,
     /// One section model only.
     Section(SectionModel),
@@ -43,7 +43,7 @@ pub enum TemplateKind {
 }
 
 impl TemplateKind {
-    pub const NAMES: [&'static str; 6] = ["auto", "trapezoid", "v", "round", "u", "tanh"];
+    pub const NAMES: [&'static str; 7] = ["auto", "trapezoid", "v", "round", "u", "ellipse", "tanh"];
 
     pub fn parse(name: &str) -> Result<Self> {
         Ok(match name {
@@ -88,6 +88,7 @@ impl FitModel {
             FitModel::Section(SectionModel::V) => 3,
             FitModel::Section(SectionModel::Round) => 4,
             FitModel::Section(SectionModel::U) => 5,
+            FitModel::Section(SectionModel::Ellipse) => 6,
         }
     }
 }

@@ -16,7 +16,11 @@
 //! The models are special cases: trapezoid T (6 parameters) is `p` itself; round-bottomed V R
 //! (5) fixes `s = 1`; sharp V (4) fixes `D = w/T`; U (3) `q = [xc, R, D]` is a circle of radius
 //! R whose lowest point is D deep, continued up by vertical walls when its center lies below
-//! the surface and cut by the surface when above.
+//! the surface and cut by the surface when above. The elliptic U E (4) `q = [xc, R, D, k]` is
+//! that U stretched across by k about its axis (semi-axes k·R across, R down): a ball cutter's
+//! groove crossed obliquely by the laser line (stretched by 1/cos of the crossing angle), a
+//! cutter on a tilted axis, a beam's profile. No straight-flanked model holds such a bottom,
+//! flatter or sharper than a circle through the same edges.
 //!
 //! Residuals are measured along the sensor beam (noise is along the sensor's z, which in
 //! levelled coordinates is the direction `(sin θ, cos θ)`): a reading on a steep wall of a
@@ -47,10 +51,18 @@ pub enum SectionModel {
     Round,
     /// Circle plus vertical walls (3).
     U,
+    /// Ellipse (the U stretched across) plus vertical walls (4).
+    Ellipse,
 }
 
+/// The elliptic U's stretch k is kept within these bounds (an ellipse four times wider than
+/// deep, or the reverse, is a V or a slot to every reading).
+const K_MIN: f64 = 0.25;
+const K_MAX: f64 = 4.0;
+
 impl SectionModel {
-    pub const ALL: [SectionModel; 4] = [SectionModel::Trapezoid, SectionModel::V, SectionModel::Round, SectionModel::U];
+    pub const ALL: [SectionModel; 5] =
+        [SectionModel::Trapezoid, SectionModel::V, SectionModel::Round, SectionModel::U, SectionModel::Ellipse];
 
     /// The model's position in [`SectionModel::ALL`], for per-model arrays.
     pub fn index(self) -> usize {
@@ -63,6 +75,7 @@ impl SectionModel {
             SectionModel::V => 4,
             SectionModel::Round => 5,
             SectionModel::U => 3,
+            SectionModel::Ellipse => 4,
         }
     }
 
@@ -72,6 +85,7 @@ impl SectionModel {
             SectionModel::V => "v",
             SectionModel::Round => "round",
             SectionModel::U => "u",
+            SectionModel::Ellipse => "ellipse",
         }
     }
 
@@ -84,7 +98,7 @@ impl SectionModel {
                 let t = q[2] + q[3];
                 [q[0], q[1], q[2], q[3], (q[1] - q[0]) / t, 1.0]
             }
-            SectionModel::U => [q[0] - q[1], q[0] + q[1], 0.0, 0.0, q[2], 1.0],
+            SectionModel::U | SectionModel::Ellipse => [q[0] - q[1], q[0] + q[1], 0.0, 0.0, q[2], 1.0],
         }
     }
 
@@ -94,6 +108,7 @@ impl SectionModel {
         let inf = f64::INFINITY;
         match self {
             SectionModel::U => ([-inf, 0.005, 1e-3, 0.0, 0.0, 0.0], [inf; 6]),
+            SectionModel::Ellipse => ([-inf, 0.005, 1e-3, K_MIN, 0.0, 0.0], [inf, inf, inf, K_MAX, inf, inf]),
             SectionModel::V => ([-inf, -inf, T_MIN_V, T_MIN_V, 0.0, 0.0], [inf, inf, T_MAX, T_MAX, inf, inf]),
             SectionModel::Round => {
                 ([-inf, -inf, -T_OVERHANG, -T_OVERHANG, 1e-4, 0.0], [inf, inf, T_MAX, T_MAX, inf, inf])
@@ -106,9 +121,12 @@ impl SectionModel {
 
     /// `q` moved into the admissible set (applied after every step of the fit).
     pub fn project(self, q: &mut [f64]) {
-        if self == SectionModel::U {
+        if matches!(self, SectionModel::U | SectionModel::Ellipse) {
             q[1] = q[1].max(0.005);
             q[2] = q[2].max(1e-3);
+            if self == SectionModel::Ellipse {
+                q[3] = q[3].clamp(K_MIN, K_MAX);
+            }
             return;
         }
         let lo = if self == SectionModel::V { T_MIN_V } else { -T_OVERHANG };
@@ -142,7 +160,7 @@ impl SectionModel {
                 let (w, t) = (q[1] - q[0], q[2] + q[3]);
                 j[4] = [-1.0 / t, 1.0 / t, -w / (t * t), -w / (t * t), 0.0, 0.0];
             }
-            SectionModel::U => {
+            SectionModel::U | SectionModel::Ellipse => {
                 j[0][0] = 1.0;
                 j[0][1] = -1.0;
                 j[1][0] = 1.0;
@@ -186,6 +204,11 @@ pub struct Pieces {
     pub r: f64,
     pub cl: f64,
     pub cr: f64,
+    /// The stretch across about `xm` (the elliptic U: `k·R` across, `R` down; 1 for every
+    /// other model): the section is the one the other fields describe, its abscissae moved to
+    /// `xm + k·(u − xm)`.
+    pub k: f64,
+    pub xm: f64,
 }
 
 /// Indices into π, for derivatives.
@@ -207,11 +230,37 @@ impl Pieces {
         let k = al + ar - t;
         let r = s * (w - t * d).max(0.0) / k;
         let hc = d - r;
-        Pieces { xl, xr, tl, tr, d, hc, r, cl: xl + tl * hc + r * al, cr: xr - tr * hc - r * ar }
+        Pieces { xl, xr, tl, tr, d, hc, r, cl: xl + tl * hc + r * al, cr: xr - tr * hc - r * ar, k: 1.0, xm: 0.0 }
     }
 
     pub fn of(model: SectionModel, q: &[f64]) -> Self {
-        Pieces::new(model.to_p(q))
+        let p = Pieces::new(model.to_p(q));
+        if model == SectionModel::Ellipse {
+            Pieces { k: q[3], xm: q[0], ..p }
+        } else {
+            p
+        }
+    }
+
+    /// Where an abscissa of the unstretched section lies on the section (the identity but
+    /// for the elliptic U).
+    #[inline(always)]
+    fn stretched(&self, u: f64) -> f64 {
+        if self.k == 1.0 {
+            u
+        } else {
+            self.xm + self.k * (u - self.xm)
+        }
+    }
+
+    /// The abscissa of the unstretched section that lies at `u` on the section.
+    #[inline(always)]
+    fn unstretched(&self, u: f64) -> f64 {
+        if self.k == 1.0 {
+            u
+        } else {
+            self.xm + (u - self.xm) / self.k
+        }
     }
 
     /// Depths where the left and right flank lines meet their fillet arcs (tangent points).
@@ -226,11 +275,13 @@ impl Pieces {
     pub fn crossings(&self) -> (f64, f64) {
         let (htl, htr) = self.tangent_depths();
         let q = (self.r * self.r - self.hc * self.hc).max(0.0).sqrt();
-        (if htl >= 0.0 { self.xl } else { self.cl - q }, if htr >= 0.0 { self.xr } else { self.cr + q })
+        let (l, r) = (if htl >= 0.0 { self.xl } else { self.cl - q }, if htr >= 0.0 { self.xr } else { self.cr + q });
+        (self.stretched(l), self.stretched(r))
     }
 
     /// The section's height v at u (vertical evaluation, for drawing).
     pub fn value(&self, u: f64) -> f64 {
+        let u = self.unstretched(u);
         let (al, ar) = (slant(self.tl), slant(self.tr));
         let (utl, utr) = (self.cl - self.r / al, self.cr + self.r / ar);
         let arc = |c: f64| -self.hc - (self.r * self.r - (u - c) * (u - c)).max(0.0).sqrt();
@@ -266,8 +317,9 @@ impl Pieces {
                 0.0
             }
         };
-        let tl = if htl >= 0.0 { self.tl } else { arc_cot() };
-        let tr = if htr >= 0.0 { self.tr } else { arc_cot() };
+        // A stretch across by k multiplies every run by k.
+        let tl = self.k * if htl >= 0.0 { self.tl } else { arc_cot() };
+        let tr = self.k * if htr >= 0.0 { self.tr } else { arc_cot() };
         let angle = |t: f64| 1.0f64.atan2(t).to_degrees();
         (angle(tl - gamma), angle(tr + gamma))
     }
@@ -303,7 +355,8 @@ impl Pieces {
         } else {
             area += arc(self.cr, bottom, (hc.atan2(q), q, hc));
         }
-        area
+        // A stretch across by k stretches every area by k.
+        self.k * area
     }
 
     /// `∂π/∂p` (9 × 6), closed form.
@@ -366,8 +419,33 @@ pub fn pieces_jacobian(model: SectionModel, q: &[f64]) -> [[f64; 6]; 9] {
                 out
             })
         }
-        SectionModel::U => jp.map(|row| [row[0] + row[1], row[1] - row[0], row[4], 0.0, 0.0, 0.0]),
+        SectionModel::U | SectionModel::Ellipse => {
+            jp.map(|row| [row[0] + row[1], row[1] - row[0], row[4], 0.0, 0.0, 0.0])
+        }
     }
+}
+
+/// `∂λ/∂q` of a beam's hit on `model` at `q` (`jq`: [`pieces_jacobian`] there). The elliptic
+/// U is hit in its unstretched frame, where the reading lies at `u' = xm + (u − xm)/k` and the
+/// beam runs along `(sin/k, cos)`: its center and stretch move the reading there too, by
+/// `∂λ/∂u'` times `1 − 1/k` and `−(Q'u − xm)/k` (Q' the hit; the beam's turn adds `λ·∂λ/∂u'`
+/// per unit of its sine, which the hit's abscissa gathers).
+#[inline(always)]
+pub fn beam_gradient<const N: usize>(model: SectionModel, q: &[f64], hit: &Hit, jq: &[[f64; 6]; 9]) -> [f64; N] {
+    let mut row = [0.0f64; N];
+    for &(k, gk) in &hit.grad {
+        if gk != 0.0 {
+            for (r, j) in row.iter_mut().zip(&jq[k]) {
+                *r += gk * j;
+            }
+        }
+    }
+    if model == SectionModel::Ellipse && N >= 4 {
+        let k = q[3];
+        row[0] += hit.du * (1.0 - 1.0 / k);
+        row[3] = -hit.du * (hit.qu - q[0]) / k;
+    }
+    row
 }
 
 /// The measures read from a section, in the order of [`Measures::values`].
@@ -408,6 +486,9 @@ impl Measures {
     }
 
     fn at(model: SectionModel, q: &[f64], gamma: f64, area_gradient: bool) -> Measures {
+        if model == SectionModel::Ellipse {
+            return Measures::of_ellipse(q, gamma);
+        }
         let p = Pieces::of(model, q);
         let j = pieces_jacobian(model, q);
         let np = model.n_params();
@@ -467,15 +548,53 @@ impl Measures {
             ],
         }
     }
+
+    /// The elliptic U's measures (bottom radius: the curvature radius there, k²·R), with their
+    /// derivatives by central differences: the closed forms would be the U's through the
+    /// stretch again, and these are taken once per chosen fit, not per iteration.
+    fn of_ellipse(q: &[f64], gamma: f64) -> Measures {
+        // The measures of `q` with the surface raised by δ: the section moved down by δ.
+        let at = |q: &[f64], delta: f64| -> [f64; MEASURES] {
+            let p = Pieces::of(SectionModel::Ellipse, &[q[0], q[1], q[2] + delta, q[3]]);
+            let (l, r) = p.crossings();
+            let (al, ar) = p.flank_angles(gamma);
+            [r - l, p.d, 0.5 * (l + r) + gamma * delta, al, ar, p.area(), p.k * p.k * p.r]
+        };
+        let values = at(q, 0.0);
+        let central = |f: &dyn Fn(f64) -> [f64; MEASURES], h: f64| -> [f64; MEASURES] {
+            let (a, b) = (f(h), f(-h));
+            std::array::from_fn(|m| (a[m] - b[m]) / (2.0 * h))
+        };
+        let mut grad = [[0.0; 6]; MEASURES];
+        for c in 0..4 {
+            let h = 1e-6 * q[c].abs().max(0.1);
+            let d = central(
+                &|h: f64| {
+                    let mut moved = [q[0], q[1], q[2], q[3]];
+                    moved[c] += h;
+                    at(&moved, 0.0)
+                },
+                h,
+            );
+            for m in 0..MEASURES {
+                grad[m][c] = d[m];
+            }
+        }
+        let surface = central(&|h: f64| at(q, h), 1e-6);
+        Measures { values, grad, surface }
+    }
 }
 
 /// The beam from a reading and its hit on the section: `λ`, the distance along the beam
 /// direction `(sn, cs)` from the reading to the section point the sensor sees (reading minus
-/// model is `−λ`), and `∂λ/∂π` as up to three (index, value) pairs.
+/// model is `−λ`), and `∂λ/∂π` as up to three (index, value) pairs; in the unstretched frame
+/// (the elliptic U's, [`beam_gradient`]) `∂λ/∂u` of the reading and the hit's abscissa.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
     pub lambda: f64,
     pub grad: [(usize, f64); 3],
+    pub du: f64,
+    pub qu: f64,
 }
 
 impl Hit {
@@ -513,7 +632,8 @@ impl Beams {
     /// Beams of direction `(sin θ, cos θ)` on `pieces` leaning by `gamma`.
     #[inline(always)]
     pub fn new(pieces: Pieces, sin: f64, cos: f64, gamma: f64) -> Self {
-        let (sn, cs) = (sin - gamma * cos, cos);
+        // The elliptic U is hit in its unstretched frame, where the beam's run is 1/k as long.
+        let (sn, cs) = ((sin - gamma * cos) / pieces.k, cos);
         let (htl, htr) = pieces.tangent_depths();
         let (al, ar) = (slant(pieces.tl), slant(pieces.tr));
         let (uls, urs) = pieces.crossings();
@@ -544,7 +664,7 @@ impl Beams {
     /// The topmost intersection of the beam through reading (u, v) with the section.
     #[inline(always)]
     pub fn hit(&self, u: f64, v: f64) -> Hit {
-        let u = u - self.gamma * v;
+        let u = self.pieces.unstretched(u - self.gamma * v);
         // Every piece lies in −D ≤ v ≤ 0, so the hit is at most (D + |v|)/cos along the beam
         // and at most |sin| times that sideways: pieces farther than that cannot be hit, and
         // are not tried. (Exact pruning; should rounding still miss, every piece is tried.)
@@ -559,7 +679,8 @@ impl Beams {
         }
         // A connected section is always hit; should rounding miss every piece, fall back to the
         // vertical distance (no gradient).
-        Hit { lambda: (self.pieces.value(u) - v) / self.cs, grad: Hit::NONE }
+        let lambda = (self.pieces.value(self.pieces.stretched(u)) - v) / self.cs;
+        Hit { lambda, grad: Hit::NONE, du: 0.0, qu: u }
     }
 
     /// The topmost hit among the pieces whose u-range lies within `reach` of u.
@@ -568,10 +689,11 @@ impl Beams {
         let p = &self.pieces;
         let (sn, cs) = (self.sn, self.cs);
         let near = |(a, b): (f64, f64)| u >= a - reach && u <= b + reach;
-        let mut best = Hit { lambda: f64::NEG_INFINITY, grad: Hit::NONE };
-        let mut take = |lambda: f64, grad: [(usize, f64); 3]| {
+        let mut best = Hit { lambda: f64::NEG_INFINITY, grad: Hit::NONE, du: 0.0, qu: u };
+        // (λ, ∂λ/∂π, ∂λ/∂u)
+        let mut take = |lambda: f64, grad: [(usize, f64); 3], du: f64| {
             if lambda > best.lambda {
-                best = Hit { lambda, grad };
+                best = Hit { lambda, grad, du, qu: u + sn * lambda };
             }
         };
         // Surface halves v = 0.
@@ -579,7 +701,7 @@ impl Beams {
             let lam = -v * self.inv_cs;
             let qu = u + sn * lam;
             if qu <= self.uls + TOL || qu >= self.urs - TOL {
-                take(lam, Hit::NONE);
+                take(lam, Hit::NONE, 0.0);
             }
         }
         // Floor v = −D between the fillet centers.
@@ -587,7 +709,7 @@ impl Beams {
             let lam = (-p.d - v) * self.inv_cs;
             let qu = u + sn * lam;
             if qu >= p.cl - TOL && qu <= p.cr + TOL {
-                take(lam, [(D, -self.inv_cs), (0, 0.0), (0, 0.0)]);
+                take(lam, [(D, -self.inv_cs), (0, 0.0), (0, 0.0)], 0.0);
             }
         }
         // Flanks: φ = Qu ± t·Qv − x.
@@ -596,7 +718,7 @@ impl Beams {
             let lam = -(u + p.tl * v - p.xl) * inv;
             let qv = v + cs * lam;
             if qv <= TOL && qv >= -self.htl - TOL {
-                take(lam, [(XL, inv), (TL, -qv * inv), (0, 0.0)]);
+                take(lam, [(XL, inv), (TL, -qv * inv), (0, 0.0)], -inv);
             }
         }
         let inv = self.inv_right;
@@ -604,7 +726,7 @@ impl Beams {
             let lam = -(u - p.tr * v - p.xr) * inv;
             let qv = v + cs * lam;
             if qv <= TOL && qv >= -self.htr - TOL {
-                take(lam, [(XR, inv), (TR, qv * inv), (0, 0.0)]);
+                take(lam, [(XR, inv), (TR, qv * inv), (0, 0.0)], -inv);
             }
         }
         // Fillet arcs: φ = |Q − C| − r, C = (c, −hc); the lower intersection.
@@ -625,7 +747,7 @@ impl Beams {
                 // ∇φ·d = ((Q − C)·d)/r, and (Q − C)·d = b + λ|d|² = −√disc.
                 if root > 1e-12 * p.r && qu >= lo - TOL && qu <= hi + TOL && qv <= TOL && qv <= -p.hc + TOL {
                     let e = -1.0 / root;
-                    take(lam, [(ci, (qu - c) * e), (HC, -(qv + p.hc) * e), (R, p.r * e)]);
+                    take(lam, [(ci, (qu - c) * e), (HC, -(qv + p.hc) * e), (R, p.r * e)], -(qu - c) * e);
                 }
             }
         }
@@ -650,6 +772,7 @@ mod tests {
             SectionModel::V => vec![-0.26, 0.24, 0.45, 0.38],
             SectionModel::Round => vec![-0.26, 0.24, 0.45, 0.38, 0.5],
             SectionModel::U => vec![0.02, 0.21, 0.15],
+            SectionModel::Ellipse => vec![0.02, 0.21, 0.15, 1.4],
         }
     }
 
@@ -688,8 +811,9 @@ mod tests {
                     let u = -0.5 + k as f64 / 59.0;
                     let v = beams.pieces.value(u) + 0.004 * ((k as f64 * 1.7).sin());
                     let hit = beams.hit(u, v);
+                    let row: [f64; 6] = beam_gradient(model, &q, &hit, &jq);
                     for c in 0..model.n_params() {
-                        let analytic: f64 = hit.grad.iter().map(|&(i, g)| g * jq[i][c]).sum();
+                        let analytic = row[c];
                         let h = 1e-7;
                         let (mut a, mut b) = (q.clone(), q.clone());
                         a[c] += h;
@@ -730,6 +854,48 @@ mod tests {
         let b = Beams::new(t, 0.0, 1.0, 0.0);
         assert!((b.hit(0.1, -0.31).lambda - 0.01).abs() < 1e-12);
         assert!((b.hit(0.9, 0.02).lambda + 0.02).abs() < 1e-12);
+    }
+
+    #[test]
+    fn elliptic_u_is_the_u_stretched_across() {
+        // Semi-axes a = k·R across and b = R down, its center c = R − D above the surface.
+        let (xc, rr, d, k) = (0.05, 0.2, 0.16, 1.5);
+        let e = Pieces::of(SectionModel::Ellipse, &[xc, rr, d, k]);
+        let (a, b, c) = (k * rr, rr, rr - d);
+        let half = a * (1.0 - (c / b).powi(2)).sqrt();
+        let (l, r) = e.crossings();
+        assert!((l - (xc - half)).abs() < 1e-12 && (r - (xc + half)).abs() < 1e-12);
+        for t in [-0.9, -0.3, 0.0, 0.5, 0.8] {
+            let u = xc + t * half;
+            let on_ellipse = c - b * (1.0 - ((u - xc) / a).powi(2)).sqrt();
+            assert!((e.value(u) - on_ellipse).abs() < 1e-12, "{u}");
+        }
+        // Area: the ellipse's segment below the surface, by polygon; the flank angle: the
+        // ellipse's slope at the crossing, run/drop = (a²·c)/(b²·half).
+        let n = 200_000;
+        let mut poly: Vec<(f64, f64)> = (0..=n)
+            .map(|i| {
+                let u = l + (r - l) * i as f64 / n as f64;
+                (u, e.value(u))
+            })
+            .collect();
+        poly.push((l, 0.0));
+        let shoelace: f64 = poly.windows(2).map(|p| 0.5 * (p[0].0 * p[1].1 - p[0].1 * p[1].0)).sum();
+        assert!((e.area() - shoelace.abs()).abs() < 1e-9, "{} {shoelace}", e.area());
+        let cot = a * a * c / (b * b * half);
+        let angle = 1.0f64.atan2(cot).to_degrees();
+        let (al, ar) = e.flank_angles(0.0);
+        assert!((al - angle).abs() < 1e-9 && (ar - angle).abs() < 1e-9, "{al} {angle}");
+        let m = Measures::of(SectionModel::Ellipse, &[xc, rr, d, k], 0.0);
+        assert!((m.values[RADIUS] - a * a / b).abs() < 1e-12 && (m.values[DEPTH] - d).abs() < 1e-15);
+        // A beam from a reading straight above hits the ellipse there.
+        let beams = Beams::new(e, 0.0, 1.0, 0.0);
+        let u = xc + 0.4 * half;
+        assert!((beams.hit(u, 0.01).lambda - (e.value(u) - 0.01)).abs() < 1e-12);
+        // Stretched by 1 it is the U, bit for bit.
+        let (u1, e1) =
+            (Pieces::of(SectionModel::U, &[xc, rr, d]), Pieces::of(SectionModel::Ellipse, &[xc, rr, d, 1.0]));
+        assert_eq!((u1.crossings(), u1.area(), u1.value(0.1)), (e1.crossings(), e1.area(), e1.value(0.1)));
     }
 
     #[test]
@@ -796,17 +962,21 @@ mod tests {
         p[1] += p[3] * delta;
         p[4] += delta;
         let pieces = Pieces::new(p);
+        let pieces = if model == SectionModel::Ellipse { Pieces { k: q[3], xm: q[0], ..pieces } } else { pieces };
         let (l, r) = pieces.crossings();
         let (al, ar) = pieces.flank_angles(gamma);
-        let radius = if model == SectionModel::Trapezoid { f64::NAN } else { pieces.r };
+        let radius = if model == SectionModel::Trapezoid { f64::NAN } else { pieces.k * pieces.k * pieces.r };
         [r - l, pieces.d, 0.5 * (l + r) + gamma * delta, al, ar, pieces.area(), radius]
     }
 
     #[test]
     fn measures_and_their_derivatives_equal_finite_differences() {
         let mut cases: Vec<(SectionModel, Vec<f64>)> = SectionModel::ALL.iter().map(|&m| (m, q_of(m))).collect();
-        // A U with walls, and a round V with an overhang.
+        // A U with walls, an elliptic U with walls and a narrow one, and a round V with an
+        // overhang.
         cases.push((SectionModel::U, vec![0.1, 0.2, 0.5]));
+        cases.push((SectionModel::Ellipse, vec![0.1, 0.2, 0.5, 1.3]));
+        cases.push((SectionModel::Ellipse, vec![-0.1, 0.3, 0.2, 0.7]));
         cases.push((SectionModel::Round, vec![-0.2, 0.2, -0.08, -0.05, 0.6]));
         for (model, q) in cases {
             for gamma in [0.0, 0.05] {
