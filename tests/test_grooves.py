@@ -244,6 +244,56 @@ def test_a_tilted_arc_states_the_lean_it_cannot_tell(tilt_mode):
         assert 0.93 <= np.mean(np.abs(err) <= 2 * se) <= 0.985, name
 
 
+def elliptic_frames(n: int, seed: int):
+    """A ball cutter's groove (radius R, depth D < R: its centre above the surface) crossed by
+    the laser line at 20–50° off the perpendicular: an ellipse k = 1/cos φ times wider than
+    deep, 250 readings at 20 µm, 5 µm noise, the surface tilted by a rotation of up to 0.03 rad;
+    and the exact truth of every measure."""
+    rng = np.random.default_rng(seed)
+    x = (np.arange(250) - 125) * 0.02
+    z = np.empty((n, 250))
+    truth = {m: np.empty(n) for m in ("width", "depth", "bottom_radius", "area", "flank_angle_left")}
+    for i in range(n):
+        r, k = rng.uniform(0.15, 0.25), 1 / np.cos(np.radians(rng.uniform(20, 50)))
+        d = rng.uniform(0.6, 0.9) * r
+        c = r - d  # the centre's height above the surface
+        half = k * np.sqrt(r * r - c * c)
+        u = np.linspace(-3, 3, 60001)
+        v = np.where(np.abs(u) < half, c - r * np.sqrt(np.clip(1 - (u / (k * r)) ** 2, 0, 1)), 0.0)
+        tilt, xc = rng.uniform(-0.03, 0.03), rng.uniform(-0.5, 0.5)
+        cs, sn = np.cos(tilt), np.sin(tilt)
+        px, pz = xc + u * cs - v * sn, u * sn + v * cs
+        z[i] = np.interp(x, px, pz) + 0.005 * rng.standard_normal(250)
+        segment = r * r * np.arccos(c / r) - c * np.sqrt(r * r - c * c)
+        truth["width"][i], truth["depth"][i], truth["bottom_radius"][i] = 2 * half, d, k * k * r
+        truth["area"][i] = k * segment
+        truth["flank_angle_left"][i] = np.degrees(np.arctan2(1.0, k * c / np.sqrt(r * r - c * c)))
+    return x, z, truth
+
+
+def test_a_groove_crossed_obliquely_is_measured_as_the_ellipse_it_is():
+    """A U crossed obliquely is an ellipse (no straight-flanked model holds it): the elliptic U
+    is chosen where the readings tell it from a circle, each measure lies near the truth, and
+    the k = 2 intervals of width, depth and area hold it in 90-99 % of frames. (Bottom radius
+    and flank angles: 76 % and 81 % here, where the U wins on narrow grooves of 15-30 readings;
+    the elliptic U alone holds them in 96-98 %.)"""
+    x, z, truth = elliptic_frames(300, seed=4)
+    f = machscan.fit_grooves(x, z)
+    assert f.ok.all()
+    assert (f.model == GrooveModel.ELLIPSE).mean() > 0.55
+    for name, tol in (("width", 0.006), ("depth", 0.002), ("bottom_radius", 0.02), ("area", 0.001), ("flank_angle_left", 5.0)):
+        err, se = getattr(f, name) - truth[name], getattr(f, "se_" + name)
+        assert np.median(np.abs(err)) < tol, name
+        if name in ("width", "depth", "area"):
+            assert 0.9 <= np.mean(np.abs(err) <= 2 * se) <= 0.99, name
+    alone = machscan.fit_grooves(x, z, template="ellipse")
+    assert (alone.model == GrooveModel.ELLIPSE).all()
+    assert np.median(np.abs(alone.width - truth["width"])) < 0.006
+    # The circle alone cannot follow it.
+    circle = machscan.fit_grooves(x, z, template="u")
+    assert np.median(np.abs(circle.width - truth["width"])) > 2 * np.median(np.abs(f.width - truth["width"]))
+
+
 @pytest.mark.parametrize("shape", synth.GROOVE_SHAPES)
 def test_flank_angles_area_and_radius_against_the_generators_truth(shape):
     """The generators' exact truth (flank angles as the frame shows them, the section's area, a

@@ -8,7 +8,8 @@
 //! 3. the bottom and the groove's extent from the data (a walk out to the surface: no nominal
 //!    width is needed), then the surface refitted without the groove and its lips; the flags
 //!    no groove, clipped and two grooves;
-//! 4. four section models (`section.rs`: trapezoid, sharp V, round-bottomed V, U) fitted by a
+//! 4. the section models (`section.rs`: trapezoid, sharp V, round-bottomed V, U, and the U
+//!    stretched into an ellipse where one Gauss–Newton step says it may fit better) fitted by a
 //!    bounded Levenberg–Marquardt to the readings of the groove with residuals along the
 //!    sensor beam; the one with the smallest AIC `2·cost/σ² + 2·parameters` is chosen, outliers
 //!    dropped and the models refitted once (fitted in an order the start's shape suggests,
@@ -448,8 +449,9 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     }
     // The elliptic U, from the U (alone: from the U's start, the U not kept). Among several
     // models only where the U was not ruled out and one Gauss–Newton step from it predicts an
-    // Akaike criterion below the best so far: a circle fits most U's as well as an ellipse
-    // can, and the stretch would only cost a parameter and a fit.
+    // Akaike criterion below the best so far (the step's χ² is never above the U's, so any
+    // margin would fit it on every U): a circle fits most U's as well as an ellipse can, and
+    // fitting it on all of them had cost a fifth of a U frame's time.
     if want[Ellipse.index()] {
         let u = match fits.iter().find(|f| f.model == U) {
             Some(u) => Some(*u),
@@ -459,9 +461,15 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
         if let Some(u) = u {
             let q0 = [u.q[0], u.q[1], u.q[2], 1.0];
             let best = fits.iter().map(|f| f.criterion(s.sigma)).fold(f64::INFINITY, f64::min);
-            if !several || akaike(predicted_cost(Ellipse, r, 0.0, &q0), Ellipse, s.sigma) < best + ELLIPSE_SCREEN {
-                fits.push(fit_model(Ellipse, r, 0.0, &q0, options));
-            }
+            let step = one_step::<4>(&r.problem(Ellipse, 0.0), &q0);
+            // Where it is not fitted, the step stands in for it: a rival whose Akaike weight
+            // and measures widen the U's errors where the readings allow an ellipse too (near
+            // k = 1 the step lands close to the optimum).
+            fits.push(if !several || step.criterion(s.sigma) < best {
+                fit_model(Ellipse, r, 0.0, &q0, options)
+            } else {
+                step
+            });
         }
     }
     fits
@@ -788,20 +796,25 @@ fn measures_with_errors(
     (measures, se)
 }
 
-/// The round V one Gauss–Newton step from a U with walls `p` (the step solved by Cholesky;
-/// none when the readings do not fix it), with its JᵀJ at the U and the cost the step predicts.
-fn round_from_u(r: &Readings<'_>, gamma: f64, p: &Pieces) -> ModelFit {
-    let problem = r.problem(SectionModel::Round, gamma);
-    let q0 = SVector::<f64, 5>::from([p.xl, p.xr, 0.0, 0.0, p.d]);
-    let (a, g, cost) = LeastSquares::<5>::normal_equations(&problem, &q0);
-    let (mut q, mut predicted) = (q0, cost);
+/// `problem`'s model one Gauss–Newton step from `q0` (projected into its bounds; none when
+/// the readings do not fix it), with its JᵀJ at `q0` and the cost the step predicts.
+fn one_step<const P: usize>(problem: &SectionFit<'_>, q0: &[f64]) -> ModelFit {
+    let x0 = SVector::<f64, P>::from_fn(|i, _| q0[i]);
+    let (a, g, cost) = LeastSquares::<P>::normal_equations(problem, &x0);
+    let (mut q, mut predicted) = (x0, cost);
     if let Some(c) = a.cholesky() {
         let step = c.solve(&g);
         q -= step;
         predicted = (cost - 0.5 * g.dot(&step)).max(0.0);
-        SectionModel::Round.project(q.as_mut_slice());
+        problem.model.project(q.as_mut_slice());
     }
-    ModelFit::at(&problem, &q, &a, predicted)
+    ModelFit::at(problem, &q, &a, predicted)
+}
+
+/// The round V one Gauss–Newton step from a U with walls `p` (the step solved by Cholesky;
+/// none when the readings do not fix it), with its JᵀJ at the U and the cost the step predicts.
+fn round_from_u(r: &Readings<'_>, gamma: f64, p: &Pieces) -> ModelFit {
+    one_step::<5>(&r.problem(SectionModel::Round, gamma), &[p.xl, p.xr, 0.0, 0.0, p.d])
 }
 
 /// Tip radii (reading pitches) of the χ² profile over a V's rounding ([`rounding_bound`]).
@@ -1064,10 +1077,6 @@ fn find_dips(v5: &[f64], v3: &[f64], first: usize, sigma: f64, deep_enough: f64)
     }
     dips
 }
-
-/// Akaike criterion within which the elliptic U is fitted beside the U: a rival whose weight
-/// may reach exp(−2) ≈ 14 % (its spread then widens the U's errors where the data allow both).
-const ELLIPSE_SCREEN: f64 = 4.0;
 
 /// Akaike criterion within which a section leaning by the frame's slope is fitted as a rival
 /// of the upright choice (weight above exp(−3) ≈ 5 %).
