@@ -406,8 +406,9 @@ def fit_grooves(
     groove's extent by a walk from its bottom out to the surface; the surface refitted without
     the groove and its lips; then the section models — trapezoid, sharp V, round-bottomed V, U,
     and the U stretched into an ellipse where that promises a better fit — fitted by a bounded
-    Levenberg–Marquardt with residuals along the sensor beam, the one with the smallest AIC kept (outliers against it dropped and the models refitted once; a
-    frame tilted by shear rather than rotation tested with the section leaning by the tilt).
+    Levenberg–Marquardt with residuals along the sensor beam, the one with the smallest AIC kept
+    (outliers against it dropped and the models refitted once; a frame tilted by shear rather
+    than rotation tested with the section leaning by the tilt).
     The models are fitted in the order the groove's first outline suggests, and one that
     already fits the readings within their noise rules out those that could not beat it (a V
     that fits leaves the trapezoid and the U out): 1.1–1.6 times faster than fitting all four.
