@@ -487,7 +487,7 @@ impl Measures {
 
     fn at(model: SectionModel, q: &[f64], gamma: f64, area_gradient: bool) -> Measures {
         if model == SectionModel::Ellipse {
-            return Measures::of_ellipse(q, gamma);
+            return Measures::of_ellipse(q, gamma, area_gradient);
         }
         let p = Pieces::of(model, q);
         let j = pieces_jacobian(model, q);
@@ -550,9 +550,10 @@ impl Measures {
     }
 
     /// The elliptic U's measures (bottom radius: the curvature radius there, k²·R), with their
-    /// derivatives by central differences: the closed forms would be the U's through the
-    /// stretch again, and these are taken once per chosen fit, not per iteration.
-    fn of_ellipse(q: &[f64], gamma: f64) -> Measures {
+    /// derivatives by central differences when `derivatives` (the closed forms would be the
+    /// U's through the stretch again, and these are taken once per fit whose errors are
+    /// wanted, not per iteration).
+    fn of_ellipse(q: &[f64], gamma: f64, derivatives: bool) -> Measures {
         // The measures of `q` with the surface raised by δ: the section moved down by δ.
         let at = |q: &[f64], delta: f64| -> [f64; MEASURES] {
             let p = Pieces::of(SectionModel::Ellipse, &[q[0], q[1], q[2] + delta, q[3]]);
@@ -561,6 +562,9 @@ impl Measures {
             [r - l, p.d, 0.5 * (l + r) + gamma * delta, al, ar, p.area(), p.k * p.k * p.r]
         };
         let values = at(q, 0.0);
+        if !derivatives {
+            return Measures { values, grad: [[0.0; 6]; MEASURES], surface: [0.0; MEASURES] };
+        }
         let central = |f: &dyn Fn(f64) -> [f64; MEASURES], h: f64| -> [f64; MEASURES] {
             let (a, b) = (f(h), f(-h));
             std::array::from_fn(|m| (a[m] - b[m]) / (2.0 * h))
