@@ -255,7 +255,7 @@ def elliptic_frames(n: int, seed: int):
     z = np.empty((n, 250))
     truth = {m: np.empty(n) for m in ("width", "depth", "bottom_radius", "area", "flank_angle_left")}
     for i in range(n):
-        r, k = rng.uniform(0.15, 0.25), 1 / np.cos(np.radians(rng.uniform(20, 50)))
+        r, k = rng.uniform(0.25, 0.4), 1 / np.cos(np.radians(rng.uniform(20, 50)))
         d = rng.uniform(0.6, 0.9) * r
         c = r - d  # the centre's height above the surface
         half = k * np.sqrt(r * r - c * c)
@@ -273,21 +273,21 @@ def elliptic_frames(n: int, seed: int):
 
 
 def test_a_groove_crossed_obliquely_is_measured_as_the_ellipse_it_is():
-    """A U crossed obliquely is an ellipse, which no straight-flanked model holds. On narrow
-    grooves (15-30 readings) the readings often cannot tell it from a circle at the evidence
-    the choice asks (Δχ² ≥ 6.63): the elliptic U is chosen on about a third of these frames,
-    each measure lies near the truth, and the k = 2 intervals of width, depth and area hold it
-    in 90-99 % of frames (bottom radius and flank angles about 73-76 %: BENCHMARKS.md). Fitted
-    alone it follows them closer than the circle does."""
+    """A U crossed obliquely is an ellipse, which no straight-flanked model holds. On these
+    0.5-1.1 mm wide grooves (25-55 readings) the elliptic U is chosen where the readings give
+    the evidence the choice asks (Δχ² >= 6.63), each measure lies near the truth, and the k = 2
+    intervals of width, depth and area hold it in 90-99 % of frames (bottom radius and flank
+    angles in 86-88 %: the frames where the circle is kept; on narrower grooves fewer frames
+    give the evidence, BENCHMARKS.md). Fitted alone it follows them closer than the circle."""
     x, z, truth = elliptic_frames(300, seed=4)
     f = machscan.fit_grooves(x, z)
     assert f.ok.all()
-    assert (f.model == GrooveModel.ELLIPSE).mean() > 0.25
-    for name, tol in (("width", 0.008), ("depth", 0.002), ("bottom_radius", 0.025), ("area", 0.001), ("flank_angle_left", 7.0)):
+    assert (f.model == GrooveModel.ELLIPSE).mean() > 0.6
+    for name, tol in (("width", 0.005), ("depth", 0.002), ("bottom_radius", 0.02), ("area", 0.001), ("flank_angle_left", 3.0)):
         err, se = getattr(f, name) - truth[name], getattr(f, "se_" + name)
         assert np.median(np.abs(err)) < tol, name
-        if name in ("width", "depth", "area"):
-            assert 0.9 <= np.mean(np.abs(err) <= 2 * se) <= 0.99, name
+        low = 0.9 if name in ("width", "depth", "area") else 0.8
+        assert low <= np.mean(np.abs(err) <= 2 * se) <= 0.99, name
     alone = machscan.fit_grooves(x, z, template="ellipse")
     circle = machscan.fit_grooves(x, z, template="u")
     assert (alone.model == GrooveModel.ELLIPSE).all()
