@@ -481,17 +481,19 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
             let best = fits.iter().map(|f| f.criterion(s.sigma)).fold(f64::INFINITY, f64::min);
             let step = one_step::<4>(&r.problem(Ellipse, 0.0), &q0);
             // Where it does not promise a better fit it is still fitted, on a short budget, as
-            // the U's rival: its Akaike weight and measures widen the U's errors where the
+            // the leading U's rival: its Akaike weight and measures widen the U's errors where the
             // readings allow an ellipse too. (The one step alone, weighed by the cost it
             // predicted, had doubled the largest widths' errors on V grooves where the U is no
             // fit and the step overshoots; by the cost where it landed, it held obliquely
             // crossed U's widths in 87 % of frames.)
-            let budget = if !several || step.criterion(s.sigma) < best {
-                *options
-            } else {
-                BoundedLmOptions { max_iterations: ELLIPSE_RIVAL_ITERATIONS, ..*options }
-            };
-            fits.push(fit_model(Ellipse, r, 0.0, &q0, &budget));
+            // Only a U that leads has a rival: behind another model its spread weighs nothing
+            // (the rival had cost an eighth of a trapezoid frame).
+            if !several || step.criterion(s.sigma) < best {
+                fits.push(fit_model(Ellipse, r, 0.0, &q0, options));
+            } else if u.criterion(s.sigma) <= best {
+                let budget = BoundedLmOptions { max_iterations: ELLIPSE_RIVAL_ITERATIONS, ..*options };
+                fits.push(fit_model(Ellipse, r, 0.0, &q0, &budget));
+            }
         }
     }
     fits
