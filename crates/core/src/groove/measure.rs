@@ -264,12 +264,23 @@ fn predicted_cost(model: SectionModel, r: &Readings<'_>, gamma: f64, q0: &[f64])
 }
 
 fn predicted_sized<const P: usize>(problem: &SectionFit<'_>, q0: &[f64]) -> f64 {
+    gauss_newton::<P>(problem, q0).3.map_or(f64::NEG_INFINITY, |(_, predicted)| predicted)
+}
+
+/// One Gauss–Newton step of `problem` from `q0`: the start, JᵀJ and cost there, and the step
+/// with the cost it predicts (None when the readings do not fix it: no Cholesky factor).
+#[allow(clippy::type_complexity)]
+fn gauss_newton<const P: usize>(
+    problem: &SectionFit<'_>,
+    q0: &[f64],
+) -> (SVector<f64, P>, SMatrix<f64, P, P>, f64, Option<(SVector<f64, P>, f64)>) {
     let x0 = SVector::<f64, P>::from_fn(|i, _| q0[i]);
     let (a, g, cost) = LeastSquares::<P>::normal_equations(problem, &x0);
-    match a.cholesky() {
-        Some(c) => cost - 0.5 * g.dot(&c.solve(&g)),
-        None => f64::NEG_INFINITY,
-    }
+    let step = a.cholesky().map(|c| {
+        let step = c.solve(&g);
+        (step, cost - 0.5 * g.dot(&step))
+    });
+    (x0, a, cost, step)
 }
 
 /// The readings a fit sees, levelled, with the beam direction.
@@ -480,14 +491,13 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
             let q0 = [u.q[0], u.q[1], u.q[2], 1.0];
             let best = fits.iter().map(|f| f.criterion(s.sigma)).fold(f64::INFINITY, f64::min);
             let step = one_step::<4>(&r.problem(Ellipse, 0.0), &q0);
-            // Where it does not promise a better fit it is still fitted, on a short budget, as
-            // the leading U's rival: its Akaike weight and measures widen the U's errors where the
-            // readings allow an ellipse too. (The one step alone, weighed by the cost it
-            // predicted, had doubled the largest widths' errors on V grooves where the U is no
-            // fit and the step overshoots; by the cost where it landed, it held obliquely
-            // crossed U's widths in 87 % of frames.)
-            // Only a U that leads has a rival: behind another model its spread weighs nothing
-            // (the rival had cost an eighth of a trapezoid frame).
+            // Where it does not promise a better fit, a U that leads still gets it as a rival,
+            // fitted on a short budget: its Akaike weight and measures widen the U's errors
+            // where the readings allow an ellipse too. (The one step alone, weighed by the cost
+            // it predicted, had doubled the largest widths' errors on V grooves where the step
+            // overshoots; weighed by the cost where it landed, it held obliquely crossed U's
+            // widths in 87 % of frames. Behind another model a rival weighs nothing, and had
+            // cost an eighth of a trapezoid frame.)
             if !several || step.criterion(s.sigma) < best {
                 fits.push(fit_model(Ellipse, r, 0.0, &q0, options));
             } else if u.criterion(s.sigma) <= best {
@@ -823,13 +833,11 @@ fn measures_with_errors(
 /// `problem`'s model one Gauss–Newton step from `q0` (projected into its bounds; none when
 /// the readings do not fix it), with its JᵀJ at `q0` and the cost the step predicts.
 fn one_step<const P: usize>(problem: &SectionFit<'_>, q0: &[f64]) -> ModelFit {
-    let x0 = SVector::<f64, P>::from_fn(|i, _| q0[i]);
-    let (a, g, cost) = LeastSquares::<P>::normal_equations(problem, &x0);
+    let (x0, a, cost, step) = gauss_newton::<P>(problem, q0);
     let (mut q, mut predicted) = (x0, cost);
-    if let Some(c) = a.cholesky() {
-        let step = c.solve(&g);
+    if let Some((step, p)) = step {
         q -= step;
-        predicted = (cost - 0.5 * g.dot(&step)).max(0.0);
+        predicted = p.max(0.0);
         problem.model.project(q.as_mut_slice());
     }
     ModelFit::at(problem, &q, &a, predicted)
