@@ -5,10 +5,12 @@ smoothly (0.1–0.5 mm), with optional noise. The truth is exact: the line along
 offset surface (Newton on the part's parameters, tests/analytic_blades.py).
 
     python benchmarks/accuracy_allowance.py [--noise 0.005] [--parts E0.8,Lt0.5] [--spacings 0.2,0.5,1.0]
+        [--model-spacing 0.15] [--model-rows 4] [--surfaces stock,quadric,plane]
 
 Prints, per part, blank spacing and offset, the largest and RMS error near the edges (within 2 + 2 r of an edge
 tip) and elsewhere, in µm, the NaN count (the blank covers every model point: there should be none) and the time per
-model point, for the quadric (default) and the paper's plane.
+model point, for the stock field (default), the quadric and the paper's plane. The model is sampled in sections
+(`--model-spacing` along them, `--model-rows` apart): the stock field reads the model's shape between its points.
 """
 
 from __future__ import annotations
@@ -60,6 +62,9 @@ def main() -> None:
     ap.add_argument("--parts", default=None, help="comma-separated names (default: all)")
     ap.add_argument("--spacings", default="0.2,0.3,0.5,0.75,1.0", help="blank spacings, mm")
     ap.add_argument("--offsets", default="0.3,-0.1,smooth", help="uniform offsets in mm, or 'smooth'")
+    ap.add_argument("--model-spacing", type=float, default=0.15, help="model points along each section, mm")
+    ap.add_argument("--model-rows", type=float, default=4.0, help="model sections apart along the span, mm")
+    ap.add_argument("--surfaces", default="stock,quadric,plane", help="comma-separated surfaces to compare")
     args = ap.parse_args()
     cat = catalogue()
     names = args.parts.split(",") if args.parts else list(cat)
@@ -68,7 +73,7 @@ def main() -> None:
     for name in names:
         blade = cat[name]
         r = blade.section.edge_radius
-        u, z = blade.model_grid(0.15, (2, 58), span_spacing=4.0)
+        u, z = blade.model_grid(args.model_spacing, (2, 58), span_spacing=args.model_rows)
         p, v = blade.point(u, z), blade.normal(u, z)
         near_edge = blade.section.edge_distance(u) < 2 + 2 * r
         for s in map(float, args.spacings.split(",")):
@@ -78,7 +83,7 @@ def main() -> None:
                 d = parts.smooth_offset(blade) if off == "smooth" else float(off)
                 truth = blade.truth(u, z, d)
                 blank = blade.sample_blank(s, (-3, 63), d, np.random.default_rng(7), jitter=0.3, noise=args.noise)
-                for surface in ("quadric", "plane"):
+                for surface in args.surfaces.split(","):
                     t0 = time.perf_counter()
                     a = machscan.allowance(p, v, blank["points"], surface=surface)
                     us = (time.perf_counter() - t0) / len(p) * 1e6

@@ -56,11 +56,12 @@ __all__ = [
     "probe_round",
 ]
 
-#: The blank's local surface in :func:`allowance` and :func:`envelope_fit`.
-BlankSurface = Literal["quadric", "plane"]
+#: How :func:`allowance` and :func:`envelope_fit` take the blank's surface: the stock field over
+#: the model, the blank's own implicit quadric, or the paper's plane.
+BlankSurface = Literal["stock", "quadric", "plane"]
 
-#: The default local surface: the quadric, unbiased by the blank's curvature.
-ALLOWANCE_SURFACE: BlankSurface = "quadric"
+#: The default: the stock field, which follows a blank round edges where the curvature jumps.
+ALLOWANCE_SURFACE: BlankSurface = "stock"
 
 
 def allowance(
@@ -75,17 +76,26 @@ def allowance(
     """Machining allowance (SPEC R7; paper 004 §1.2): the stock the blank leaves over each model
     point, measured along the point's outward normal to the blank's surface there.
 
-    The default ``surface="quadric"`` fits an implicit quadric to the blank points about a centre
-    on the line, Gaussian-weighted over 1.5 blank spacings, and moves the centre to where the line
-    meets it (four fits; ``docs/registration.md``). It holds circles and cylinders of any
-    orientation, so it follows a blade's edge of 1.5 point spacings' radius that turns by 90° and
-    more across the neighbourhood, where a plane or height field of nearby points cannot (those
-    were 0.1–0.3 mm wrong at a 0.8 mm edge sampled every 0.5 mm). Measured against exact offsets
-    of twisted elliptic and circular-arc blades (BENCHMARKS.md): within 3 µm on smooth edges of
-    radius ≥ 1.5 spacings, 0.2–1 mm apart; 4–13 µm where a fillet meets a flank tangentially at
-    spacings ≤ 0.5 mm, 15–30 µm at 0.75–1 mm. ``surface="plane"`` is the paper's least-squares
-    plane of the ``k`` nearest blank points, ``t = n·(q0 − p) / (n·v)`` (eq 10 as SPEC R7 corrects
-    it), which sits below a curved blank by the mean sag of its points, κ·d²/2.
+    The default ``surface="stock"`` measures where the blank was measured: each blank point's
+    distance from the model (its foot found on the model's osculating paraboloid, curvatures from
+    the model normals), then fits that stock field about each model point (a weighted quadratic
+    over 1.5 blank spacings, ``docs/registration.md``). A point on the model normal's line has the
+    model point for its foot, so the field there is the allowance; it stays smooth where model
+    and blank both turn — round a blade's edge, where a fillet meets a flank — which no surface
+    fitted to the blank points alone follows at a coarse spacing. Measured against exact offsets
+    of twisted elliptic and circular-arc blades (BENCHMARKS.md, blank 0.5–1 mm apart, model
+    sections every 0.15 mm): within 6.8 µm everywhere at edge radii ≥ 1.2 blank spacings, edges
+    and fillet joins included. It needs the part's own normals (CAD) and a model at least as
+    dense as the blank: a curvature jump between model points d apart costs up to
+    Δκ·(d/2)²/2 (11–19 µm at edges of 1.5 mm radius with the model every 1 mm both ways).
+    ``surface="quadric"`` fits an implicit quadric to the blank points alone about a centre on
+    the line, Gaussian-weighted over 1.5 blank spacings, moved to where the line meets it (four
+    fits): it holds circles and cylinders of any orientation, does not depend on the model's
+    sampling, and is within 3 µm on smooth edges of radius ≥ 1.5 spacings, but 10–18 µm where a
+    fillet meets a flank at 0.75–1 mm spacing. ``surface="plane"`` is the paper's least-squares
+    plane of the ``k`` nearest blank points, ``t = n·(q0 − p) / (n·v)`` (eq 10 as SPEC R7
+    corrects it), which sits below a curved blank by the mean sag of its points, κ·d²/2, and is
+    0.1–0.6 mm wrong at such edges.
 
     Parameters
     ----------
@@ -95,11 +105,12 @@ def allowance(
         Their outward normals (normalised here; none may be zero).
     blank_points : array_like, shape (M, 3)
         The measured blank, in the model's frame (e.g. after :func:`machscan.align_blank`), mm.
-    surface : {"quadric", "plane"}
-        The blank's local surface.
+    surface : {"stock", "quadric", "plane"}
+        How the blank's surface is taken (above).
     k : int, optional
-        The plane's blank points, 3 ≤ k ≤ M (default :data:`ALLOWANCE_NEIGHBORS`, 8). The quadric's
-        neighbourhood follows the spacing instead (giving ``k`` with it is refused).
+        The plane's blank points, 3 ≤ k ≤ M (default :data:`ALLOWANCE_NEIGHBORS`, 8). The stock
+        field's and the quadric's neighbourhoods follow the spacing instead (giving ``k`` with
+        them is refused).
     spacing : float, optional
         The blank's point spacing, mm; by default estimated from the blank (the median over its
         points of the radius holding eight neighbours, as an even grid's spacing). Give it for a

@@ -113,6 +113,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--surface",
         choices=get_args(BlankSurface),
         default=ALLOWANCE_SURFACE,
-        help="the blank's local surface: quadric, or the paper's plane (default: %(default)s)",
+        help="how the blank's surface is taken: the stock field over the model, the blank's own quadric, or the "
+        "paper's plane (default: %(default)s)",
     )
     al.set_defaults(run=run)

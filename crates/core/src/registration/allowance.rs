@@ -9,8 +9,13 @@
 //! nearest points turn by 90° or more: no plane or height field over it follows them (0.1–0.3 mm
 //! wrong at a 0.8 mm edge sampled every 0.5 mm).
 //!
-//! The default, `BlankSurface::Quadric`, fits an implicit quadric about a centre on the line and
-//! moves the centre to where the line meets it, four times:
+//! The default, `BlankSurface::Stock`, measures each blank point's distance from the model and
+//! fits that stock field about the model point ([`super::stock`]): it follows the blank where
+//! model and blank turn together, a fillet meeting a flank included, but needs the model's own
+//! normals and a model sampled about as densely as the blank.
+//!
+//! `BlankSurface::Quadric` fits the blank points alone: an implicit quadric about a centre on the
+//! line, the centre moved to where the line meets it, four times:
 //!
 //!   f(x, y, z) = z + c0 + c1·x + c2·y + c3·x² + c4·xy + c5·y² + c6·z² + c7·xz + c8·yz = 0
 //!
@@ -26,8 +31,9 @@
 //! (beyond the blank's end), the surface grazes the line (more than 60° from the model's normal
 //! plane), or the centre has not settled. Measured against exact offsets of twisted elliptic and
 //! circular-arc blades (BENCHMARKS.md): within 3 µm on smooth edges of radius ≥ 1.5 s at 0.2–1 mm
-//! spacing; where a fillet meets a flank tangentially (the curvature jumps) 4–13 µm at s ≤ 0.5
-//! mm, 15–30 µm at 0.75–1 mm.
+//! spacing; where a fillet meets a flank tangentially (the curvature jumps) 3–6 µm at s ≤ 0.5
+//! mm, 10–18 µm at 0.75–1 mm (the stock field: within 2.3 µm there).
+use super::stock::{ModelShape, StockField};
 use crate::error::{check_finite_points, check_positive, Error, Result};
 use crate::spatial::PointIndex;
 use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
@@ -40,7 +46,7 @@ type V9 = SVector<f64, 9>;
 /// The blank's surface is this far from the model normal (|cos| below, 60°): it is not the
 /// blank over the point but a neighbouring feature, so the line along the normal meets it far
 /// off, and the allowance there is NaN (reported, not guessed). Stock varies far more gently.
-const GRAZING: f64 = 0.5;
+pub(super) const GRAZING: f64 = 0.5;
 
 /// Blank points of each plane by default (the paper's local surface): enough for a stable fit
 /// through sensor noise, few enough to stay local at the blank's sampling.
@@ -49,12 +55,12 @@ pub const PLANE_POINTS: usize = 8;
 /// The quadric's kernel width h, in blank spacings: wide enough that the Gaussian weights hold
 /// well over the nine points its nine terms need through noise, narrow enough to follow an edge
 /// of 1.5 s radius.
-const WIDTH: f64 = 1.5;
+pub(super) const WIDTH: f64 = 1.5;
 /// Neighbours of a quadric fit, and of an edge's long, narrow fit.
 const FIT_POINTS: usize = 48;
 const EDGE_POINTS: usize = 200;
 /// Weights beyond this many h are cut (exp(−6.25) ≈ 0.002).
-const CUT: f64 = 2.5;
+pub(super) const CUT: f64 = 2.5;
 /// The edge fit's widths across and along the edge, in blank spacings.
 const ACROSS: f64 = 0.4;
 const ALONG: f64 = 4.5;
@@ -79,10 +85,10 @@ const RIDGE: f64 = 1e-4;
 /// The last step of the centre, in blank spacings, above which it has not settled.
 const SETTLED: f64 = 0.05;
 /// The centre has no blank point within this many spacings: a hole.
-const GAP: f64 = 1.5;
+pub(super) const GAP: f64 = 1.5;
 /// The weighted mean of the neighbours' offsets across the line is above this share of their
 /// weighted RMS offset: they lie on one side, the line passes beyond the blank's end.
-const COVER: f64 = 0.5;
+pub(super) const COVER: f64 = 0.5;
 /// Blank points sampled for the spacing estimate.
 const SPACING_SAMPLES: usize = 20_000;
 
@@ -93,6 +99,8 @@ pub enum BlankSurface {
     Plane,
     /// The re-centred implicit quadric (module docs).
     Quadric,
+    /// The blank points' stock over the model, fitted about the point ([`super::stock`]).
+    Stock,
 }
 
 impl BlankSurface {
@@ -100,7 +108,8 @@ impl BlankSurface {
         match name {
             "plane" => Ok(BlankSurface::Plane),
             "quadric" => Ok(BlankSurface::Quadric),
-            _ => Err(Error::invalid("surface", format!("expected 'quadric' or 'plane', got {name:?}"))),
+            "stock" => Ok(BlankSurface::Stock),
+            _ => Err(Error::invalid("surface", format!("expected 'stock', 'quadric' or 'plane', got {name:?}"))),
         }
     }
 }
@@ -116,7 +125,7 @@ pub struct BlankOptions {
 
 impl Default for BlankOptions {
     fn default() -> Self {
-        BlankOptions { surface: BlankSurface::Quadric, k: None, spacing: None }
+        BlankOptions { surface: BlankSurface::Stock, k: None, spacing: None }
     }
 }
 
@@ -134,11 +143,12 @@ impl<'a> Blank<'a> {
         check_finite_points("blank_points", points)?;
         let k = match (options.surface, options.k) {
             (BlankSurface::Plane, k) => k.unwrap_or(PLANE_POINTS),
-            (BlankSurface::Quadric, Some(_)) => return Err(Error::invalid(
+            (BlankSurface::Quadric | BlankSurface::Stock, Some(_)) => return Err(Error::invalid(
                 "k",
-                "applies to surface='plane'; the quadric's neighbourhood follows the blank's spacing (give spacing=)",
+                "applies to surface='plane'; the stock field's and the quadric's neighbourhoods follow the blank's \
+                 spacing (give spacing=)",
             )),
-            (BlankSurface::Quadric, None) => 0,
+            (BlankSurface::Quadric | BlankSurface::Stock, None) => 0,
         };
         if let Some(s) = options.spacing {
             check_positive("spacing", s, "mm")?;
@@ -156,13 +166,13 @@ impl<'a> Blank<'a> {
         } else if points.len() < FIT_POINTS {
             return Err(Error::invalid(
                 "blank_points",
-                format!("{} points are too few for the quadric's fits ({FIT_POINTS} at least)", points.len()),
+                format!("{} points are too few for a local surface ({FIT_POINTS} at least)", points.len()),
             ));
         }
         let index = PointIndex::new(points)?;
         let spacing = match options.spacing {
             Some(s) => s,
-            None if options.surface == BlankSurface::Quadric => {
+            None if options.surface != BlankSurface::Plane => {
                 let s = point_spacing(points, &index);
                 if !(s.is_finite() && s > 0.0) {
                     return Err(Error::invalid(
@@ -179,11 +189,24 @@ impl<'a> Blank<'a> {
 
     /// Where the line `p + t·v` (v unit) meets the blank's local surface: `t` and the unit normal
     /// of that surface there (its sign arbitrary). None where the blank does not cover the point.
+    /// The stock field is met through [`StockField`], which needs the model too.
     pub(super) fn meet(&self, p: &V3, v: &V3) -> Option<(f64, V3)> {
         match self.surface {
             BlankSurface::Plane => self.meet_plane(p, v),
-            BlankSurface::Quadric => self.meet_quadric(p, v),
+            BlankSurface::Quadric | BlankSurface::Stock => self.meet_quadric(p, v),
         }
+    }
+
+    pub(super) fn surface(&self) -> BlankSurface {
+        self.surface
+    }
+
+    pub(super) fn spacing(&self) -> f64 {
+        self.spacing
+    }
+
+    pub(super) fn points(&self) -> &'a [[f64; 3]] {
+        self.points
     }
 
     fn point(&self, i: usize) -> V3 {
@@ -322,11 +345,17 @@ struct Fit {
     residual: f64,
 }
 
+/// Two unit tangents completing the unit normal `v` to a right-handed frame (e1, e2, v).
+pub(super) fn tangent_frame(v: &V3) -> (V3, V3) {
+    let a = if v.x.abs() < 0.9 { V3::x() } else { V3::y() };
+    let e1 = v.cross(&a).normalize();
+    (e1, v.cross(&e1))
+}
+
 impl Frame {
     fn new(v: V3, h: f64) -> Frame {
-        let a = if v.x.abs() < 0.9 { V3::x() } else { V3::y() };
-        let e1 = v.cross(&a).normalize();
-        Frame { e2: v.cross(&e1), e1, v, h }
+        let (e1, e2) = tangent_frame(&v);
+        Frame { e1, e2, v, h }
     }
 
     fn terms(&self, q: &V3) -> (V9, f64) {
@@ -436,6 +465,14 @@ pub fn allowance(
     check_finite_points("model_points", model)?;
     super::check_normals("model_normals", normals, model.len())?;
     let blank = Blank::new(blank, options)?;
+    if options.surface == BlankSurface::Stock {
+        let field = StockField::new(&ModelShape::new(model, normals)?, blank.points(), blank.spacing())?;
+        return Ok(model
+            .par_iter()
+            .zip(normals)
+            .map(|(p, v)| field.meet(&V3::from(*p), &V3::from(*v).normalize()).map_or(f64::NAN, |(t, _)| t))
+            .collect());
+    }
     Ok(model
         .par_iter()
         .zip(normals)

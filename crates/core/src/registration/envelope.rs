@@ -11,7 +11,8 @@
 //! log-barrier interior point method; each step is checked against the exact allowance and
 //! shrunk by a trust region when it does not keep what the linearisation promised (SQP with an
 //! exact L∞ penalty).
-use super::allowance::{Blank, BlankOptions};
+use super::allowance::{Blank, BlankOptions, BlankSurface};
+use super::stock::{ModelShape, StockField};
 use super::twist;
 use crate::error::{check_finite_points, Error, Result};
 use crate::geom::{transform_point, transform_vector};
@@ -94,6 +95,8 @@ struct Problem<'a> {
     model: &'a [[f64; 3]],
     normals: Vec<Vector3<f64>>,
     blank: Blank<'a>,
+    /// The model's shapes, for the stock field (`BlankSurface::Stock`).
+    shape: Option<ModelShape>,
     centre: Vector3<f64>,
     scale: f64,
 }
@@ -106,17 +109,36 @@ impl Problem<'_> {
     /// normal there over `n·v`.
     fn evaluate(&self, pose: &Matrix4<f64>) -> Result<Evaluation> {
         let inverse = pose.try_inverse().ok_or_else(|| Error::invalid("init", "is not invertible"))?;
+        // The blank's surface where each model normal meets it, in the model's frame: the stock
+        // field of the blank moved to the model, or the blank's own local surface met by the
+        // model taken into the blank's frame.
+        let met: Vec<Option<(f64, Vector3<f64>)>> = match &self.shape {
+            Some(shape) => {
+                let moved: Vec<[f64; 3]> = self.blank.points().iter().map(|&b| transform_point(pose, b)).collect();
+                let field = StockField::new(shape, &moved, self.blank.spacing())?;
+                self.model.par_iter().zip(&self.normals).map(|(p, v)| field.meet(&Vector3::from(*p), v)).collect()
+            }
+            None => self
+                .model
+                .par_iter()
+                .zip(&self.normals)
+                .map(|(p, v)| {
+                    let pb = Vector3::from(transform_point(&inverse, *p));
+                    let vb = Vector3::from(transform_vector(&inverse, [v[0], v[1], v[2]]));
+                    let (a, n) = self.blank.meet(&pb, &vb.normalize())?;
+                    Some((a, Vector3::from(transform_vector(pose, [n[0], n[1], n[2]]))))
+                })
+                .collect(),
+        };
         let local: Vec<(f64, Option<SVector<f64, 6>>)> = self
             .model
-            .par_iter()
+            .iter()
             .zip(&self.normals)
-            .map(|(p, v)| {
-                let pb = Vector3::from(transform_point(&inverse, *p));
-                let vb = Vector3::from(transform_vector(&inverse, [v[0], v[1], v[2]]));
-                let Some((a, n)) = self.blank.meet(&pb, &vb.normalize()) else {
+            .zip(met)
+            .map(|((p, v), met)| {
+                let Some((a, n)) = met else {
                     return (f64::NAN, None);
                 };
-                let n = Vector3::from(transform_vector(pose, [n[0], n[1], n[2]]));
                 let nv = n.dot(v);
                 let x = Vector3::from(*p) + a * v;
                 let r = (x - self.centre).cross(&n) / (nv * self.scale);
@@ -200,10 +222,12 @@ pub fn envelope_fit(
         return Err(Error::invalid("model_points", "must hold at least one point"));
     }
     let (centre, scale) = super::spread(model);
+    let shape = (blank.surface() == BlankSurface::Stock).then(|| ModelShape::new(model, normals)).transpose()?;
     let problem = Problem {
         model,
         normals: normals.iter().map(|v| Vector3::from(*v).normalize()).collect(),
         blank,
+        shape,
         centre,
         scale,
     };

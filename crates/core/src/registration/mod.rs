@@ -9,6 +9,7 @@ pub mod icp;
 pub mod locating;
 pub mod mesh_fit;
 pub mod positioning;
+mod stock;
 
 pub use allowance::{allowance, BlankOptions, BlankSurface};
 pub use blank_alignment::{align_blank, AlignmentStage, BlankAlignment};
