@@ -220,7 +220,7 @@ def test_allowance_recovers_a_known_offset_field():
     """The blank is the model offset along its normals by a smooth field (a second, denser
     sampling, 0.2 mm apart): the allowance is that field, within 3 µm with the paper's plane
     (which reads a curved blank short by about its mean curvature × the neighbors' mean squared
-    distance: 1.5 µm at the 20 mm radii here) and within 0.3 µm with the default quadric."""
+    distance: 1.5 µm at the 20 mm radii here) and within 0.3 µm with the default stock field and with the quadric."""
     rng = np.random.default_rng(5)
 
     def surface(x, y):
@@ -240,6 +240,8 @@ def test_allowance_recovers_a_known_offset_field():
     model, normals = surface(rng.uniform(-20, 20, 2000), rng.uniform(-14, 14, 2000))
     a = machscan.allowance(model, normals, blank)
     assert np.abs(a - field(model)).max() < 0.0003
+    quadric = machscan.allowance(model, normals, blank, surface="quadric")
+    assert np.abs(quadric - field(model)).max() < 0.0003
     plane = machscan.allowance(model, normals, blank, surface="plane")
     assert np.abs(plane - field(model)).max() < 0.003
     # A blank below the model: negative allowance where the part would come out short.
@@ -302,6 +304,10 @@ TWISTED = dict(twist_deg=30, lean=(0.05, 0.02), bow=(5e-4, 0))
         (parts.LenticularSection(20, 3, 2, 1.2), 0.3, 0.010),
         # Thick edges, coarse blank: 2 mm radius every 1 mm.
         (parts.EllipseSection.with_edge_radius(20, 2.0), 1.0, 0.005),
+        # Fillets meeting flanks at 1.5–1.6 blank spacings (issue #32 §3: the blank's own quadric was 12–18 µm off
+        # there; the stock field, 2–3 µm in BENCHMARKS.md).
+        (parts.LenticularSection(20, 5, -1.5, 1.5), 1.0, 0.005),
+        (parts.LenticularSection(20, 3, 2, 1.2), 0.75, 0.005),
     ],
 )
 @pytest.mark.parametrize("offset", [0.3, -0.1, "smooth"])
@@ -342,7 +348,11 @@ def test_bad_blank_options_are_refused_by_name():
     model, normals = np.zeros((3, 3)), np.tile([0.0, 0.0, 1.0], (3, 1))
     blank = np.random.default_rng(0).random((50, 3))
     with pytest.raises(ValueError, match="k"):
-        machscan.allowance(model, normals, blank, k=8)  # the quadric follows the spacing
+        machscan.allowance(model, normals, blank, k=8)  # the stock field follows the spacing
+    with pytest.raises(ValueError, match="k"):
+        machscan.allowance(model, normals, blank, surface="quadric", k=8)
+    with pytest.raises(ValueError, match="surface.*'stock'"):
+        machscan.allowance(model, normals, blank, surface="stok")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="spacing"):
         machscan.allowance(model, normals, blank, spacing=-1.0)
     with pytest.raises(ValueError, match="k"):

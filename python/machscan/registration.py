@@ -77,8 +77,8 @@ def allowance(
     point, measured along the point's outward normal to the blank's surface there.
 
     The default ``surface="stock"`` measures where the blank was measured: each blank point's
-    distance from the model (its foot found on the model's osculating paraboloid, curvatures from
-    the model normals), then fits that stock field about each model point (a weighted quadratic
+    distance from the model (its foot found on the osculating circle of the model's normal
+    section, curvatures from the model normals), then fits that stock field about each model point (a weighted quadratic
     over 1.5 blank spacings, ``docs/registration.md``). A point on the model normal's line has the
     model point for its foot, so the field there is the allowance; it stays smooth where model
     and blank both turn — round a blade's edge, where a fillet meets a flank — which no surface
