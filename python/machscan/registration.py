@@ -85,9 +85,12 @@ def allowance(
     fitted to the blank points alone follows at a coarse spacing. Measured against exact offsets
     of twisted elliptic and circular-arc blades (BENCHMARKS.md, blank 0.5–1 mm apart, model
     sections every 0.15 mm): within 6.8 µm everywhere at edge radii ≥ 1.2 blank spacings, edges
-    and fillet joins included. It needs the part's own normals (CAD) and a model at least as
-    dense as the blank: a curvature jump between model points d apart costs up to
-    Δκ·(d/2)²/2 (11–19 µm at edges of 1.5 mm radius with the model every 1 mm both ways).
+    and fillet joins included. It needs the part's own normals (CAD), and it reads the model's
+    shape between model points: a curvature jump between model points d apart costs up to
+    Δκ·(d/2)²/2. So where the model is sampled more coarsely than the blank (a model point's
+    fourth nearest neighbour farther than the blank's spacing), that point is measured on the
+    blank's own quadric (below) instead; sample the model at least as densely as the blank near
+    edges (with the model every 1 mm both ways, 10–20 µm at fillet joins and 0.8 mm edges).
     ``surface="quadric"`` fits an implicit quadric to the blank points alone about a centre on
     the line, Gaussian-weighted over 1.5 blank spacings, moved to where the line meets it (four
     fits): it holds circles and cylinders of any orientation, does not depend on the model's

@@ -466,11 +466,18 @@ pub fn allowance(
     super::check_normals("model_normals", normals, model.len())?;
     let blank = Blank::new(blank, options)?;
     if options.surface == BlankSurface::Stock {
-        let field = StockField::new(&ModelShape::new(model, normals)?, blank.points(), blank.spacing())?;
+        let shape = ModelShape::new(model, normals)?;
+        let field = StockField::new(&shape, blank.points(), blank.spacing())?;
         return Ok(model
             .par_iter()
             .zip(normals)
-            .map(|(p, v)| field.meet(&V3::from(*p), &V3::from(*v).normalize()).map_or(f64::NAN, |(t, _)| t))
+            .enumerate()
+            .map(|(i, (p, v))| {
+                let (p, v) = (V3::from(*p), V3::from(*v).normalize());
+                // Where the model is sampled more coarsely than the blank, the blank's quadric.
+                let met = if shape.coarser_than(i, blank.spacing()) { blank.meet(&p, &v) } else { field.meet(&p, &v) };
+                met.map_or(f64::NAN, |(t, _)| t)
+            })
             .collect());
     }
     Ok(model

@@ -110,25 +110,33 @@ impl Problem<'_> {
     fn evaluate(&self, pose: &Matrix4<f64>) -> Result<Evaluation> {
         let inverse = pose.try_inverse().ok_or_else(|| Error::invalid("init", "is not invertible"))?;
         // The blank's surface where each model normal meets it, in the model's frame: the stock
-        // field of the blank moved to the model, or the blank's own local surface met by the
-        // model taken into the blank's frame.
+        // field of the blank moved to the model (where the model is sampled as finely as the
+        // blank), or the blank's own local surface met by the model taken into the blank's frame.
+        let in_blank = |p: &[f64; 3], v: &Vector3<f64>| {
+            let pb = Vector3::from(transform_point(&inverse, *p));
+            let vb = Vector3::from(transform_vector(&inverse, [v[0], v[1], v[2]]));
+            let (a, n) = self.blank.meet(&pb, &vb.normalize())?;
+            Some((a, Vector3::from(transform_vector(pose, [n[0], n[1], n[2]]))))
+        };
         let met: Vec<Option<(f64, Vector3<f64>)>> = match &self.shape {
             Some(shape) => {
                 let moved: Vec<[f64; 3]> = self.blank.points().iter().map(|&b| transform_point(pose, b)).collect();
-                let field = StockField::new(shape, &moved, self.blank.spacing())?;
-                self.model.par_iter().zip(&self.normals).map(|(p, v)| field.meet(&Vector3::from(*p), v)).collect()
+                let spacing = self.blank.spacing();
+                let field = StockField::new(shape, &moved, spacing)?;
+                self.model
+                    .par_iter()
+                    .zip(&self.normals)
+                    .enumerate()
+                    .map(|(i, (p, v))| {
+                        if shape.coarser_than(i, spacing) {
+                            in_blank(p, v)
+                        } else {
+                            field.meet(&Vector3::from(*p), v)
+                        }
+                    })
+                    .collect()
             }
-            None => self
-                .model
-                .par_iter()
-                .zip(&self.normals)
-                .map(|(p, v)| {
-                    let pb = Vector3::from(transform_point(&inverse, *p));
-                    let vb = Vector3::from(transform_vector(&inverse, [v[0], v[1], v[2]]));
-                    let (a, n) = self.blank.meet(&pb, &vb.normalize())?;
-                    Some((a, Vector3::from(transform_vector(pose, [n[0], n[1], n[2]]))))
-                })
-                .collect(),
+            None => self.model.par_iter().zip(&self.normals).map(|(p, v)| in_blank(p, v)).collect(),
         };
         let local: Vec<(f64, Option<SVector<f64, 6>>)> = self
             .model

@@ -20,9 +20,11 @@
 //! not seen and is taken as 0; that costs κ·d²/2 at a distance d from the line (about 2 µm for a
 //! twisted blade's span curvature and sections 4 mm apart). The model's own sampling sets the
 //! error where the curvature jumps: a jump Δκ between two model points d apart leaves up to
-//! Δκ·(d/2)²/2 (BENCHMARKS.md: a model sampled every 0.15–0.5 mm is within 6 µm at edges of 1.5
-//! blank spacings; every 1 mm both ways, 11–19 µm). So the model's normals must be the part's
-//! (CAD), and its points at least as dense as the blank's.
+//! Δκ·(d/2)²/2 (BENCHMARKS.md: a model sampled every 0.15–0.5 mm is within 6.3 µm at edges of
+//! 1.5 blank spacings; every 1 mm both ways, 10–20 µm, where the blank's quadric was 1–15 µm at
+//! blank spacings of 0.5–0.75 mm). So the model's normals must be the part's (CAD), and where the
+//! model is sampled more coarsely than the blank (its fourth nearest point farther than the blank's
+//! spacing) the blank's own quadric measures the point instead ([`ModelShape::coarser_than`]).
 //!
 //! The field about p is a weighted least-squares quadratic in the feet's tangent coordinates
 //! (taken along the chord's tangent direction at the chord's length, so that a field wrapping
@@ -57,6 +59,8 @@ pub(super) struct ModelShape {
     frames: Vec<(V3, V3)>,
     /// (S_xx, S_xy, S_yy) in the point's tangent frame.
     shape: Vec<[f64; 3]>,
+    /// The distance to the farthest of those neighbours: how finely the model is sampled there.
+    sampling: Vec<f64>,
     index: PointIndex,
 }
 
@@ -70,14 +74,16 @@ impl ModelShape {
         let points: Vec<V3> = model.iter().map(|p| V3::from(*p)).collect();
         let normals: Vec<V3> = normals.iter().map(|n| V3::from(*n).normalize()).collect();
         let frames: Vec<(V3, V3)> = normals.iter().map(tangent_frame).collect();
-        let mut shape = ModelShape { points, normals, frames, shape: Vec::new(), index };
-        shape.shape = (0..model.len()).into_par_iter().map(|i| shape.shape_operator(i)).collect();
+        let mut shape = ModelShape { points, normals, frames, shape: Vec::new(), sampling: Vec::new(), index };
+        let (operators, sampling) = (0..model.len()).into_par_iter().map(|i| shape.shape_operator(i)).unzip();
+        (shape.shape, shape.sampling) = (operators, sampling);
         Ok(shape)
     }
 
     /// S with dn = S·dp over the nearest neighbours (tangent parts in point i's frame), least
-    /// squares; on a line of neighbours only its two observable terms.
-    fn shape_operator(&self, i: usize) -> [f64; 3] {
+    /// squares; on a line of neighbours its two observable terms, the third that of a cylinder
+    /// through them. And the distance to the farthest of those neighbours.
+    fn shape_operator(&self, i: usize) -> ([f64; 3], f64) {
         let (e1, e2) = self.frames[i];
         let (p, n) = (self.points[i], self.normals[i]);
         let near = self.index.knn(&p.into(), SHAPE_NEIGHBORS + 1);
@@ -89,8 +95,9 @@ impl ModelShape {
                 ([dp.dot(&e1), dp.dot(&e2)], [dn.dot(&e1), dn.dot(&e2)])
             })
             .collect();
+        let sampling = near.last().map_or(f64::INFINITY, |&(_, d2)| d2.sqrt());
         if offsets.is_empty() {
-            return [0.0; 3];
+            return ([0.0; 3], sampling);
         }
         // The principal axes (a, b) of the offsets' spread.
         let (cxx, cxy, cyy) = offsets
@@ -128,13 +135,35 @@ impl ModelShape {
         if let Some(v) = solved.filter(|v| v.iter().all(|x| x.is_finite())) {
             s[..unknowns].copy_from_slice(&v);
         }
+        if on_a_line && s[0].abs() > 1e-9 {
+            // Across the line the curvature is not seen. Where the sections cross an edge (the
+            // normal turns far more along them than across, |s_ab/s_aa| ≤ 0.25), the edge is a
+            // cylinder (Gaussian curvature 0): s_bb = s_ab²/s_aa. Taken as 0 there, a section 5°
+            // off square to a twisted blade's edge of 0.8 mm radius read its feet two
+            // millimetres across 16 µm off. On a twisted flank (|s_ab/s_aa| ≥ 0.5) the surface is
+            // a helicoid, whose curvature along the span is 0; linear between the two.
+            let ratio = (s[1] / s[0]).abs();
+            let weight = ((0.5 - ratio) / 0.25).clamp(0.0, 1.0);
+            s[2] = weight * s[1] * s[1] / s[0];
+        }
+        if on_a_line && s[0].abs() > 1e-9 {
+            s[2] = s[1] * s[1] / s[0];
+        }
         let [saa, sab, sbb] = s;
         // Back to (e1, e2): S = R·S_ab·Rᵀ, R's columns the axes a = (ca, sa), b = (−sa, ca).
-        [
+        let operator = [
             saa * ca * ca - 2.0 * sab * ca * sa + sbb * sa * sa,
             (saa - sbb) * ca * sa + sab * (ca * ca - sa * sa),
             saa * sa * sa + 2.0 * sab * ca * sa + sbb * ca * ca,
-        ]
+        ];
+        (operator, sampling)
+    }
+
+    /// The model is sampled more coarsely than the blank at model point `i` (its farthest
+    /// shape neighbour beyond the blank's `spacing`): the stock field would read a shape the
+    /// model does not resolve there, and the blank's own quadric is the better measure.
+    pub(super) fn coarser_than(&self, i: usize, spacing: f64) -> bool {
+        self.sampling[i] > spacing
     }
 
     /// A blank point's foot on the model, its stock (signed, along the model's outward normal
@@ -371,6 +400,32 @@ mod tests {
             assert!(stock < 0.002, "{name}: stock field worst error {stock}");
             let quadric = worst(BlankSurface::Quadric, 1.0, offset);
             assert!(quadric > 0.005, "{name}: the quadric was expected to miss the joins: {quadric}");
+        }
+    }
+
+    #[test]
+    fn where_the_model_is_coarser_than_the_blank_the_quadric_measures() {
+        // The model every 1 mm round the stadium and 1 mm apart, the blank every 0.5 mm: every
+        // model point's fourth neighbour is farther than the blank's spacing, so every point is
+        // the quadric's; with the blank every 1.5 mm, none is.
+        let part = stadium();
+        let model = part.sample(1.0, 1.0, (4.0, 16.0), &|_, _| 0.0, None);
+        let points: Vec<[f64; 3]> = model.iter().map(|m| m.0.into()).collect();
+        let normals: Vec<[f64; 3]> = model.iter().map(|m| m.1.into()).collect();
+        let shape = ModelShape::new(&points, &normals).unwrap();
+        for (spacing, coarser) in [(0.5, true), (1.5, false)] {
+            let mut seed = 3u64;
+            let blank: Vec<[f64; 3]> = part
+                .sample(spacing, spacing, (0.0, 20.0), &|_, _| 0.3, Some(&mut seed))
+                .iter()
+                .map(|b| b.0.into())
+                .collect();
+            let options = |surface| BlankOptions { surface, k: None, spacing: Some(spacing) };
+            let stock = allowance(&points, &normals, &blank, &options(BlankSurface::Stock)).unwrap();
+            let quadric = allowance(&points, &normals, &blank, &options(BlankSurface::Quadric)).unwrap();
+            let same = stock.iter().zip(&quadric).filter(|(a, b)| a.to_bits() == b.to_bits()).count();
+            assert!((0..points.len()).all(|i| shape.coarser_than(i, spacing) == coarser));
+            assert_eq!(same == points.len(), coarser, "spacing {spacing}: {same} of {} equal", points.len());
         }
     }
 
