@@ -32,7 +32,7 @@
 //! plane), or the centre has not settled. Measured against exact offsets of twisted elliptic and
 //! circular-arc blades (BENCHMARKS.md): within 3 µm on smooth edges of radius ≥ 1.5 s at 0.2–1 mm
 //! spacing; where a fillet meets a flank tangentially (the curvature jumps) 3–6 µm at s ≤ 0.5
-//! mm, 10–18 µm at 0.75–1 mm (the stock field: within 2.3 µm there).
+//! mm, 10–18 µm at 0.75–1 mm (the stock field: within 6.0 µm there).
 use super::stock::{ModelShape, StockField};
 use crate::error::{check_finite_points, check_positive, Error, Result};
 use crate::spatial::PointIndex;

@@ -17,12 +17,12 @@
 //! paraboloid, because a model sampled every millimetre round an edge of 0.8 mm radius puts a
 //! blank point's foot half a millimetre from p, where the paraboloid is 19 µm off the circle. Where
 //! p's neighbours lie on one line (a model sampled in sections), the curvature across the line is
-//! not seen and is taken as 0; that costs κ·d²/2 at a distance d from the line (about 2 µm for a
-//! twisted blade's span curvature and sections 4 mm apart). The model's own sampling sets the
+//! not seen: it is taken as a cylinder's where the sections cross an edge, as a helicoid's (0)
+//! on a twisted flank ([`ModelShape::shape_operator`]). The model's own sampling sets the
 //! error where the curvature jumps: a jump Δκ between two model points d apart leaves up to
-//! Δκ·(d/2)²/2 (BENCHMARKS.md: a model sampled every 0.15–0.5 mm is within 6.3 µm at edges of
-//! 1.5 blank spacings; every 1 mm both ways, 10–20 µm, where the blank's quadric was 1–15 µm at
-//! blank spacings of 0.5–0.75 mm). So the model's normals must be the part's (CAD), and where the
+//! Δκ·(d/2)²/2 (BENCHMARKS.md: with the model sampled every 0.15–0.5 mm, edges of 1.5 blank
+//! spacings are within 6.3 µm; every 1 mm both ways, the field alone was 10–20 µm off, where the
+//! blank's quadric held 1–15 µm at blank spacings of 0.5–0.75 mm). So the model's normals must be the part's (CAD), and where the
 //! model is sampled more coarsely than the blank (its fourth nearest point farther than the blank's
 //! spacing) the blank's own quadric measures the point instead ([`ModelShape::coarser_than`]).
 //!
