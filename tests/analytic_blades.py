@@ -21,6 +21,10 @@ Sections:
                                   = crescent, concave lower side), the corners rounded by
                                   tangent fillets of radius r (curvature jumps at the joins).
 
+Also `stadium(sigma, z)`: a stadium section (flats joined by half circles, the curvature jumping
+from 1/r to 0) extruded straight along z, by arc length; a blank offset by a field d(sigma, z)
+along its normals has d at each model point as its exact allowance.
+
 Example:
     blade = Blade(EllipseSection(20, 4), span=60, twist_deg=30, lean=(0.05, 0.02))
     u, z = blade.model_grid(0.3, z_range=(0, 60))
@@ -361,6 +365,27 @@ def smooth_offset(blade, lo=0.1, hi=0.5, waves=(1, 1.5), phase=(0.3, 0.7)):
             TAU * waves[1] * np.asarray(z) / blade.span + TAU * phase[1])
 
     return d
+
+
+def stadium(sigma, z, half=5.0, r=1.5):
+    """A stadium section (flats 2·half long joined by half circles of radius r: the curvature jumps from 1/r to 0
+    where they meet) extruded along z: points and outward normals at arc length σ and height z."""
+    sigma = np.mod(sigma, 4 * half + 2 * np.pi * r)
+    x, y, nx, ny = (np.zeros_like(sigma) for _ in range(4))
+    legs = [2 * half, np.pi * r, 2 * half, np.pi * r]
+    start = np.concatenate([[0], np.cumsum(legs)])
+    for k in range(4):
+        s = sigma - start[k]
+        on = (s >= 0) & (s < legs[k])
+        if k in (0, 2):
+            sign = 1 if k == 0 else -1
+            x[on], y[on], nx[on], ny[on] = sign * (-half + s[on]), sign * r, 0, sign
+        else:
+            a = s[on] / r
+            sign = 1 if k == 1 else -1
+            nx[on], ny[on] = sign * np.sin(a), sign * np.cos(a)
+            x[on], y[on] = sign * half + r * nx[on], r * ny[on]
+    return np.column_stack([x, y, z]), np.column_stack([nx, ny, np.zeros_like(x)])
 
 
 def _inside(q, poly):

@@ -390,27 +390,6 @@ def test_align_blank_recovers_a_misplaced_blank_to_the_even_allowance(angle, shi
         assert np.nanstd(alone.allowance) > 0.05
 
 
-def _stadium(sigma, z, half=5.0, r=1.5):
-    """A stadium section (flats 2·half long joined by half circles of radius r: the curvature jumps from 1/r to 0
-    where they meet) extruded along z: points and outward normals at arc length σ and height z."""
-    sigma = np.mod(sigma, 4 * half + 2 * np.pi * r)
-    x, y, nx, ny = (np.zeros_like(sigma) for _ in range(4))
-    legs = [2 * half, np.pi * r, 2 * half, np.pi * r]
-    start = np.concatenate([[0], np.cumsum(legs)])
-    for k in range(4):
-        s = sigma - start[k]
-        on = (s >= 0) & (s < legs[k])
-        if k in (0, 2):
-            sign = 1 if k == 0 else -1
-            x[on], y[on], nx[on], ny[on] = sign * (-half + s[on]), sign * r, 0, sign
-        else:
-            a = s[on] / r
-            sign = 1 if k == 1 else -1
-            nx[on], ny[on] = sign * np.sin(a), sign * np.cos(a)
-            x[on], y[on] = sign * half + r * nx[on], r * ny[on]
-    return np.column_stack([x, y, z]), np.column_stack([nx, ny, np.zeros_like(x)])
-
-
 def test_the_stock_field_on_a_part_sampled_without_sections():
     """A stadium extruded and turned off the axes (edges of 1.5 mm where the curvature jumps to the flats'), the model
     sampled at random (no sections: every shape operator sees both directions), 0.15 mm apart on average, the blank
@@ -425,11 +404,11 @@ def test_the_stock_field_on_a_part_sampled_without_sections():
 
     count = int(perimeter * 16.0 / 0.15**2)
     sigma, z = rng.uniform(0, perimeter, count), rng.uniform(2, 18, count)
-    model, normals = _stadium(sigma, z)
+    model, normals = parts.stadium(sigma, z)
     gs, gz = np.meshgrid(np.arange(0, perimeter, 1.0), np.arange(-2, 22, 1.0))
     gs = gs + rng.uniform(-0.3, 0.3, gs.shape)
     gz = gz + rng.uniform(-0.3, 0.3, gz.shape)
-    surface, n = _stadium(gs.ravel(), gz.ravel())
+    surface, n = parts.stadium(gs.ravel(), gz.ravel())
     blank = surface + stock(gs.ravel(), gz.ravel())[:, None] * n
     turn = np.linalg.qr(rng.normal(size=(3, 3)))[0]
     a = machscan.allowance(model @ turn.T, normals @ turn.T, blank @ turn.T)
