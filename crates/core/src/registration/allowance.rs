@@ -33,7 +33,7 @@
 //! circular-arc blades (BENCHMARKS.md): within 3 µm on smooth edges of radius ≥ 1.5 s at 0.2–1 mm
 //! spacing; where a fillet meets a flank tangentially (the curvature jumps) 3–6 µm at s ≤ 0.5
 //! mm, 10–18 µm at 0.75–1 mm (the stock field: within 6.0 µm there).
-use super::stock::{ModelShape, StockField};
+use super::stock::ModelShape;
 use crate::error::{check_finite_points, check_positive, Error, Result};
 use crate::spatial::PointIndex;
 use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
@@ -189,7 +189,7 @@ impl<'a> Blank<'a> {
 
     /// Where the line `p + t·v` (v unit) meets the blank's local surface: `t` and the unit normal
     /// of that surface there (its sign arbitrary). None where the blank does not cover the point.
-    /// The stock field is met through [`StockField`], which needs the model too.
+    /// The stock field is met through [`super::stock::StockField`], which needs the model too.
     pub(super) fn meet(&self, p: &V3, v: &V3) -> Option<(f64, V3)> {
         match self.surface {
             BlankSurface::Plane => self.meet_plane(p, v),
@@ -467,7 +467,7 @@ pub fn allowance(
     let blank = Blank::new(blank, options)?;
     if options.surface == BlankSurface::Stock {
         let shape = ModelShape::new(model, normals)?;
-        let field = StockField::new(&shape, blank.points(), blank.spacing())?;
+        let field = shape.field(blank.points(), blank.spacing())?;
         return Ok(model
             .par_iter()
             .zip(normals)
@@ -475,7 +475,10 @@ pub fn allowance(
             .map(|(i, (p, v))| {
                 let (p, v) = (V3::from(*p), V3::from(*v).normalize());
                 // Where the model is sampled more coarsely than the blank, the blank's quadric.
-                let met = if shape.coarser_than(i, blank.spacing()) { blank.meet(&p, &v) } else { field.meet(&p, &v) };
+                let met = match &field {
+                    Some(field) if !shape.coarser_than(i, blank.spacing()) => field.meet(&p, &v),
+                    _ => blank.meet(&p, &v),
+                };
                 met.map_or(f64::NAN, |(t, _)| t)
             })
             .collect());

@@ -12,7 +12,7 @@
 //! shrunk by a trust region when it does not keep what the linearisation promised (SQP with an
 //! exact L∞ penalty).
 use super::allowance::{Blank, BlankOptions, BlankSurface};
-use super::stock::{ModelShape, StockField};
+use super::stock::ModelShape;
 use super::twist;
 use crate::error::{check_finite_points, Error, Result};
 use crate::geom::{transform_point, transform_vector};
@@ -122,17 +122,14 @@ impl Problem<'_> {
             Some(shape) => {
                 let moved: Vec<[f64; 3]> = self.blank.points().iter().map(|&b| transform_point(pose, b)).collect();
                 let spacing = self.blank.spacing();
-                let field = StockField::new(shape, &moved, spacing)?;
+                let field = shape.field(&moved, spacing)?;
                 self.model
                     .par_iter()
                     .zip(&self.normals)
                     .enumerate()
-                    .map(|(i, (p, v))| {
-                        if shape.coarser_than(i, spacing) {
-                            in_blank(p, v)
-                        } else {
-                            field.meet(&Vector3::from(*p), v)
-                        }
+                    .map(|(i, (p, v))| match &field {
+                        Some(field) if !shape.coarser_than(i, spacing) => field.meet(&Vector3::from(*p), v),
+                        _ => in_blank(p, v),
                     })
                     .collect()
             }

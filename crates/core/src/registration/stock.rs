@@ -166,6 +166,15 @@ impl ModelShape {
         self.sampling[i] > spacing
     }
 
+    /// The stock field of `blank` (in the model's frame, point spacing `spacing`); None where
+    /// every model point is coarser than the blank (the quadric measures them all).
+    pub(super) fn field(&self, blank: &[[f64; 3]], spacing: f64) -> Result<Option<StockField>> {
+        if self.sampling.iter().all(|&d| d > spacing) {
+            return Ok(None);
+        }
+        StockField::new(self, blank, spacing).map(Some)
+    }
+
     /// A blank point's foot on the model, its stock (signed, along the model's outward normal
     /// there) and the model's unit normal at the foot; None beyond the centre of curvature.
     fn foot(&self, b: &V3) -> Option<(V3, f64, V3)> {
@@ -209,7 +218,7 @@ pub(super) struct StockField {
 
 impl StockField {
     /// `blank` in the model's frame; `spacing` its point spacing.
-    pub(super) fn new(model: &ModelShape, blank: &[[f64; 3]], spacing: f64) -> Result<StockField> {
+    fn new(model: &ModelShape, blank: &[[f64; 3]], spacing: f64) -> Result<StockField> {
         let found: Vec<(V3, f64, V3)> = blank.par_iter().filter_map(|b| model.foot(&V3::from(*b))).collect();
         let feet: Vec<[f64; 3]> = found.iter().map(|f| f.0.into()).collect();
         let index = PointIndex::new(&feet)?;
