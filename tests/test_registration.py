@@ -353,6 +353,10 @@ def test_bad_blank_options_are_refused_by_name():
         machscan.allowance(model, normals, blank, surface="quadric", k=8)
     with pytest.raises(ValueError, match=r"surface.*'stock'"):
         machscan.allowance(model, normals, blank, surface="stok")  # type: ignore[arg-type]
+    # No model points, no allowance: an empty array, as NumPy answers an empty input.
+    for surface in ("stock", "quadric", "plane"):
+        empty = machscan.allowance(np.zeros((0, 3)), np.zeros((0, 3)), blank, surface=surface)  # type: ignore[arg-type]
+        assert empty.shape == (0,)
     with pytest.raises(ValueError, match="spacing"):
         machscan.allowance(model, normals, blank, spacing=-1.0)
     with pytest.raises(ValueError, match="k"):

@@ -465,7 +465,7 @@ pub fn allowance(
     check_finite_points("model_points", model)?;
     super::check_normals("model_normals", normals, model.len())?;
     let blank = Blank::new(blank, options)?;
-    if options.surface == BlankSurface::Stock {
+    if options.surface == BlankSurface::Stock && !model.is_empty() {
         let shape = ModelShape::new(model, normals)?;
         let field = shape.field(blank.points(), blank.spacing())?;
         return Ok(model
