@@ -84,15 +84,15 @@ def allowance(
     and blank both turn — round a blade's edge, where a fillet meets a flank — which no surface
     fitted to the blank points alone follows at a coarse spacing. Measured against exact offsets
     of twisted elliptic and circular-arc blades (BENCHMARKS.md, blank 0.2–1 mm apart, model
-    sections 0.15 mm along them): within 6.0 µm at edges of radius 0.8–10 blank spacings, fillet
-    joins included, 2.5 µm elsewhere. It needs the part's own normals (CAD), and it reads the model's
+    sections 0.15 mm along them): within 5.9 µm at edges of radius 0.8–10 blank spacings, fillet
+    joins included, 0.9 µm elsewhere. It needs the part's own normals (CAD), and it reads the model's
     shape between model points: a curvature jump between model points d apart costs up to
     Δκ·(d/2)²/2. So where the model is sampled more coarsely than the blank (a model point's
     fourth nearest neighbour farther than the blank's spacing), that point is measured on the
     blank's own quadric (below) instead. Sample the model evenly (sections, a grid, or
     :meth:`machscan.cad.CadMesh.sample`) at 0.5 mm or finer, and more finely than the blank near
     edges: with the model every 1 mm, fillet joins at 0.75–1 mm blank spacing are 13–19 µm off;
-    a model drawn uniformly at random leaves gaps (13–14 µm at 0.5 mm mean spacing).
+    a model drawn uniformly at random leaves gaps (12 µm at 0.5 mm mean spacing).
     ``surface="quadric"`` fits an implicit quadric to the blank points alone about a centre on
     the line, Gaussian-weighted over 1.5 blank spacings, moved to where the line meets it (four
     fits): it holds circles and cylinders of any orientation, does not depend on the model's

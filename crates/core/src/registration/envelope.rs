@@ -128,7 +128,9 @@ impl Problem<'_> {
                     .zip(&self.normals)
                     .enumerate()
                     .map(|(i, (p, v))| match &field {
-                        Some(field) if !shape.coarser_than(i, spacing) => field.meet(&Vector3::from(*p), v),
+                        Some(field) if !shape.coarser_than(i, spacing) => {
+                            field.meet(&Vector3::from(*p), v).or_else(|| in_blank(p, v))
+                        }
                         _ => in_blank(p, v),
                     })
                     .collect()

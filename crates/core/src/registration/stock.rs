@@ -18,7 +18,8 @@
 //! blank point's foot half a millimetre from p, where the paraboloid is 19 µm off the circle. Where
 //! p's neighbours lie on one line (a model sampled in sections), the curvature across the line is
 //! not seen: it is taken as a cylinder's where the sections cross an edge, as a helicoid's (0)
-//! on a twisted flank ([`ModelShape::shape_operator`]). The model's own sampling sets the
+//! on a twisted flank ([`ModelShape::shape_operator`]). A foot is read only near p or where the
+//! model was sampled beyond p in its direction ([`Reach::ahead`]). The model's own sampling sets the
 //! error where the curvature jumps: a jump Δκ between two model points d apart leaves up to
 //! Δκ·(d/2)²/2 (BENCHMARKS.md: with the model sampled every 0.15–0.5 mm, edges of 1.5 blank
 //! spacings are within 6.3 µm; every 1 mm both ways, the field alone was 10–20 µm off, where the
@@ -48,6 +49,15 @@ const SHAPE_NEIGHBORS: usize = 4;
 const ON_A_LINE: f64 = 0.05;
 /// A foot whose model normal is more than 120° from the point's is on the other side of an edge.
 const FACING: f64 = -0.5;
+/// A foot is read from a model point's shape only where one of its nearest model points lies at
+/// least this share of the foot's offset ahead of it, in its direction.
+const AHEAD: f64 = 0.5;
+const REACH_NEIGHBORS: usize = 8;
+/// ... but any foot within this share of the blank's spacing of its model point is read.
+const FREE: f64 = 0.5;
+/// The least total weight of the feet a field is fitted to (about three feet within h): fewer,
+/// and the blank's quadric measures the point.
+const MIN_WEIGHT: f64 = 3.0;
 /// At most this many feet in a fit (within 2.5 h there are about 45 on a surface sampled at the
 /// blank's spacing, more where the model is concave).
 const FIELD_POINTS: usize = 128;
@@ -61,6 +71,9 @@ pub(super) struct ModelShape {
     shape: Vec<[f64; 3]>,
     /// The distance to the farthest of those neighbours: how finely the model is sampled there.
     sampling: Vec<f64>,
+    /// Where the neighbours lie: the axes (a, b) of their spread in the tangent frame (cos, sin
+    /// of a), the range of their offsets along a and along b, and whether they lie on one line.
+    reach: Vec<Reach>,
     index: PointIndex,
 }
 
@@ -74,16 +87,20 @@ impl ModelShape {
         let points: Vec<V3> = model.iter().map(|p| V3::from(*p)).collect();
         let normals: Vec<V3> = normals.iter().map(|n| V3::from(*n).normalize()).collect();
         let frames: Vec<(V3, V3)> = normals.iter().map(tangent_frame).collect();
-        let mut shape = ModelShape { points, normals, frames, shape: Vec::new(), sampling: Vec::new(), index };
-        let (operators, sampling) = (0..model.len()).into_par_iter().map(|i| shape.shape_operator(i)).unzip();
-        (shape.shape, shape.sampling) = (operators, sampling);
+        let mut shape =
+            ModelShape { points, normals, frames, shape: Vec::new(), sampling: Vec::new(), reach: Vec::new(), index };
+        let found: Vec<([f64; 3], f64, Reach)> =
+            (0..model.len()).into_par_iter().map(|i| shape.shape_operator(i)).collect();
+        shape.shape = found.iter().map(|f| f.0).collect();
+        shape.sampling = found.iter().map(|f| f.1).collect();
+        shape.reach = found.iter().map(|f| f.2).collect();
         Ok(shape)
     }
 
     /// S with dn = S·dp over the nearest neighbours (tangent parts in point i's frame), least
     /// squares; on a line of neighbours its two observable terms, the third that of a cylinder
-    /// through them. And the distance to the farthest of those neighbours.
-    fn shape_operator(&self, i: usize) -> ([f64; 3], f64) {
+    /// through them. And the distance to the farthest of those neighbours, and where they lie.
+    fn shape_operator(&self, i: usize) -> ([f64; 3], f64, Reach) {
         let (e1, e2) = self.frames[i];
         let (p, n) = (self.points[i], self.normals[i]);
         let near = self.index.knn(&p.into(), SHAPE_NEIGHBORS + 1);
@@ -97,7 +114,7 @@ impl ModelShape {
             .collect();
         let sampling = near.last().map_or(f64::INFINITY, |&(_, d2)| d2.sqrt());
         if offsets.is_empty() {
-            return ([0.0; 3], sampling);
+            return ([0.0; 3], sampling, Reach::NOWHERE);
         }
         // The principal axes (a, b) of the offsets' spread.
         let (cxx, cxy, cyy) = offsets
@@ -146,9 +163,6 @@ impl ModelShape {
             let weight = ((0.5 - ratio) / 0.25).clamp(0.0, 1.0);
             s[2] = weight * s[1] * s[1] / s[0];
         }
-        if on_a_line && s[0].abs() > 1e-9 {
-            s[2] = s[1] * s[1] / s[0];
-        }
         let [saa, sab, sbb] = s;
         // Back to (e1, e2): S = R·S_ab·Rᵀ, R's columns the axes a = (ca, sa), b = (−sa, ca).
         let operator = [
@@ -156,7 +170,15 @@ impl ModelShape {
             (saa - sbb) * ca * sa + sab * (ca * ca - sa * sa),
             saa * sa * sa + 2.0 * sab * ca * sa + sbb * ca * ca,
         ];
-        (operator, sampling)
+        let mut reach = Reach { axis: (ca, sa), offsets: [[0.0; 2]; REACH_NEIGHBORS], count: 0, on_a_line };
+        for &(j, d2) in self.index.knn(&p.into(), REACH_NEIGHBORS + 1).iter() {
+            if j != i && d2 > 0.0 && reach.count < REACH_NEIGHBORS {
+                let dp = self.points[j] - p;
+                reach.offsets[reach.count] = [dp.dot(&e1), dp.dot(&e2)];
+                reach.count += 1;
+            }
+        }
+        (operator, sampling, reach)
     }
 
     /// The model is sampled more coarsely than the blank at model point `i` (its farthest
@@ -177,13 +199,20 @@ impl ModelShape {
 
     /// A blank point's foot on the model, its stock (signed, along the model's outward normal
     /// there) and the model's unit normal at the foot; None beyond the centre of curvature.
-    fn foot(&self, b: &V3) -> Option<(V3, f64, V3)> {
+    fn foot(&self, b: &V3, spacing: f64) -> Option<(V3, f64, V3)> {
         let (i, _) = self.index.nearest(&(*b).into());
         let (e1, e2) = self.frames[i];
         let (p, n) = (self.points[i], self.normals[i]);
         let w = b - p;
         let (x, y, z) = (w.dot(&e1), w.dot(&e2), w.dot(&n));
         let t = x.hypot(y);
+        // Beyond p's neighbours its shape says nothing: a CAD mesh's flat has vertices only at
+        // its ends, and the last arc vertex's curvature carried over the flat put feet up to
+        // 0.3 mm off. Along a line of neighbours (a section) only the offset along it counts;
+        // across the sections the curvature is the cylinder's or the helicoid's (above).
+        if !self.reach[i].ahead(x, y, FREE * spacing) {
+            return None;
+        }
         let (dx, dy) = if t > 0.0 { (x / t, y / t) } else { (1.0, 0.0) };
         let [sxx, sxy, syy] = self.shape[i];
         // The normal section along the offset, as the circle of its normal curvature κ (centre
@@ -207,6 +236,38 @@ impl ModelShape {
     }
 }
 
+/// Where a model point's shape neighbours lie, in its tangent frame: their offsets, the axis
+/// (cos, sin) of their spread, and whether they lie on one line.
+#[derive(Debug, Clone, Copy)]
+struct Reach {
+    axis: (f64, f64),
+    offsets: [[f64; 2]; REACH_NEIGHBORS],
+    count: usize,
+    on_a_line: bool,
+}
+
+impl Reach {
+    const NOWHERE: Reach = Reach { axis: (1.0, 0.0), offsets: [[0.0; 2]; REACH_NEIGHBORS], count: 0, on_a_line: false };
+
+    /// The tangent offset (x, y) is no longer than `free`, or a neighbour lies ahead of it: at least [`AHEAD`] of its length along it (along the line only, where the
+    /// neighbours lie on one). A foot failing both lies where the model point's shape was not
+    /// measured.
+    fn ahead(&self, x: f64, y: f64, free: f64) -> bool {
+        let (x, y) = if self.on_a_line {
+            let (ca, sa) = self.axis;
+            let a = ca * x + sa * y;
+            (a * ca, a * sa)
+        } else {
+            (x, y)
+        };
+        let t2 = x * x + y * y;
+        // Within `free` the foot is among the model points whatever its direction: a model
+        // sampled at random has gaps between its nearest few, and refusing feet there cost
+        // more than it saved (BENCHMARKS.md).
+        t2 <= free * free || self.offsets[..self.count].iter().any(|d| d[0] * x + d[1] * y >= AHEAD * t2)
+    }
+}
+
 /// The blank's feet on the model with their stocks, indexed.
 pub(super) struct StockField {
     feet: Vec<[f64; 3]>,
@@ -219,7 +280,7 @@ pub(super) struct StockField {
 impl StockField {
     /// `blank` in the model's frame; `spacing` its point spacing.
     fn new(model: &ModelShape, blank: &[[f64; 3]], spacing: f64) -> Result<StockField> {
-        let found: Vec<(V3, f64, V3)> = blank.par_iter().filter_map(|b| model.foot(&V3::from(*b))).collect();
+        let found: Vec<(V3, f64, V3)> = blank.par_iter().filter_map(|b| model.foot(&V3::from(*b), spacing)).collect();
         let feet: Vec<[f64; 3]> = found.iter().map(|f| f.0.into()).collect();
         let index = PointIndex::new(&feet)?;
         Ok(StockField {
@@ -266,7 +327,7 @@ impl StockField {
             mean = [mean[0] + w * x, mean[1] + w * y];
             spread += w * (x * x + y * y);
         }
-        if !(sw > 0.0) || mean[0].hypot(mean[1]) / sw > COVER * (spread / sw).sqrt() {
+        if !(sw >= MIN_WEIGHT) || mean[0].hypot(mean[1]) / sw > COVER * (spread / sw).sqrt() {
             return None;
         }
         // The quadratic where the feet fix it, else the plane (few feet: the field's slope only).
