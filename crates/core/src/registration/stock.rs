@@ -52,6 +52,8 @@ const FACING: f64 = -0.5;
 /// A foot is read from a model point's shape only where one of its nearest model points lies at
 /// least this share of the foot's offset ahead of it, in its direction.
 const AHEAD: f64 = 0.5;
+/// The nearest model points looked at for that (more than the shape's four: a model sampled
+/// at random leaves gaps between its nearest few).
 const REACH_NEIGHBORS: usize = 8;
 /// ... but any foot within this share of the blank's spacing of its model point is read.
 const FREE: f64 = 0.5;
@@ -71,8 +73,7 @@ pub(super) struct ModelShape {
     shape: Vec<[f64; 3]>,
     /// The distance to the farthest of those neighbours: how finely the model is sampled there.
     sampling: Vec<f64>,
-    /// Where the neighbours lie: the axes (a, b) of their spread in the tangent frame (cos, sin
-    /// of a), the range of their offsets along a and along b, and whether they lie on one line.
+    /// Where the nearest model points lie about each point ([`Reach`]).
     reach: Vec<Reach>,
     index: PointIndex,
 }
@@ -103,7 +104,9 @@ impl ModelShape {
     fn shape_operator(&self, i: usize) -> ([f64; 3], f64, Reach) {
         let (e1, e2) = self.frames[i];
         let (p, n) = (self.points[i], self.normals[i]);
-        let near = self.index.knn(&p.into(), SHAPE_NEIGHBORS + 1);
+        // One query for both: the shape's neighbours are the nearest of the reach's.
+        let reach_near = self.index.knn(&p.into(), REACH_NEIGHBORS + 1);
+        let near = &reach_near[..reach_near.len().min(SHAPE_NEIGHBORS + 1)];
         let offsets: Vec<([f64; 2], [f64; 2])> = near
             .iter()
             .filter(|&&(j, d2)| j != i && d2 > 0.0)
@@ -171,7 +174,7 @@ impl ModelShape {
             saa * sa * sa + 2.0 * sab * ca * sa + sbb * ca * ca,
         ];
         let mut reach = Reach { axis: (ca, sa), offsets: [[0.0; 2]; REACH_NEIGHBORS], count: 0, on_a_line };
-        for &(j, d2) in self.index.knn(&p.into(), REACH_NEIGHBORS + 1).iter() {
+        for &(j, d2) in &reach_near {
             if j != i && d2 > 0.0 && reach.count < REACH_NEIGHBORS {
                 let dp = self.points[j] - p;
                 reach.offsets[reach.count] = [dp.dot(&e1), dp.dot(&e2)];
@@ -236,8 +239,8 @@ impl ModelShape {
     }
 }
 
-/// Where a model point's shape neighbours lie, in its tangent frame: their offsets, the axis
-/// (cos, sin) of their spread, and whether they lie on one line.
+/// Where a model point's nearest model points lie, in its tangent frame: their offsets, and the
+/// axis (cos, sin) of its shape neighbours' spread and whether they lie on one line.
 #[derive(Debug, Clone, Copy)]
 struct Reach {
     axis: (f64, f64),
@@ -249,9 +252,9 @@ struct Reach {
 impl Reach {
     const NOWHERE: Reach = Reach { axis: (1.0, 0.0), offsets: [[0.0; 2]; REACH_NEIGHBORS], count: 0, on_a_line: false };
 
-    /// The tangent offset (x, y) is no longer than `free`, or a neighbour lies ahead of it: at least [`AHEAD`] of its length along it (along the line only, where the
-    /// neighbours lie on one). A foot failing both lies where the model point's shape was not
-    /// measured.
+    /// The tangent offset (x, y) is no longer than `free`, or a neighbour lies ahead of it: at
+    /// least [`AHEAD`] of its length along it (along the line only, where the shape's neighbours
+    /// lie on one). A foot failing both lies where the model point's shape was not measured.
     fn ahead(&self, x: f64, y: f64, free: f64) -> bool {
         let (x, y) = if self.on_a_line {
             let (ca, sa) = self.axis;
