@@ -11,7 +11,7 @@ paper's removal model with its own feeds. The stock left is checked on a separat
 every 7th point.
 
     python benchmarks/grinding_parts.py [--spacings 0.3,0.4,...,1.5] [--parts ellipse,biconvex,crescent]
-        [--scallops 0.005,0.01,0.02]
+        [--scallops 0.005,0.01,0.02] [--across 0.5]
 """
 
 from __future__ import annotations
@@ -26,26 +26,29 @@ import numpy as np
 import machscan
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from analytic_blades import Blade, EllipseSection, LenticularSection, smooth_offset
+from analytic_blades import Blade, EllipseSection, LenticularSection, StadiumSection, smooth_offset
 
 MODEL = dict(C=0.05, exponents=(0.6, -0.7, 0.8), belt_speed=20.0, force=15.0, feed_limits=(0.5, 200.0))
 PARTS = {
     "ellipse": lambda: Blade(EllipseSection(20.0, 4.0), span=60.0, twist_deg=30.0, lean=(0.05, 0.02)),
     "biconvex": lambda: Blade(LenticularSection(20.0, 3.0, 2.0, 0.8), span=60.0, twist_deg=30.0, lean=(0.03, -0.04)),
     "crescent": lambda: Blade(LenticularSection(20.0, 5.0, -1.5, 0.5), span=60.0, twist_deg=30.0, lean=(-0.04, 0.03)),
+    "stadium": lambda: Blade(StadiumSection(8.0, 2.0), span=40.0, twist_deg=0.0),
+    "stadium-twisted": lambda: Blade(StadiumSection(8.0, 2.0), span=40.0, twist_deg=20.0, lean=(0.02, 0.0)),
 }
 STAGGER = 0.382  # golden-ratio shift of each scan line along the section
 
 
-def cloud(blade: Blade, spacing: float, stagger: float = STAGGER):
-    """Model points every `spacing`, their exact normals and the allowance 0.2–0.4 mm."""
-    u, z = blade.model_grid(spacing, stagger=stagger)
+def cloud(blade: Blade, spacing: float, stagger: float = STAGGER, across: float | None = None):
+    """Model points every `spacing` along the sections and every `across` (default `spacing`) along the span, their
+    exact normals and the allowance 0.2–0.4 mm."""
+    u, z = blade.model_grid(spacing, span_spacing=across, stagger=stagger)
     d = smooth_offset(blade, 0.2, 0.4)
     return blade.point(u, z), blade.normal(u, z), d(u, z)
 
 
-def measure(blade: Blade, spacing: float, scallop: float, check) -> dict:
-    p, n, a = cloud(blade, spacing)
+def measure(blade: Blade, spacing: float, scallop: float, check, across: float | None = None) -> dict:
+    p, n, a = cloud(blade, spacing, across=across)
     row = dict(points_in=len(p))
     t0 = time.perf_counter()
     try:
@@ -79,8 +82,10 @@ def refusal(message: str) -> str:
     """The refusal in a table cell: why, and the spacing the call says the cloud needs."""
     if "no surface fit" in message:
         why = "no fit"
-    else:
+    elif "disagree by " in message:
         why = "fits disagree by " + message.split("disagree by ")[1].split(" mm")[0] + " mm"
+    else:
+        return f"refused: {message}"
     needed = message.split("points every ")[1].split(" mm")[0]
     return f"refused: {why}; needs ≤ {needed} mm"
 
@@ -90,6 +95,8 @@ def main() -> None:
     ap.add_argument("--spacings", default="0.3,0.4,0.5,0.6,0.75,0.9,1,1.25,1.5")
     ap.add_argument("--parts", default=",".join(PARTS))
     ap.add_argument("--scallops", default="0.01", help="scallop heights, mm; several give the density table too")
+    ap.add_argument("--across", type=float, default=None,
+                    help="span spacing of the cloud's sections, mm (default: the spacing along them, an even cloud)")
     args = ap.parse_args()
     spacings = [float(s) for s in args.spacings.split(",")]
     scallops = [float(h) for h in args.scallops.split(",")]
@@ -105,7 +112,7 @@ def main() -> None:
             blade = PARTS[name]()
             check = cloud(blade, 0.25, stagger=0.5)
             for spacing in spacings:
-                r = measure(blade, spacing, scallop, check)
+                r = measure(blade, spacing, scallop, check, args.across)
                 if "refused" in r:
                     print(f"| {name} | {spacing:g} | {r['points_in']:,} | {refusal(r['refused'])} | | | | | | {r['time']:.2f} |")
                 else:

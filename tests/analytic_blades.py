@@ -20,6 +20,8 @@ Sections:
                                   > 0) and hl (lower; > 0 bulges down = biconvex, < 0 bulges up
                                   = crescent, concave lower side), the corners rounded by
                                   tangent fillets of radius r (curvature jumps at the joins).
+  StadiumSection(half, r)         two flats 2·half long joined by half circles of radius r (the
+                                  curvature jumps from 0 to 1/r where they meet).
 
 Also `stadium(sigma, z)`: a stadium section (flats joined by half circles, the curvature jumping
 from 1/r to 0) extruded straight along z, by arc length; a blank offset by a field d(sigma, z)
@@ -187,6 +189,54 @@ class LenticularSection(Section):
 
     def __repr__(self):
         return f"Lenticular(a={self.a:g}, hu={self.hu:g}, hl={self.hl:g}, r_e={self.edge_radius:g})"
+
+
+class StadiumSection(Section):
+    """Two flats 2·half long joined by half circles of radius r (the curvature jumps from 0 to 1/r where they meet),
+    by arc length: u = s / length, counter-clockwise from the bottom flat's left end (-half, -r)."""
+
+    def __init__(self, half, r):
+        self.half, self.r = float(half), float(r)
+        self.edge_radius = self.r
+        self.legs = np.array([2 * self.half, np.pi * self.r, 2 * self.half, np.pi * self.r])
+        self.start = np.concatenate([[0.0], np.cumsum(self.legs)])
+        self.edge_u = np.array([self.start[1] + 0.5 * self.legs[1], self.start[3] + 0.5 * self.legs[3]]) / self.length
+
+    @property
+    def length(self):
+        return float(self.start[-1])
+
+    def arclength(self, u):
+        return np.mod(np.asarray(u, float), 1.0) * self.length
+
+    def u_at(self, s):
+        return np.mod(np.asarray(s, float), self.length) / self.length
+
+    def _eval(self, u):
+        s = np.mod(np.asarray(u, float), 1.0) * self.length
+        pt, tg = np.zeros(s.shape + (2,)), np.zeros(s.shape + (2,))
+        for k in range(4):
+            on = (s >= self.start[k]) & (s < self.start[k + 1]) if k < 3 else s >= self.start[3]
+            t = s[on] - self.start[k]
+            if k in (0, 2):
+                sign = 1.0 if k == 0 else -1.0
+                pt[on] = np.stack([sign * (-self.half + t), -sign * self.r * np.ones_like(t)], -1)
+                tg[on] = [sign, 0.0]
+            else:
+                sign = 1.0 if k == 1 else -1.0
+                a = t / self.r - np.pi / 2
+                pt[on] = np.stack([sign * (self.half + self.r * np.cos(a)), sign * self.r * np.sin(a)], -1)
+                tg[on] = np.stack([-sign * np.sin(a), sign * np.cos(a)], -1)
+        return pt, tg * self.length
+
+    def point(self, u):
+        return self._eval(u)[0]
+
+    def deriv(self, u):
+        return self._eval(u)[1]
+
+    def __repr__(self):
+        return f"Stadium(half={self.half:g}, r={self.r:g})"
 
 
 class Blade:

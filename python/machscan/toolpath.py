@@ -529,8 +529,9 @@ def grinding_paths(
 
     Rows are sections of the surface by planes of normal ``section_normal``. Between two rows the surface's
     curvature across them sets the spacing: the widest that keeps the cusp at ``scallop_height``
-    (:func:`step_over`), so rows close up on convex stretches and open out on concave ones. Curvature comes from a
-    quadric fitted over ``fit_radius`` (the scale of a step, so scan noise does not turn into curvature). Each row's
+    (:func:`step_over`), so rows close up on convex stretches and open out on concave ones. Curvature comes from how
+    the given normals turn across the rows over ``fit_radius`` (the scale of a step, so scan noise does not turn into
+    curvature; docs/grinding.md step 1). Each row's
     points are put in order by :func:`bead_chain`, resampled every ``spacing`` and put back on the surface within
     their plane — round an edge of a few point spacings' radius by a fit of the edge's cross-sections, which follows it
     between scan lines. Open rows alternate direction, closed rows (blade sections) run the same way. Where the wheel
@@ -557,8 +558,9 @@ def grinding_paths(
     removal_model : RemovalModel or dict, optional
         The removal model; without one ``.feed`` is NaN and the APT file has no FEDRAT.
     thickness : float, optional
-        Slab of cloud points that traces a row, mm; default twice the cloud's median point spacing (give it for
-        scans whose spacing differs much between directions).
+        Slab of cloud points that traces a row, mm; default twice the cloud's median point spacing, or 1.5 times
+        the gap between its lines across the planes where that is more (a model sampled in sections, a line scan),
+        so that every slab holds a line.
     spacing : float, optional
         Path point spacing along a row, mm; default the cloud's median point spacing.
     tolerance : float, optional

@@ -7,16 +7,18 @@
 //!
 //! 1. **Row spacing.** Neighbouring rows an arc L apart leave a cusp whose height depends on the
 //!    tool radius R and the surface's radius ρ across the rows (`scallop.rs`). ρ is taken at
-//!    sample points of the cloud from a quadric fitted over `fit_radius` — the scale of a step, so
-//!    a few µm of scan noise do not turn into curvature — and each sample gives the widest plane
+//!    sample points of the cloud from the turn of the given normals across the rows over
+//!    `fit_radius` (`Cloud::across`) — the scale of a step, so scan noise does not turn into
+//!    curvature — and each sample gives the widest plane
 //!    spacing that keeps its cusp at the scallop height: `step_over(R, ρ, h)` times the sine of
 //!    the angle between the surface and the planes. From a row at offset d, the next lies at
 //!    d + Δ, Δ the smallest such spacing over the samples between d and d + Δ (a fixed point: the
 //!    band only narrows as Δ does). The first and last rows lie half a step inside the cloud's
 //!    ends (at most half a slab), so the stock beyond them is left at the scallop height too;
 //!    where the rows would overshoot the last, every gap shrinks in proportion.
-//! 2. **Row points.** The cloud points within ±thickness/2 of the plane are projected onto it,
-//!    ordered by the bead chain (`bead_chain.rs`) and resampled every `spacing` along the chain.
+//! 2. **Row points.** The cloud points within ±thickness/2 of the plane (a slab at least 1.5
+//!    times as thick as the gap between the cloud's lines across the planes, so it always holds
+//!    one: a model sampled in sections) are projected onto it, ordered by the bead chain (`bead_chain.rs`) and resampled every `spacing` along the chain.
 //!    Each sample is then put on the surface without leaving the plane: a height field of the
 //!    nearest cloud points (cubic where they span four scan lines, else quadric, widened until they
 //!    span three), solved along the in-plane direction of its normal; round an edge, where the
@@ -55,7 +57,7 @@ use super::scallop::step_over;
 use crate::error::{check_finite, check_finite_points, check_positive, Error, Result};
 use crate::spatial::PointIndex;
 use nalgebra::allocator::Allocator;
-use nalgebra::{Const, DefaultAllocator, DimDiff, DimSub, Matrix6, SMatrix, SVector, Vector3, Vector6, U1};
+use nalgebra::{Const, DefaultAllocator, DimDiff, DimSub, Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6, U1};
 use rayon::prelude::*;
 use std::collections::HashSet;
 
@@ -126,6 +128,12 @@ const DISAGREEMENT: f64 = 2.0;
 /// measured was resolved for a 5–20 µm scallop height: the edge radius times this is the point
 /// spacing an edge needs (BENCHMARKS.md, `benchmarks/grinding_parts.py`).
 const RESOLVED_TURN: f64 = 0.6;
+/// Smallest eigenvalue of the Jacobi-scaled normal matrix of the fit of the normals' turn across
+/// the rows (`Cloud::across`) below which the neighbours do not span the direction across them.
+const ACROSS_CONDITION: f64 = 1e-3;
+/// The default slab is at least this many gaps between the cloud's lines across the planes thick
+/// (`line_gap`): it then always holds one line, at most two.
+const SLAB_PER_GAP: f64 = 1.5;
 /// Newton iterations putting a point on the local quadric within its plane.
 const PLACE_ITERATIONS: usize = 6;
 /// Default feed step: a new feed is programmed where the feed that removes the allowance departs
@@ -199,7 +207,8 @@ pub struct GrindingOptions {
     pub tool_radius: f64,
     pub scallop_height: f64,
     pub section_normal: [f64; 3],
-    /// Slab thickness of a section, mm; default twice the cloud's point spacing.
+    /// Slab thickness of a section, mm; default twice the cloud's point spacing, or 1.5 times the
+    /// gap between its lines across the planes where that is more (`line_gap`).
     pub thickness: Option<f64>,
     /// Path point spacing along a row, mm; default the cloud's point spacing.
     pub spacing: Option<f64>,
@@ -367,28 +376,6 @@ impl Patch {
     fn slopes(&self, x: f64, y: f64) -> (f64, f64) {
         let c = &self.height;
         (c[1] + 2.0 * c[3] * x + c[4] * y, c[2] + c[4] * x + 2.0 * c[5] * y)
-    }
-
-    fn normal(&self, x: f64, y: f64) -> V3 {
-        let (hx, hy) = self.slopes(x, y);
-        (self.w - hx * self.u - hy * self.v).normalize()
-    }
-
-    /// Normal curvature (> 0 convex, the normal w pointing away from the material) in the
-    /// direction of the tangent vector `t` at (x, y).
-    fn curvature(&self, x: f64, y: f64, t: V3) -> f64 {
-        let (hx, hy) = self.slopes(x, y);
-        let c = &self.height;
-        let (hxx, hxy, hyy) = (2.0 * c[3], c[4], 2.0 * c[5]);
-        let (du, dv) = (t.dot(&self.u), t.dot(&self.v));
-        let root = (1.0 + hx * hx + hy * hy).sqrt();
-        let second = (hxx * du * du + 2.0 * hxy * du * dv + hyy * dv * dv) / root;
-        let first = (1.0 + hx * hx) * du * du + 2.0 * hx * hy * du * dv + (1.0 + hy * hy) * dv * dv;
-        if first > 0.0 {
-            -second / first
-        } else {
-            0.0
-        }
     }
 
     /// The surface point within the plane {p : p·n = offset} nearest `q` (a point of the
@@ -714,6 +701,15 @@ impl Cloud<'_> {
 
     /// Curvature across the rows (planes of normal n) at q from the wide fit, and the sine of
     /// the angle between the surface and the planes there.
+    ///
+    /// The curvature is the rate at which the given normals turn along the direction `t` across
+    /// the rows: the slope, along t, of the plane fitted to n_i·t over the neighbourhood (on a
+    /// circle n·t is exactly linear in the distance along t). Not from a quadric of the positions:
+    /// where the surface's curvature jumps (a flat meeting a fillet) such a fit across the jump
+    /// put up to ±0.03 /mm into the direction along the join, where the surface is straight; a
+    /// curvature of −0.096 /mm, near the tool's own, let the concave step-over grow to 4.2 mm on a
+    /// prism and the pass left 0.23 mm between two rows. The normals of a prism have no component
+    /// along it, so this fit gives exactly 0 there.
     fn across(&self, q: V3, n: V3) -> Option<(f64, f64)> {
         let mut near: Vec<usize> = Vec::new();
         self.wide_index.for_each_within(&q.into(), self.fit_radius, |k| near.push(self.wide[k]));
@@ -727,16 +723,26 @@ impl Cloud<'_> {
         if near.len() < 6 {
             return None;
         }
-        let pts: Vec<V3> = near.iter().map(|&i| self.p(i)).collect();
-        let patch = Patch::fit(q, self.mean_normal(&near), &pts, None, f64::INFINITY)?;
-        let (x, y) = patch.coords(q);
-        let normal = patch.normal(x, y);
+        let (origin, normal) = (self.p(near[0]), self.normals[near[0]]);
         let along_row = n.cross(&normal);
         if along_row.norm() < 1e-9 {
             return Some((0.0, 0.0));
         }
-        let across = normal.cross(&along_row.normalize());
-        let k = patch.curvature(x, y, across);
+        let along_row = along_row.normalize();
+        let across = normal.cross(&along_row);
+        let (mut ata, mut atb) = (Matrix3::zeros(), V3::zeros());
+        for &i in &near {
+            let d = self.p(i) - origin;
+            let row = V3::new(1.0, d.dot(&across), d.dot(&along_row));
+            ata += row * row.transpose();
+            atb += row * self.normals[i].dot(&across);
+        }
+        // Neighbours all on one line along the row (sections further apart than the fit radius)
+        // say nothing about the turn across it.
+        if determinacy(&ata) < ACROSS_CONDITION {
+            return None;
+        }
+        let k = ata.cholesky()?.solve(&atb)[1];
         k.is_finite().then_some((k, across.dot(&n).abs()))
     }
 }
@@ -764,6 +770,33 @@ fn point_spacing(points: &[[f64; 3]], index: &PointIndex) -> f64 {
     }
     let mid = d.len() / 2;
     *d.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// Median gap along `n` between a point's line of points and the next, over up to 2000 points
+/// spread through the cloud: the smallest offset along `n` above a quarter `spacing` among a
+/// point's 32 nearest. A model sampled in sections, or a line scan, has its lines further apart
+/// than its points along them; a slab thinner than that gap holds no line where it falls between
+/// two, and its row has no points there (a model every 0.15 mm along sections 0.5 mm apart gave
+/// no path at all). On an even cloud it is below the spacing.
+fn line_gap(points: &[[f64; 3]], index: &PointIndex, n: V3, spacing: f64) -> f64 {
+    let every = (points.len() / 2000).max(1);
+    let mut gaps: Vec<f64> = (0..points.len())
+        .step_by(every)
+        .filter_map(|i| {
+            let p = V3::from(points[i]);
+            index
+                .knn(&points[i], 32)
+                .iter()
+                .map(|&(j, _)| (V3::from(points[j]) - p).dot(&n).abs())
+                .filter(|&d| d > 0.25 * spacing)
+                .reduce(f64::min)
+        })
+        .collect();
+    if gaps.is_empty() {
+        return 0.0;
+    }
+    let mid = gaps.len() / 2;
+    *gaps.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// One point per occupied voxel of size `voxel`: the first one met.
@@ -1044,7 +1077,10 @@ pub fn grinding_paths(
         return Err(Error::invalid("points", "all points coincide"));
     }
     let flat = step_over(r, f64::INFINITY, h)?;
-    let thickness = options.thickness.unwrap_or(2.0 * spacing_cloud);
+    // A slab wider than the gap between the cloud's lines holds one of them wherever it falls.
+    let thickness = options
+        .thickness
+        .unwrap_or_else(|| (2.0 * spacing_cloud).max(SLAB_PER_GAP * line_gap(points, &index, n, spacing_cloud)));
     let spacing = options.spacing.unwrap_or(spacing_cloud);
     let tolerance = options.tolerance.unwrap_or(DEFAULT_TOLERANCE * h);
     let fit_radius = options.fit_radius.unwrap_or(flat.max(4.0 * spacing_cloud));
