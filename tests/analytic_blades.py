@@ -25,7 +25,8 @@ Sections:
 
 Also `stadium(sigma, z)`: a stadium section (flats joined by half circles, the curvature jumping
 from 1/r to 0) extruded straight along z, by arc length; a blank offset by a field d(sigma, z)
-along its normals has d at each model point as its exact allowance.
+along its normals has d at each model point as its exact allowance. `stadium_mesh` tessellates it as a CAD mesher
+does (flats one triangle across), `stadium_offset_distance` is the exact distance along a line to its offset.
 
 Example:
     blade = Blade(EllipseSection(20, 4), span=60, twist_deg=30, lean=(0.05, 0.02))
@@ -436,6 +437,42 @@ def stadium(sigma, z, half=5.0, r=1.5):
             nx[on], ny[on] = sign * np.sin(a), sign * np.cos(a)
             x[on], y[on] = sign * half + r * nx[on], r * ny[on]
     return np.column_stack([x, y, z]), np.column_stack([nx, ny, np.zeros_like(x)])
+
+
+def stadium_mesh(half=5.0, r=1.5, length=20.0, arc_step_deg=10.0):
+    """The stadium prism as a CAD mesher tessellates it: each flat one triangle pair across, the half circles cut every
+    `arc_step_deg`, two rows of vertices at z = 0 and `length`; wound outward. (vertices (N, 3), triangles (T, 3))."""
+    arc_n = round(180.0 / arc_step_deg)
+    arc = np.pi * r
+    cuts = np.linspace(0, arc, arc_n + 1)
+    sigma = np.concatenate([[0.0], 2 * half + cuts, 4 * half + arc + cuts[:-1]])
+    sigma = np.unique(np.round(sigma, 9))
+    s, z = np.meshgrid(sigma, [0.0, length], indexing="ij")
+    vertices, _ = stadium(s.ravel(), z.ravel())
+    k = len(sigma)
+    i = np.arange(k)
+    a, b, c, d = 2 * i, 2 * ((i + 1) % k), 2 * ((i + 1) % k) + 1, 2 * i + 1
+    # stadium() runs clockwise seen from +z, so (a, b, c) would wind inward.
+    return vertices, np.concatenate([np.column_stack([a, c, b]), np.column_stack([a, d, c])])
+
+
+def stadium_offset_distance(points, directions, offset, half=5.0, r=1.5):
+    """Distance t along each unit direction from each point to the stadium offset by `offset` (flats at |y| = r +
+    offset, half circles of radius r + offset about (±half, 0)): exact, the nearest crossing ahead within 1 mm."""
+    p, v = np.asarray(points, float), np.asarray(directions, float)
+    t = np.full(len(p), np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for sign in (1, -1):
+            flat = (sign * (r + offset) - p[:, 1]) / v[:, 1]
+            x = p[:, 0] + flat * v[:, 0]
+            t = np.where(np.isnan(t) & (np.abs(x) <= half) & (np.abs(flat) < 1), flat, t)
+        for sign in (1, -1):
+            q, w = p[:, :2] - [sign * half, 0.0], v[:, :2]
+            a, b, c = np.sum(w * w, 1), 2 * np.sum(q * w, 1), np.sum(q * q, 1) - (r + offset) ** 2
+            root = (-b + np.sqrt(b * b - 4 * a * c)) / (2 * a)
+            x = p[:, 0] + root * v[:, 0]
+            t = np.where(np.isnan(t) & (sign * (x - sign * half) >= 0) & (np.abs(root) < 1), root, t)
+    return t
 
 
 def _inside(q, poly):

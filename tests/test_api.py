@@ -33,6 +33,7 @@ TOP_LEVEL = [
     "match_contours",
     "nearest_neighbors",
     "octree_simplify",
+    "point_spacing",
     "principal_curvatures",
     "profile_to_points",
     "random_downsample",

@@ -414,3 +414,68 @@ def test_ctrl_c_stops_a_long_exact_geodesic_call():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
     assert out.stdout.split() == ["interrupted", "after", "True"], out.stdout + out.stderr
+
+
+# Points with normals spread over a mesh (the model of an allowance given as STL).
+
+
+def _box():
+    v = np.array([[x, y, z] for x in (0.0, 4.0) for y in (0.0, 3.0) for z in (0.0, 2.0)])
+    hull = __import__("scipy.spatial", fromlist=["ConvexHull"]).ConvexHull(v)
+    t = hull.simplices.copy()
+    # Wind outward: each face's normal away from the centre.
+    normal = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    inward = np.sum(normal * (v[t].mean(1) - v.mean(0)), 1) < 0
+    t[inward] = t[inward][:, ::-1]
+    return v, t
+
+
+def test_corner_normals_keep_a_boxs_faces_flat_up_to_its_edges():
+    v, t = _box()
+    corners = machscan.mesh.corner_normals(v, t)
+    face = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    face /= np.linalg.norm(face, axis=1, keepdims=True)
+    # Faces meet at 90° > 30°: no corner averages across an edge; a face's two triangles share its normal.
+    np.testing.assert_allclose(corners, np.repeat(face[:, None, :], 3, axis=1), atol=1e-12)
+    # Above 90° they would: the corner then leans out of the face.
+    assert np.abs(np.einsum("tkj,tj->tk", machscan.mesh.corner_normals(v, t, feature_angle=100.0), face) - 1).max() > 0.1
+
+
+def test_samples_of_a_faceted_cylinder_lie_on_it_with_normals_that_turn_with_it():
+    # A cylinder of radius 5 cut in 36 facets (10° each): corner normals are the radial directions at the vertices
+    # (each is the mean of two facets symmetric about it), so an interpolated normal is within half a facet's turn of
+    # the radial direction through the sample.
+    k, r = 36, 5.0
+    a = 2 * np.pi * np.arange(k) / k
+    v = np.concatenate([np.column_stack([r * np.cos(a), r * np.sin(a), np.full(k, z)]) for z in (0.0, 10.0)])
+    i = np.arange(k)
+    t = np.concatenate([np.column_stack([i, (i + 1) % k, k + (i + 1) % k]), np.column_stack([i, k + (i + 1) % k, k + i])])
+    points, normals = machscan.mesh.sample_surface(v, t, 0.3, seed=2)
+    radial = points[:, :2] / np.linalg.norm(points[:, :2], axis=1, keepdims=True)
+    turn = np.degrees(np.arccos(np.clip(np.sum(normals[:, :2] * radial, 1), -1, 1)))
+    assert turn.max() < 5.0 and np.abs(normals[:, 2]).max() < 1e-12
+    sag = r * (1 - np.cos(np.pi / k))  # the chord's depth under the arc
+    assert np.all(np.linalg.norm(points[:, :2], axis=1) >= r - sag - 1e-9)
+    # Poisson-disk: no two closer than the spacing, and the surface covered (every point of a fine grid within 1.5
+    # spacings of a sample).
+    tree = __import__("scipy.spatial", fromlist=["cKDTree"]).cKDTree(points)
+    assert tree.query(points, 2)[0][:, 1].min() >= 0.3
+    g = np.stack(np.meshgrid(np.linspace(0, 2 * np.pi, 400), np.linspace(0, 10, 60)), -1).reshape(-1, 2)
+    grid = np.column_stack([(r - sag) * np.cos(g[:, 0]), (r - sag) * np.sin(g[:, 0]), g[:, 1]])
+    assert tree.query(grid)[0].max() < 1.5 * 0.3
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        (dict(spacing=0.0), "spacing"),
+        (dict(spacing=0.5, normals=np.zeros((3, 3))), "normals"),
+        (dict(spacing=0.5, feature_angle=0.0), "feature_angle"),
+    ],
+)
+def test_bad_sampling_arguments_are_refused_by_name(kwargs, name):
+    v, t = _box()
+    with pytest.raises(ValueError, match=f"^{name}:"):
+        machscan.mesh.sample_surface(v, t, **kwargs)
+    with pytest.raises(ValueError, match=r"^triangles:"):
+        machscan.mesh.sample_surface(v, t + 100, 0.5)

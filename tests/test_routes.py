@@ -213,3 +213,39 @@ def test_points_without_stock_pass_from_allowance_to_grind_and_are_counted(tmp_p
         assert f"{int(hole.sum())} model points have no allowance" in capsys.readouterr().out
         report = np.genfromtxt(out / "report.csv", delimiter=",", names=True)
         assert int(report["no_stock_points"].sum()) == int(hole.sum())
+
+
+def test_a_cad_meshs_stl_as_the_model_is_sampled_and_its_allowance_feeds_grind(tmp_path, capsys):
+    # The model as a CAD mesher writes it: the stadium prism (flats one triangle across, half circles of 1.5 mm cut
+    # every 10°). Its vertices alone leave the flats without a point (the allowance there unknown, the grinding rows
+    # nothing to follow); the surface is sampled every quarter blank spacing instead, with normals interpolated from
+    # the corners. Blank every 1 mm (edges of 1.5 spacings: the hardest), offset 0.3 mm.
+    vertices, triangles = parts.stadium_mesh()
+    machscan.io.write_mesh(tmp_path / "model.stl", vertices, triangles)
+    rng = np.random.default_rng(4)
+    perimeter = 4 * 5.0 + 2 * np.pi * 1.5
+    s, z = np.meshgrid(np.arange(0, perimeter, 1.0), np.arange(-3, 23, 1.0))
+    s, z = s + rng.uniform(-0.3, 0.3, s.shape), z + rng.uniform(-0.3, 0.3, z.shape)
+    surface, normal = parts.stadium(s.ravel(), z.ravel())
+    machscan.write_points(tmp_path / "blank.ply", surface + 0.3 * normal, dtype="float64")
+    # machscan allowance model.stl blank.ply --out allowance.ply
+    assert main(["allowance", str(tmp_path / "model.stl"), str(tmp_path / "blank.ply"), "--out", str(tmp_path / "a.ply")]) == 0
+    assert "is a mesh" in capsys.readouterr().out
+    stored = machscan.io.read(tmp_path / "a.ply")
+    p, v, a = stored.points, stored.normals, stored.scalars["allowance"]
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    on_flats = (np.abs(p[:, 0]) < 4.5) & (p[:, 2] > 1) & (p[:, 2] < 19)
+    assert on_flats.sum() > 500  # the flats have points now (the mesh's vertices put none inside them)
+    np.testing.assert_allclose(machscan.mesh.closest_points(vertices, triangles, p).distances, 0.0, atol=1e-5)
+    inner = (p[:, 2] > 2) & (p[:, 2] < 18)
+    truth = parts.stadium_offset_distance(p, v, 0.3)
+    # Measured: 6.5 µm (the chords lie up to 5.7 µm inside the arcs, the normals are the arc's); float32 on disk.
+    assert not np.isnan(a[inner]).any() and np.abs(a - truth)[inner].max() < 0.010
+    # machscan grind allowance.ply --tool-radius 10 --scallop-height 0.01 --removal ... --out grinding/
+    out = tmp_path / "grinding"
+    args = ["grind", str(tmp_path / "a.ply"), "--tool-radius", "10", "--scallop-height", "0.01", "--removal", REMOVAL]
+    assert main([*args, "--out", str(out)]) == 0
+    report = np.genfromtxt(out / "report.csv", delimiter=",", names=True)
+    offsets = report["offset_mm"]
+    assert len(np.unique(offsets)) == len(offsets) and report["closed"].all()  # whole rows round the prism
+    assert np.nanmax(np.abs(np.column_stack([report["deviation_min_mm"], report["deviation_max_mm"]]))) <= 0.03

@@ -1256,6 +1256,16 @@ def remove_duplicates(points: ArrayLike, tolerance: float) -> _I64:
     other point within ``tolerance`` mm; removed points never remove others, so chains of close
     points do not open holes. Returns the kept indices, ascending.
     """
+def point_spacing(points: ArrayLike) -> float:
+    """The cloud's point spacing, mm, as :func:`machscan.allowance` estimates a blank's by default:
+    the median over up to 20,000 points of r₈·√(π/9), r₈ the distance to the 8th other point
+    (nine points in a disc of radius r₈ at a density of 1/s²); within 1 % through 30 % jitter.
+    A scan of lines much farther apart than their points reads the spacing along the lines.
+
+    Examples
+    --------
+    >>> s = machscan.point_spacing(blank)
+    """
 def crop_box(points: ArrayLike, min_bound: ArrayLike, max_bound: ArrayLike) -> _I64:
     """Indices of the points inside the box ``[min_bound, max_bound]`` (bounds included): crop box /
     pass-through filter (a pass-through on one axis is a box infinite on the others).

@@ -185,30 +185,9 @@ class CadMesh:
         -------
         points, normals : ndarray, shape (K, 3)
         """
-        from machscan.cloud import remove_duplicates
+        from machscan.mesh import sample_surface
 
-        if not (np.isfinite(spacing) and spacing > 0):
-            raise ValueError(f"spacing: must be a positive distance, got {spacing}")
-        v, t = self.vertices, self.triangles
-        a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
-        area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-        total = float(area.sum())
-        # Ten candidates per disk of the spacing: enough that the thinned set covers evenly.
-        n = int(np.ceil(10 * total / (np.pi * (spacing / 2) ** 2)))
-        if n > 50_000_000:
-            raise ValueError(f"spacing: {spacing} mm over {total:.0f} mm² would need {n:,} candidates; sample coarser")
-        rng = np.random.default_rng(seed)
-        pick = rng.choice(len(t), size=n, p=area / total)
-        r1, r2 = rng.random(n), rng.random(n)
-        flip = r1 + r2 > 1
-        r1[flip], r2[flip] = 1 - r1[flip], 1 - r2[flip]
-        w = np.column_stack([1 - r1 - r2, r1, r2])
-        tri = t[pick]
-        points = np.einsum("nk,nkj->nj", w, v[tri])
-        normals = np.einsum("nk,nkj->nj", w, self.vertex_normals[tri])
-        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-        keep = remove_duplicates(points, spacing)
-        return points[keep], normals[keep]
+        return sample_surface(self.vertices, self.triangles, spacing, normals=self.vertex_normals, seed=seed)
 
 
 def read_cad(path: str | os.PathLike[str], *, tolerance: float = 0.01) -> CadMesh:

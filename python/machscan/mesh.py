@@ -3,7 +3,8 @@ that mirror-milling compensation works on. :func:`delaunay_xy` meshes a height-f
 the Delaunay triangulation of its xy projection; :func:`closest_points` finds the nearest point
 of a mesh to each query; :func:`insert_points` makes points of the surface vertices of its mesh;
 :func:`geodesic_distances` measures along the surface, and :class:`GeodesicSolver` does so again and again on
-one mesh prepared once. The formulas and their papers: ``docs/mesh.md``."""
+one mesh prepared once; :func:`sample_surface` spreads points with normals evenly over a mesh. The formulas and
+their papers: ``docs/mesh.md``."""
 
 from __future__ import annotations
 
@@ -17,15 +18,18 @@ from machscan import _core
 from machscan._core import delaunay_xy
 
 __all__ = [
+    "FEATURE_ANGLE",
     "ClosestPoints",
     "GeodesicMethod",
     "GeodesicSolver",
     "InsertedPoints",
     "Landing",
     "closest_points",
+    "corner_normals",
     "delaunay_xy",
     "geodesic_distances",
     "insert_points",
+    "sample_surface",
 ]
 
 #: How :func:`geodesic_distances` measures: ``"exact"``, the exact polyhedral geodesic (window propagation of
@@ -280,3 +284,115 @@ class GeodesicSolver:
 
     def __repr__(self) -> str:
         return f"GeodesicSolver(method={self.method!r}, vertex_count={self.vertex_count})"
+
+
+#: Default feature angle of :func:`corner_normals`, degrees: faces meeting at a vertex more steeply than this are
+#: on two sides of an edge of the part, whose normals are not averaged.
+FEATURE_ANGLE = 30.0
+
+
+def corner_normals(vertices: ArrayLike, triangles: ArrayLike, *, feature_angle: float = FEATURE_ANGLE) -> NDArray[np.float64]:
+    """Unit normals at each triangle's corners, shape (T, 3, 3): the area-weighted mean of the normals of the faces
+    round the corner's vertex that turn by less than ``feature_angle`` degrees from the triangle's own. A smooth
+    stretch (a fillet tessellated in facets) gets normals that turn with it; a face beside an edge of the part (a box's
+    side) keeps its own normal up to the edge, where one averaged over both sides would lean 45° out of it.
+
+    Raises
+    ------
+    ValueError
+        ``vertices`` not (N, 3) finite, ``triangles`` not (T, 3) indices into them, or a triangle of zero area.
+    """
+    v, t = _mesh_arrays(vertices, triangles)
+    if not (np.isfinite(feature_angle) and 0 < feature_angle < 180):
+        raise ValueError(f"feature_angle: must be between 0 and 180 degrees, got {feature_angle}")
+    face = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])  # twice the area along the unit normal
+    length = np.linalg.norm(face, axis=1)
+    if np.any(length == 0):
+        raise ValueError(f"triangles: triangle {int(np.argmin(length))} has zero area (no normal)")
+    unit = face / length[:, None]
+    # Every pair (corner, face round the corner's vertex), by grouping the corners by vertex.
+    corner_vertex = t.ravel()
+    corner_face = np.repeat(np.arange(len(t)), 3)
+    order = np.argsort(corner_vertex, kind="stable")
+    by_vertex = corner_vertex[order]
+    first = np.searchsorted(by_vertex, by_vertex, "left")
+    count = np.searchsorted(by_vertex, by_vertex, "right") - first
+    owner = np.repeat(np.arange(len(order)), count)
+    within = np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count)
+    other = first[owner] + within
+    own_face, other_face = corner_face[order[owner]], corner_face[order[other]]
+    smooth = np.einsum("ij,ij->i", unit[own_face], unit[other_face]) >= np.cos(np.radians(feature_angle))
+    total = np.zeros((len(order), 3))
+    np.add.at(total, owner[smooth], face[other_face[smooth]])
+    normals = np.empty_like(total)
+    normals[order] = total / np.linalg.norm(total, axis=1, keepdims=True)
+    return normals.reshape(len(t), 3, 3)
+
+
+def sample_surface(
+    vertices: ArrayLike,
+    triangles: ArrayLike,
+    spacing: float,
+    *,
+    normals: ArrayLike | None = None,
+    feature_angle: float = FEATURE_ANGLE,
+    seed: int = 0,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Points with normals spread evenly over a triangle mesh, about ``spacing`` mm apart (Poisson-disk by
+    elimination: a dense random sample, area-weighted, thinned so that no two kept points are closer than
+    ``spacing``): a model for :func:`machscan.allowance` and grinding from a mesh whose vertices are where a mesher
+    put them (a flat one triangle across has none inside it). Points lie on the triangles; normals are interpolated
+    over each triangle from its corners and normalised — ``normals`` per vertex (N, 3) when given (a CAD mesh's
+    exact ones), else :func:`corner_normals` with ``feature_angle``.
+
+    Returns
+    -------
+    points, normals : ndarray, shape (K, 3)
+
+    Raises
+    ------
+    ValueError
+        ``spacing`` not a positive distance or too fine for the mesh's area (over 50 M candidates), bad arrays.
+    """
+    from machscan.cloud import remove_duplicates
+
+    v, t = _mesh_arrays(vertices, triangles)
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"spacing: must be a positive distance, got {spacing}")
+    if normals is None:
+        corners = corner_normals(v, t, feature_angle=feature_angle)
+    else:
+        vn = np.asarray(normals, dtype=np.float64)
+        if vn.shape != v.shape or not np.isfinite(vn).all():
+            raise ValueError(f"normals: must be finite, one per vertex {v.shape}, got shape {vn.shape}")
+        corners = vn[t]
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    total = float(area.sum())
+    # Ten candidates per disk of the spacing: enough that the thinned set covers evenly.
+    n = int(np.ceil(10 * total / (np.pi * (spacing / 2) ** 2)))
+    if n > 50_000_000:
+        raise ValueError(f"spacing: {spacing} mm over {total:.0f} mm² would need {n:,} candidates; sample coarser")
+    rng = np.random.default_rng(seed)
+    pick = rng.choice(len(t), size=n, p=area / total)
+    r1, r2 = rng.random(n), rng.random(n)
+    flip = r1 + r2 > 1
+    r1[flip], r2[flip] = 1 - r1[flip], 1 - r2[flip]
+    w = np.column_stack([1 - r1 - r2, r1, r2])
+    points = np.einsum("nk,nkj->nj", w, v[t[pick]])
+    sampled = np.einsum("nk,nkj->nj", w, corners[pick])
+    sampled /= np.linalg.norm(sampled, axis=1, keepdims=True)
+    keep = remove_duplicates(points, spacing)
+    return points[keep], sampled[keep]
+
+
+def _mesh_arrays(vertices: ArrayLike, triangles: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    v = np.asarray(vertices, dtype=np.float64)
+    t = np.asarray(triangles)
+    if v.ndim != 2 or v.shape[1] != 3 or not np.isfinite(v).all():
+        raise ValueError(f"vertices: must be finite (N, 3) points in mm, got shape {v.shape}")
+    if t.ndim != 2 or t.shape[1] != 3 or not np.issubdtype(t.dtype, np.integer) or len(t) == 0:
+        raise ValueError(f"triangles: must be (T, 3) integer vertex indices, at least one, got {t.dtype} {t.shape}")
+    if t.min() < 0 or t.max() >= len(v):
+        raise ValueError(f"triangles: indices must lie in 0 … {len(v) - 1}, found {t.min()} … {t.max()}")
+    return v, t.astype(np.int64)

@@ -116,16 +116,28 @@ def _csv_text(text: str | None) -> str:
     return "" if text is None else '"' + text.replace('"', "'").replace("\n", " ") + '"'
 
 
-def _read_model(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Model points and outward normals from a file: its normals, or for a mesh (STL/OBJ/PLY
-    with faces) the area-weighted normals of its vertices (outward for a consistently wound
-    mesh)."""
+#: A mesh given as the model of an allowance is sampled every this share of the blank's point spacing: the stock
+#: field reads the model's shape between its points and wants it sampled more finely than the blank
+#: (docs/registration.md R7).
+MESH_SAMPLING = 0.25
+
+
+def _read_model(path: Path, *, spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Model points and outward normals from a file: its points and normals, or for a mesh (STL/OBJ/PLY with faces
+    and no normals) points spread evenly over its surface every ``spacing`` mm with normals interpolated from its
+    corners (:func:`machscan.mesh.sample_surface`) — or, without ``spacing``, its vertices with their area-weighted
+    normals (outward for a consistently wound mesh)."""
     from machscan.io import read
+    from machscan.mesh import sample_surface
 
     f = read(path)
     if f.normals is not None:
         return f.points, f.normals
     if len(f.triangles):
+        if spacing is not None:
+            points, normals = sample_surface(f.points, f.triangles, spacing)
+            print(f"model     : {path} is a mesh: {len(points):,} points with normals spread over it every {spacing:.3g} mm")
+            return points, normals
         t = f.triangles
         face = np.cross(f.points[t[:, 1]] - f.points[t[:, 0]], f.points[t[:, 2]] - f.points[t[:, 0]])
         normals = np.zeros_like(f.points)

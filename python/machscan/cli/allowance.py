@@ -9,6 +9,7 @@ from typing import get_args
 import numpy as np
 
 from machscan.cli._shared import (
+    MESH_SAMPLING,
     _read_model,
     _read_pose,
     _warn,
@@ -24,11 +25,13 @@ from machscan.registration import (
 __all__ = ["add_parser", "run"]
 
 def run(args: argparse.Namespace) -> int:
+    from machscan.cloud import point_spacing
     from machscan.io import read_points, write_points
     from machscan.registration import align_blank, allowance, envelope_fit
 
-    model, normals = _read_model(args.model)
     blank = read_points(args.blank)
+    spacing = args.spacing if args.spacing is not None else point_spacing(blank)
+    model, normals = _read_model(args.model, spacing=MESH_SAMPLING * spacing)
     start = _read_pose(args.start, "--start") if args.start else None
     if args.local and not args.fit:
         raise ValueError("--local: is an option of --fit (the envelope fit alone, from --start)")
@@ -82,7 +85,12 @@ def run(args: argparse.Namespace) -> int:
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The subcommand's arguments."""
     al = sub.add_parser("allowance", help="machining allowance of a measured blank over the model")
-    al.add_argument("model", type=Path, help="model points with normals (PLY/PCD/XYZ/CSV) or a mesh (STL)")
+    al.add_argument(
+        "model",
+        type=Path,
+        help="model points with normals (PLY/PCD/XYZ/CSV), or a mesh (STL/OBJ/PLY with faces) whose surface is "
+        "sampled every half blank spacing",
+    )
     al.add_argument("blank", type=Path, help="measured blank points, in the model's frame")
     al.add_argument(
         "--out",

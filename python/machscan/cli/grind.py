@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from machscan.cli._shared import (
+    MESH_SAMPLING,
     _check_positive_mm,
     _floats,
     _read_model,
@@ -35,6 +36,7 @@ def _read_allowance(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from machscan.cloud import point_spacing
     from machscan.io import read_points
     from machscan.registration import allowance
     from machscan.synth import blade_allowance
@@ -49,8 +51,9 @@ def run(args: argparse.Namespace) -> int:
     elif args.source is None:
         raise ValueError("grind: give ALLOWANCE (or MODEL --blank BLANK, or --simulate)")
     elif args.blank is not None:
-        points, normals = _read_model(args.source)
-        stock = allowance(points, normals, read_points(args.blank))
+        blank = read_points(args.blank)
+        points, normals = _read_model(args.source, spacing=MESH_SAMPLING * point_spacing(blank))
+        stock = allowance(points, normals, blank)
     else:
         points, normals, stock = _read_allowance(args.source)
     model = None
