@@ -11,7 +11,7 @@ paper's removal model with its own feeds. The stock left is checked on a separat
 every 7th point.
 
     python benchmarks/grinding_parts.py [--spacings 0.3,0.4,...,1.5] [--parts ellipse,biconvex,crescent]
-        [--scallops 0.005,0.01,0.02] [--across 0.5]
+        [--scallops 0.005,0.01,0.02] [--across 0.5 | --poisson]
 """
 
 from __future__ import annotations
@@ -39,16 +39,25 @@ PARTS = {
 STAGGER = 0.382  # golden-ratio shift of each scan line along the section
 
 
-def cloud(blade: Blade, spacing: float, stagger: float = STAGGER, across: float | None = None):
-    """Model points every `spacing` along the sections and every `across` (default `spacing`) along the span, their
+def cloud(blade: Blade, spacing: float, stagger: float = STAGGER, across: float | None = None, poisson: bool = False):
+    """Model points every `spacing` along the sections and every `across` (default `spacing`) along the span — or,
+    `poisson`, spread at random and thinned so that no two are closer than `spacing` (as a CAD mesh is sampled) — their
     exact normals and the allowance 0.2–0.4 mm."""
-    u, z = blade.model_grid(spacing, span_spacing=across, stagger=stagger)
+    if poisson:
+        rng = np.random.default_rng(7)
+        count = int(10 * blade.section.length * blade.span / (np.pi * (spacing / 2) ** 2))
+        u = blade.section.u_at(rng.uniform(0, blade.section.length, count))
+        z = rng.uniform(0, blade.span, count)
+        keep = machscan.remove_duplicates(blade.point(u, z), spacing)
+        u, z = u[keep], z[keep]
+    else:
+        u, z = blade.model_grid(spacing, span_spacing=across, stagger=stagger)
     d = smooth_offset(blade, 0.2, 0.4)
     return blade.point(u, z), blade.normal(u, z), d(u, z)
 
 
-def measure(blade: Blade, spacing: float, scallop: float, check, across: float | None = None) -> dict:
-    p, n, a = cloud(blade, spacing, across=across)
+def measure(blade: Blade, spacing: float, scallop: float, check, across: float | None = None, poisson: bool = False) -> dict:
+    p, n, a = cloud(blade, spacing, across=across, poisson=poisson)
     row = dict(points_in=len(p))
     t0 = time.perf_counter()
     try:
@@ -95,6 +104,7 @@ def main() -> None:
     ap.add_argument("--spacings", default="0.3,0.4,0.5,0.6,0.75,0.9,1,1.25,1.5")
     ap.add_argument("--parts", default=",".join(PARTS))
     ap.add_argument("--scallops", default="0.01", help="scallop heights, mm; several give the density table too")
+    ap.add_argument("--poisson", action="store_true", help="clouds spread at random, no two closer than the spacing")
     ap.add_argument("--across", type=float, default=None,
                     help="span spacing of the cloud's sections, mm (default: the spacing along them, an even cloud)")
     args = ap.parse_args()
@@ -112,7 +122,7 @@ def main() -> None:
             blade = PARTS[name]()
             check = cloud(blade, 0.25, stagger=0.5)
             for spacing in spacings:
-                r = measure(blade, spacing, scallop, check, args.across)
+                r = measure(blade, spacing, scallop, check, args.across, args.poisson)
                 if "refused" in r:
                     print(f"| {name} | {spacing:g} | {r['points_in']:,} | {refusal(r['refused'])} | | | | | | {r['time']:.2f} |")
                 else:

@@ -218,8 +218,9 @@ def test_points_without_stock_pass_from_allowance_to_grind_and_are_counted(tmp_p
 def test_a_cad_meshs_stl_as_the_model_is_sampled_and_its_allowance_feeds_grind(tmp_path, capsys):
     # The model as a CAD mesher writes it: the stadium prism (flats one triangle across, half circles of 1.5 mm cut
     # every 10°). Its vertices alone leave the flats without a point (the allowance there unknown, the grinding rows
-    # nothing to follow); the surface is sampled every quarter blank spacing instead, with normals interpolated from
-    # the corners. Blank every 1 mm (edges of 1.5 spacings: the hardest), offset 0.3 mm.
+    # nothing to follow); the surface is sampled every 0.15 mm instead (half the blank's spacing, at most 0.15 mm),
+    # with normals interpolated from the corners. Blank every 1 mm (edges of 1.5 spacings: the hardest),
+    # offset 0.3 mm.
     vertices, triangles = parts.stadium_mesh()
     machscan.io.write_mesh(tmp_path / "model.stl", vertices, triangles)
     rng = np.random.default_rng(4)

@@ -9,11 +9,11 @@ from typing import get_args
 import numpy as np
 
 from machscan.cli._shared import (
-    MESH_SAMPLING,
     _read_model,
     _read_pose,
     _warn,
     _write_table,
+    mesh_spacing,
     out_pose_path,
 )
 from machscan.registration import (
@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
 
     blank = read_points(args.blank)
     spacing = args.spacing if args.spacing is not None else point_spacing(blank)
-    model, normals = _read_model(args.model, spacing=MESH_SAMPLING * spacing)
+    model, normals = _read_model(args.model, spacing=mesh_spacing(spacing))
     start = _read_pose(args.start, "--start") if args.start else None
     if args.local and not args.fit:
         raise ValueError("--local: is an option of --fit (the envelope fit alone, from --start)")
@@ -89,7 +89,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "model",
         type=Path,
         help="model points with normals (PLY/PCD/XYZ/CSV), or a mesh (STL/OBJ/PLY with faces) whose surface is "
-        "sampled every half blank spacing",
+        "sampled every half blank spacing, at most 0.15 mm",
     )
     al.add_argument("blank", type=Path, help="measured blank points, in the model's frame")
     al.add_argument(

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 
 from machscan.cli._shared import (
-    MESH_SAMPLING,
     _check_positive_mm,
     _floats,
     _read_model,
     _read_rows,
     _warn,
     _write_table,
+    mesh_spacing,
 )
 
 __all__ = ["add_parser", "run"]
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("grind: give ALLOWANCE (or MODEL --blank BLANK, or --simulate)")
     elif args.blank is not None:
         blank = read_points(args.blank)
-        points, normals = _read_model(args.source, spacing=MESH_SAMPLING * point_spacing(blank))
+        points, normals = _read_model(args.source, spacing=mesh_spacing(point_spacing(blank)))
         stock = allowance(points, normals, blank)
     else:
         points, normals, stock = _read_allowance(args.source)
