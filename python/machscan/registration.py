@@ -1008,7 +1008,8 @@ class AlignmentStage:
         The blank's pose after the stage (blank → model frame).
     fitness, rmse : float
         How the blank's points sit on the model there: the share with a model point within the last ICP
-        correspondence distance, and their RMS distance, mm.
+        correspondence distance, and their RMS distance, mm (0 with none in reach: a stock wider than that distance,
+        on a small part).
     allowance : ndarray, shape (N,)
         The allowance of every model point at that pose, mm (NaN: the blank does not cover it).
     """
@@ -1030,9 +1031,11 @@ class AlignmentStage:
             else "no allowance measured"
         )
         none = len(self.allowance) - len(a)
+        # No blank point within the last ICP distance (a stock wider than it): there is no RMS distance to give.
+        sits = f"fitness {self.fitness:.3f}  rmse {self.rmse:.4f} mm" if self.fitness > 0 else "fitness 0 (rmse: none in reach)"
         return (
-            f"{self.name:<25} moved {np.linalg.norm(rel[:3, 3]):8.3f} mm {angle:7.3f}°  fitness {self.fitness:.3f}  "
-            f"rmse {self.rmse:.4f} mm  {stock}" + (f", {none} points without stock" if none else "")
+            f"{self.name:<25} moved {np.linalg.norm(rel[:3, 3]):8.3f} mm {angle:7.3f}°  {sits}  "
+            f"{stock}" + (f", {none} points without stock" if none else "")
         )
 
 
