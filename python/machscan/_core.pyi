@@ -64,6 +64,7 @@ __all__ = [
     "match_contours",
     "nearest_neighbors",
     "octree_simplify",
+    "point_spacing",
     "principal_curvatures",
     "probe_fit",
     "profile_to_points",
