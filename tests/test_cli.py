@@ -515,3 +515,25 @@ def test_grind_refuses_a_path_whose_simulated_pass_leaves_the_band(tmp_path, cap
     assert (out / "report.csv").exists() and (out / "path.csv").exists()
     assert main(args + ["--force"]) == 3
     assert (out / "grind.cl").exists() and "--force" in capsys.readouterr().err
+
+
+def test_a_reader_that_stops_early_does_not_stop_the_command(tmp_path):
+    # `machscan allowance ... | head -1`: once the reader has gone, every print raised BrokenPipeError (an OSError),
+    # and the command stopped with "machscan: error: [Errno 32] Broken pipe" between its table and its output file.
+    import subprocess
+    import sys
+
+    g = np.stack(np.meshgrid(np.arange(30) * 0.5, np.arange(30) * 0.5), -1).reshape(-1, 2)
+    model = np.column_stack([g, np.zeros(len(g))])
+    machscan.write_points(tmp_path / "model.ply", model, np.tile([0.0, 0.0, 1.0], (len(g), 1)))
+    machscan.write_points(tmp_path / "blank.ply", model + [0.0, 0.0, 0.3])
+    out = tmp_path / "a.ply"
+    command = [sys.executable, "-m", "machscan", "allowance", "model.ply", "blank.ply", "--out", str(out)]
+    run = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert run.stdout is not None and run.stderr is not None
+    run.stdout.close()  # the reader is gone before the first line
+    errors = run.stderr.read().decode()
+    assert run.wait(timeout=120) == 0, errors
+    assert errors == ""
+    a = machscan.io.read(out).scalars["allowance"]  # NaN at the blank's corners, where its feet lie on one side
+    assert np.isfinite(a).mean() > 0.95 and np.nanmax(np.abs(a - 0.3)) < 1e-5

@@ -38,7 +38,10 @@ machscan batch grooves SCAN... --cad CAD... [--workers N | --scheduler ADDR] [--
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+from collections.abc import Callable
+from typing import TextIO
 
 from machscan.cli import allowance, batch, calibrate, compare, compensate, demo, grind, grooves, points, position
 
@@ -61,6 +64,39 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _UntilClosed:
+    """Standard output that drops what is printed once its reader has gone (``machscan allowance ... | head``): the
+    command still writes its files and exits with its own status, where a broken pipe would have stopped it between
+    its table and its output file."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+        self._gone = False
+
+    def _guard(self, action: Callable[[], object]) -> None:
+        if self._gone:
+            return
+        try:
+            action()
+        except BrokenPipeError:
+            self._gone = True
+            # The interpreter flushes the real stream at exit: point it where a write cannot fail.
+            try:
+                os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+            except (OSError, ValueError):
+                pass
+
+    def write(self, text: str) -> int:
+        self._guard(lambda: self._stream.write(text))
+        return len(text)
+
+    def flush(self) -> None:
+        self._guard(self._stream.flush)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._stream, name)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -69,11 +105,15 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if getattr(args, "cloud_every", 1) < 1:
         parser.error("--cloud-every must be at least 1")
+    stdout = sys.stdout
+    sys.stdout = _UntilClosed(stdout)  # type: ignore[assignment]
     try:
         return int(args.run(args))
     except (ValueError, OSError) as e:
         print(f"machscan: error: {e}", file=sys.stderr)
         return 2
+    finally:
+        sys.stdout = stdout
 
 
 if __name__ == "__main__":
