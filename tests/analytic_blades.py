@@ -420,23 +420,16 @@ def smooth_offset(blade, lo=0.1, hi=0.5, waves=(1, 1.5), phase=(0.3, 0.7)):
 
 def stadium(sigma, z, half=5.0, r=1.5):
     """A stadium section (flats 2·half long joined by half circles of radius r: the curvature jumps from 1/r to 0
-    where they meet) extruded along z: points and outward normals at arc length σ and height z."""
-    sigma = np.mod(sigma, 4 * half + 2 * np.pi * r)
-    x, y, nx, ny = (np.zeros_like(sigma) for _ in range(4))
-    legs = [2 * half, np.pi * r, 2 * half, np.pi * r]
-    start = np.concatenate([[0], np.cumsum(legs)])
-    for k in range(4):
-        s = sigma - start[k]
-        on = (s >= 0) & (s < legs[k])
-        if k in (0, 2):
-            sign = 1 if k == 0 else -1
-            x[on], y[on], nx[on], ny[on] = sign * (-half + s[on]), sign * r, 0, sign
-        else:
-            a = s[on] / r
-            sign = 1 if k == 1 else -1
-            nx[on], ny[on] = sign * np.sin(a), sign * np.cos(a)
-            x[on], y[on] = sign * half + r * nx[on], r * ny[on]
-    return np.column_stack([x, y, z]), np.column_stack([nx, ny, np.zeros_like(x)])
+    where they meet) extruded along z: points and outward normals at arc length σ and height z. σ runs clockwise seen
+    from +z from (−half, r): `StadiumSection` mirrored in y."""
+    section = StadiumSection(half, r)
+    u = np.asarray(sigma, float) / section.length
+    c, d = section.point(u), section.deriv(u)
+    normal = np.stack([d[..., 1], -d[..., 0]], -1)
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    flip = np.array([1.0, -1.0])
+    z = np.broadcast_to(np.asarray(z, float), u.shape)
+    return np.column_stack([c * flip, z]), np.column_stack([normal * flip, np.zeros_like(z)])
 
 
 def stadium_mesh(half=5.0, r=1.5, length=20.0, arc_step_deg=10.0):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, get_args
 
@@ -130,11 +131,13 @@ def mesh_spacing(blank_spacing: float) -> float:
     return min(share * blank_spacing, finest)
 
 
-def _read_model(path: Path, *, spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def _read_model(path: Path, *, spacing: Callable[[], float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Model points and outward normals from a file: its points and normals, or for a mesh (STL/OBJ/PLY with faces
-    and no normals) points spread evenly over its surface every ``spacing`` mm with normals interpolated from its
-    corners (:func:`machscan.mesh.sample_surface`) — or, without ``spacing``, its vertices with their area-weighted
-    normals (outward for a consistently wound mesh)."""
+    and no normals) points spread evenly over its surface every ``spacing()`` mm (asked only of a mesh) with
+    normals interpolated from its corners (:func:`machscan.mesh.sample_surface`) — or, without ``spacing``, its
+    vertices with their area-weighted normals (outward for a consistently wound mesh). A mesh's vertices are where
+    its mesher put them (a flat one triangle across has none inside it): the allowance and grinding want the
+    surface."""
     from machscan.io import read
     from machscan.mesh import sample_surface
 
@@ -143,8 +146,9 @@ def _read_model(path: Path, *, spacing: float | None = None) -> tuple[np.ndarray
         return f.points, f.normals
     if len(f.triangles):
         if spacing is not None:
-            points, normals = sample_surface(f.points, f.triangles, spacing)
-            print(f"model     : {path} is a mesh: {len(points):,} points with normals spread over it every {spacing:.3g} mm")
+            every = spacing()
+            points, normals = sample_surface(f.points, f.triangles, every)
+            print(f"model     : {path} is a mesh: {len(points):,} points with normals spread over it every {every:.3g} mm")
             return points, normals
         t = f.triangles
         face = np.cross(f.points[t[:, 1]] - f.points[t[:, 0]], f.points[t[:, 2]] - f.points[t[:, 0]])

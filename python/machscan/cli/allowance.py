@@ -30,8 +30,11 @@ def run(args: argparse.Namespace) -> int:
     from machscan.registration import align_blank, allowance, envelope_fit
 
     blank = read_points(args.blank)
-    spacing = args.spacing if args.spacing is not None else point_spacing(blank)
-    model, normals = _read_model(args.model, spacing=mesh_spacing(spacing))
+    # The blank's spacing is read only for a mesh model, which is sampled by it.
+    model, normals = _read_model(
+        args.model,
+        spacing=lambda: mesh_spacing(args.spacing if args.spacing is not None else point_spacing(blank)),
+    )
     start = _read_pose(args.start, "--start") if args.start else None
     if args.local and not args.fit:
         raise ValueError("--local: is an option of --fit (the envelope fit alone, from --start)")

@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("grind: give ALLOWANCE (or MODEL --blank BLANK, or --simulate)")
     elif args.blank is not None:
         blank = read_points(args.blank)
-        points, normals = _read_model(args.source, spacing=mesh_spacing(point_spacing(blank)))
+        points, normals = _read_model(args.source, spacing=lambda: mesh_spacing(point_spacing(blank)))
         stock = allowance(points, normals, blank)
     else:
         points, normals, stock = _read_allowance(args.source)

@@ -248,20 +248,18 @@ pub struct GrindingPaths {
     pub without_stock: usize,
 }
 
-/// A quadric height field h(x, y) = c₀ + c₁x + c₂y + c₃x² + c₄xy + c₅y² over the frame
-/// (origin, u, v, w) — the wide fit, for curvature — and for a local fit, cubic fields of the
-/// height and of values (allowance, normal) over the same (x, y). The local fields are cubic
-/// because at an edge of the cloud the patch is one-sided and a quadric's error there grows with
-/// the third derivatives: 2.6 µm of height on a 20 mm radius sampled every mm, against 0.3 µm.
+/// A local fit: cubic fields of the height and of values (allowance, normal) over (x, y) in the
+/// frame (origin, u, v, w). Cubic because at an edge of the cloud the patch is one-sided and a
+/// quadric's error there grows with the third derivatives: 2.6 µm of height on a 20 mm radius
+/// sampled every mm, against 0.3 µm.
 struct Patch {
     origin: V3,
     u: V3,
     v: V3,
     w: V3,
-    height: Vector6<f64>,
     /// Cubic coefficients over (x, y) / `scale`, in the order of `cubic_terms`, one column per
-    /// channel.
-    value: Option<SMatrix<f64, 10, CHANNELS>>,
+    /// channel (the height first).
+    value: SMatrix<f64, 10, CHANNELS>,
     scale: f64,
 }
 
@@ -294,89 +292,58 @@ fn cubic_terms(x: f64, y: f64) -> SVector<f64, 10> {
 }
 
 impl Patch {
-    /// Weighted least-squares fit to `points` (and `values`, e.g. allowance) in the frame whose w
-    /// is `normal`, each point weighted by exp(−(d/σ)²) for its distance d from the origin
-    /// (`sigma` ∞: unweighted). None when the points do not span the fields.
-    fn fit(origin: V3, normal: V3, points: &[V3], values: Option<&[[f64; CHANNELS]]>, sigma: f64) -> Option<Patch> {
+    /// Weighted least-squares fit to `points` and their `values` (e.g. allowance) in the frame
+    /// whose w is `normal`, each point weighted by exp(−(d/σ)²) for its distance d from the
+    /// origin. None when the points do not span the fields.
+    fn fit(origin: V3, normal: V3, points: &[V3], values: &[[f64; CHANNELS]], sigma: f64) -> Option<Patch> {
         let w = normal.normalize();
         let (u, v) = tangent_frame(w);
         // Lengths scaled by the patch size inside the fits, for conditioning.
         let scale = points.iter().map(|p| (p - origin).norm()).fold(0.0, f64::max).max(1e-12);
-        let (mut ata, mut atb) = (Matrix6::zeros(), Vector6::zeros());
         let (mut cta, mut ctv) = (SMatrix::<f64, 10, 10>::zeros(), SMatrix::<f64, 10, CHANNELS>::zeros());
-        for (k, p) in points.iter().enumerate() {
+        for (p, vals) in points.iter().zip(values) {
             let d = (p - origin) / scale;
-            let (x, y) = (d.dot(&u), d.dot(&v));
             let weight = (-(p - origin).norm_squared() / (sigma * sigma)).exp();
-            let row = Vector6::new(1.0, x, y, x * x, x * y, y * y);
-            ata += weight * row * row.transpose();
-            atb += weight * row * d.dot(&w);
-            if let Some(vals) = values {
-                let c = cubic_terms(x, y);
-                let mut row = vals[k];
-                row[0] = (p - origin).dot(&w);
-                cta += weight * c * c.transpose();
-                ctv += weight * c * SMatrix::<f64, 1, CHANNELS>::from_row_slice(&row);
+            let c = cubic_terms(d.dot(&u), d.dot(&v));
+            let mut row = *vals;
+            row[0] = (p - origin).dot(&w);
+            cta += weight * c * c.transpose();
+            ctv += weight * c * SMatrix::<f64, 1, CHANNELS>::from_row_slice(&row);
+        }
+        // The cubic terms need the patch to span four lines of points across every direction; a
+        // scan's points lie on lines, and across fewer a cubic is not determined (y³ is a
+        // multiple of y on three lines). Then the fields are quadrics.
+        if determinacy(&cta) < CUBIC_CONDITION {
+            for k in 6..10 {
+                cta.row_mut(k).fill(0.0);
+                cta.column_mut(k).fill(0.0);
+                cta[(k, k)] = 1.0;
+                ctv.row_mut(k).fill(0.0);
             }
         }
-        let unscale = Vector6::new(scale, 1.0, 1.0, 1.0 / scale, 1.0 / scale, 1.0 / scale);
-        let height = ata.cholesky()?.solve(&atb).component_mul(&unscale);
-        let value = match values {
-            Some(_) => {
-                // The cubic terms need the patch to span four lines of points across every
-                // direction; a scan's points lie on lines, and across fewer a cubic is not
-                // determined (y³ is a multiple of y on three lines). Then the fields are quadrics.
-                if determinacy(&cta) < CUBIC_CONDITION {
-                    for k in 6..10 {
-                        cta.row_mut(k).fill(0.0);
-                        cta.column_mut(k).fill(0.0);
-                        cta[(k, k)] = 1.0;
-                        ctv.row_mut(k).fill(0.0);
-                    }
-                }
-                Some(cta.cholesky()?.solve(&ctv))
-            }
-            None => None,
-        };
-        height.iter().all(|c| c.is_finite()).then_some(Patch { origin, u, v, w, height, value, scale })
+        let value = cta.cholesky()?.solve(&ctv);
+        value.iter().all(|c| c.is_finite()).then_some(Patch { origin, u, v, w, value, scale })
     }
 
-    /// Height and slopes at (x, y): of the cubic when there is one.
+    /// Height and slopes of the height field at (x, y).
     fn height_slopes(&self, x: f64, y: f64) -> (f64, f64, f64) {
-        match &self.value {
-            Some(c) => {
-                let (a, b) = (x / self.scale, y / self.scale);
-                let h = c.column(0);
-                let dx = [0.0, 1.0, 0.0, 2.0 * a, b, 0.0, 3.0 * a * a, 2.0 * a * b, b * b, 0.0];
-                let dy = [0.0, 0.0, 1.0, 0.0, a, 2.0 * b, 0.0, a * a, 2.0 * a * b, 3.0 * b * b];
-                let slope = |d: [f64; 10]| (0..10).map(|k| h[k] * d[k]).sum::<f64>() / self.scale;
-                (h.dot(&cubic_terms(a, b)), slope(dx), slope(dy))
-            }
-            None => {
-                let (hx, hy) = self.slopes(x, y);
-                (Self::eval(&self.height, x, y), hx, hy)
-            }
-        }
+        let (a, b) = (x / self.scale, y / self.scale);
+        let h = self.value.column(0);
+        let dx = [0.0, 1.0, 0.0, 2.0 * a, b, 0.0, 3.0 * a * a, 2.0 * a * b, b * b, 0.0];
+        let dy = [0.0, 0.0, 1.0, 0.0, a, 2.0 * b, 0.0, a * a, 2.0 * a * b, 3.0 * b * b];
+        let slope = |d: [f64; 10]| (0..10).map(|k| h[k] * d[k]).sum::<f64>() / self.scale;
+        (h.dot(&cubic_terms(a, b)), slope(dx), slope(dy))
     }
 
-    /// The cubic fields at (x, y): height, then the values' channels.
-    fn value_at(&self, x: f64, y: f64) -> Option<[f64; CHANNELS]> {
+    /// The fields at (x, y): height, then the values' channels.
+    fn value_at(&self, x: f64, y: f64) -> [f64; CHANNELS] {
         let t = cubic_terms(x / self.scale, y / self.scale);
-        self.value.as_ref().map(|c| std::array::from_fn(|j| c.column(j).dot(&t)))
+        std::array::from_fn(|j| self.value.column(j).dot(&t))
     }
 
     fn coords(&self, p: V3) -> (f64, f64) {
         let d = p - self.origin;
         (d.dot(&self.u), d.dot(&self.v))
-    }
-
-    fn eval(c: &Vector6<f64>, x: f64, y: f64) -> f64 {
-        c[0] + c[1] * x + c[2] * y + c[3] * x * x + c[4] * x * y + c[5] * y * y
-    }
-
-    fn slopes(&self, x: f64, y: f64) -> (f64, f64) {
-        let c = &self.height;
-        (c[1] + 2.0 * c[3] * x + c[4] * y, c[2] + c[4] * x + 2.0 * c[5] * y)
     }
 
     /// The surface point within the plane {p : p·n = offset} nearest `q` (a point of the
@@ -488,7 +455,8 @@ impl Cloud<'_> {
             // or two scan lines) can put a point on the surface with a normal turned 70° from every
             // given one: a wheel there sinks 8 mm into the part. Its normal must lie within the
             // turn of the given normals nearest it.
-            if self.normal_agrees(fit.0, fit.1, EDGE_AGREEMENT) && self.near_surface(fit.0, fit.1) {
+            let near = self.index.knn(&fit.0.into(), 4);
+            if self.normal_agrees(&near, fit.1, EDGE_AGREEMENT) && self.near_surface(&near, fit.0, fit.1) {
                 return Some(fit);
             }
         }
@@ -529,10 +497,10 @@ impl Cloud<'_> {
             })
             .collect();
         let fitted = || {
-            let patch = Patch::fit(q, self.mean_normal(&near), &pts, Some(&vals), sigma)?;
+            let patch = Patch::fit(q, self.mean_normal(&near), &pts, &vals, sigma)?;
             let on = patch.place_in_plane(q, n)?;
             let (x, y) = patch.coords(on);
-            let [_, allowance, nx, ny, nz] = patch.value_at(x, y)?;
+            let [_, allowance, nx, ny, nz] = patch.value_at(x, y);
             // The normal interpolated from the given ones: a model's normals are exact, and a
             // scan's were estimated over more points than this patch holds.
             let normal = V3::new(nx, ny, nz);
@@ -545,14 +513,13 @@ impl Cloud<'_> {
         // with its nearest points' normal and allowance, if it lies within the scallop height of
         // the nearest point's tangent plane (a slab point projected onto a plane the surface
         // grazes lies off the surface: no point).
+        let holds = |fit: &(V3, V3, f64)| {
+            let near = self.index.knn(&fit.0.into(), 4);
+            (fit.1.dot(&self.nearby(fit.0).0) >= FIT_AGREEMENT || self.normal_agrees(&near, fit.1, FIT_AGREEMENT))
+                && self.near_surface(&near, fit.0, fit.1)
+        };
         match fitted() {
-            Some(fit)
-                if (fit.1.dot(&self.nearby(fit.0).0) >= FIT_AGREEMENT
-                    || self.normal_agrees(fit.0, fit.1, FIT_AGREEMENT))
-                    && self.near_surface(fit.0, fit.1) =>
-            {
-                Some(fit)
-            }
+            Some(fit) if holds(&fit) => Some(fit),
             _ => {
                 let (nearest, _) = self.index.nearest(&q.into());
                 if (q - self.p(nearest)).dot(&self.normals[nearest]).abs() > self.fallback_reach {
@@ -583,26 +550,27 @@ impl Cloud<'_> {
     }
 
     /// Whether a fitted point p of normal m lies on a smooth surface through its nearest given
-    /// points: for one of its 4 nearest, q of normal n, the chord p − q is square to n + m within
+    /// points (`near`, its 4 nearest with squared distances): for one of them, q of normal n, the chord p − q is square to n + m within
     /// `DISAGREEMENT` scallop heights — exact for any circular arc from q to p, so a fit that
     /// follows an edge between scan lines passes, one off the surface does not. An edge patch
     /// taken where a flat meets a fillet (a stadium's join, every 0.35 mm at random) put the
     /// wheel's contact 0.46 mm above the flat with a normal turned 29°, and the row was refused as
     /// too sparse; one at a random cloud's end put it 80 µm into a biconvex blade's fillet.
-    fn near_surface(&self, p: V3, m: V3) -> bool {
+    fn near_surface(&self, near: &[(usize, f64)], p: V3, m: V3) -> bool {
         let limit = DISAGREEMENT * self.fallback_reach;
-        self.index.knn(&p.into(), 4).iter().any(|&(i, _)| {
+        near.iter().any(|&(i, _)| {
             let bisector = self.normals[i] + m;
             let length = bisector.norm();
             length > 0.0 && ((p - self.p(i)).dot(&bisector) / length).abs() <= limit
         })
     }
 
-    /// Whether `normal` at `p` lies among the given normals nearest p: within acos(`one`) of one of
-    /// the 4 nearest, or within 15° of the arc between two of them (round an edge the normals turn
-    /// by up to a radian between points, and a fit between them lies that far from both).
-    fn normal_agrees(&self, p: V3, normal: V3, one: f64) -> bool {
-        let near: Vec<V3> = self.index.knn(&p.into(), 4).iter().map(|&(i, _)| self.normals[i]).collect();
+    /// Whether `normal` at a point lies among the given normals of its 4 nearest points (`near`,
+    /// with squared distances): within acos(`one`) of one, or within 15° of the arc between two
+    /// of them (round an edge the normals turn by up to a radian between points, and a fit between
+    /// them lies that far from both).
+    fn normal_agrees(&self, near: &[(usize, f64)], normal: V3, one: f64) -> bool {
+        let near: Vec<V3> = near.iter().map(|&(i, _)| self.normals[i]).collect();
         near.iter().enumerate().any(|(k, &a)| {
             a.dot(&normal) >= one
                 || near[k + 1..].iter().any(|&b| {
@@ -774,47 +742,38 @@ fn plane_step(r: f64, h: f64, k: f64, crossing: f64, flat: f64) -> f64 {
     arc * crossing
 }
 
-/// Median distance from a point to its nearest neighbour, over up to 2000 points spread through
-/// the cloud.
-fn point_spacing(points: &[[f64; 3]], index: &PointIndex) -> f64 {
-    let every = (points.len() / 2000).max(1);
-    let mut d: Vec<f64> = (0..points.len())
-        .step_by(every)
-        .filter_map(|i| index.knn(&points[i], 2).get(1).map(|&(_, d2)| d2.sqrt()))
-        .filter(|d| *d > 0.0)
-        .collect();
-    if d.is_empty() {
+/// The median of `measure` over up to 2000 of the `count` points, spread through the cloud; 0
+/// where it measures none.
+fn sampled_median(count: usize, measure: impl Fn(usize) -> Option<f64>) -> f64 {
+    let mut found: Vec<f64> = (0..count).step_by((count / 2000).max(1)).filter_map(measure).collect();
+    if found.is_empty() {
         return 0.0;
     }
-    let mid = d.len() / 2;
-    *d.select_nth_unstable_by(mid, f64::total_cmp).1
+    let mid = found.len() / 2;
+    *found.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
-/// Median gap along `n` between a point's line of points and the next, over up to 2000 points
-/// spread through the cloud: the smallest offset along `n` above a quarter `spacing` among a
-/// point's 32 nearest. A model sampled in sections, or a line scan, has its lines further apart
-/// than its points along them; a slab thinner than that gap holds no line where it falls between
-/// two, and its row has no points there (a model every 0.15 mm along sections 0.5 mm apart gave
-/// no path at all). On an even cloud it is below the spacing.
+/// Median distance from a point to its nearest neighbour.
+fn point_spacing(points: &[[f64; 3]], index: &PointIndex) -> f64 {
+    sampled_median(points.len(), |i| index.knn(&points[i], 2).get(1).map(|&(_, d2)| d2.sqrt()).filter(|&d| d > 0.0))
+}
+
+/// Median gap along `n` between a point's line of points and the next: the smallest offset
+/// along `n` above a quarter `spacing` among a point's 32 nearest. A model sampled in sections,
+/// or a line scan, has its lines further apart than its points along them; a slab thinner than
+/// that gap holds no line where it falls between two, and its row has no points there (a model
+/// every 0.15 mm along sections 0.5 mm apart gave no path at all). On an even cloud it is below
+/// the spacing.
 fn line_gap(points: &[[f64; 3]], index: &PointIndex, n: V3, spacing: f64) -> f64 {
-    let every = (points.len() / 2000).max(1);
-    let mut gaps: Vec<f64> = (0..points.len())
-        .step_by(every)
-        .filter_map(|i| {
-            let p = V3::from(points[i]);
-            index
-                .knn(&points[i], 32)
-                .iter()
-                .map(|&(j, _)| (V3::from(points[j]) - p).dot(&n).abs())
-                .filter(|&d| d > 0.25 * spacing)
-                .reduce(f64::min)
-        })
-        .collect();
-    if gaps.is_empty() {
-        return 0.0;
-    }
-    let mid = gaps.len() / 2;
-    *gaps.select_nth_unstable_by(mid, f64::total_cmp).1
+    sampled_median(points.len(), |i| {
+        let p = V3::from(points[i]);
+        index
+            .knn(&points[i], 32)
+            .iter()
+            .map(|&(j, _)| (V3::from(points[j]) - p).dot(&n).abs())
+            .filter(|&d| d > 0.25 * spacing)
+            .reduce(f64::min)
+    })
 }
 
 /// One point per occupied voxel of size `voxel`: the first one met.
