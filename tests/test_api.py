@@ -34,6 +34,7 @@ TOP_LEVEL = [
     "nearest_neighbors",
     "octree_simplify",
     "point_spacing",
+    "sample_surface",
     "principal_curvatures",
     "profile_to_points",
     "random_downsample",
@@ -71,6 +72,7 @@ def test_submodules_and_top_level_names():
     assert machscan.read_points is machscan.io.read_points
     assert machscan.fit_grooves is machscan.grooves.fit_grooves
     assert machscan.scan_to_wcs is machscan.kinematics.scan_to_wcs
+    assert machscan.sample_surface is machscan.mesh.sample_surface
 
 
 def test_older_names_still_work_and_say_the_new_one():

@@ -99,6 +99,7 @@ from machscan.mesh import (
     delaunay_xy,
     geodesic_distances,
     insert_points,
+    sample_surface,
 )
 from machscan.registration import (
     BlankAlignment,
@@ -232,6 +233,7 @@ __all__ = [
     "remove_radius_outliers",
     "remove_statistical_outliers",
     "resample_polyline",
+    "sample_surface",
     "scallop_height",
     "scan",
     "scan_to_wcs",

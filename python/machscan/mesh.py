@@ -301,6 +301,11 @@ def corner_normals(vertices: ArrayLike, triangles: ArrayLike, *, feature_angle: 
     ------
     ValueError
         ``vertices`` not (N, 3) finite, ``triangles`` not (T, 3) indices into them, or a triangle of zero area.
+
+    Examples
+    --------
+    >>> mesh = machscan.io.read_mesh("part.stl")
+    >>> corners = machscan.mesh.corner_normals(mesh.vertices, mesh.triangles)  # (T, 3, 3), unit
     """
     v, t = _mesh_arrays(vertices, triangles)
     if not (np.isfinite(feature_angle) and 0 < feature_angle < 180):
@@ -353,6 +358,12 @@ def sample_surface(
     ------
     ValueError
         ``spacing`` not a positive distance or too fine for the mesh's area (over 50 M candidates), bad arrays.
+
+    Examples
+    --------
+    >>> mesh = machscan.io.read_mesh("part.stl")
+    >>> model, normals = machscan.sample_surface(mesh.vertices, mesh.triangles, 0.15)  # points 0.15 mm apart
+    >>> allowance = machscan.allowance(model, normals, blank)
     """
     from machscan.cloud import remove_duplicates
 
