@@ -27,8 +27,8 @@
 use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
 use super::section::{
-    beam_gradient, pieces_jacobian, slant, Beams, Measures, Pieces, SectionModel, ANGLE_LEFT, ANGLE_RIGHT, AREA,
-    CENTER, DEPTH, MEASURES, RADIUS, WIDTH,
+    beam_gradient, pieces_jacobian, round_v_depth, slant, Beams, Measures, Pieces, SectionModel, ANGLE_LEFT,
+    ANGLE_RIGHT, AREA, CENTER, DEPTH, MEASURES, RADIUS, WIDTH,
 };
 use crate::optim::{bounded_levenberg_marquardt, BoundedLeastSquares, BoundedLmOptions, LeastSquares};
 use nalgebra::{SMatrix, SVector};
@@ -464,14 +464,14 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 // floor cut the bottom 8–30 µm short).
                 let from_v = v_q.filter(|_| v_fitted || !(floor || steep));
                 let [xl, xr, tl, tr, ..] = from_v.unwrap_or(s.p0);
-                let sharp = (xr - xl) / (tl + tr);
-                let k = (1.0 + tl * tl).sqrt() + (1.0 + tr * tr).sqrt() - (tl + tr);
+                let sharp = round_v_depth(xl, xr, tl, tr, 0.0);
+                let k = slant(tl) + slant(tr) - (tl + tr);
                 // Only where the start looks like a V is the round V the sharp V's rival and
                 // must start where it can move; after a floor it is a fallback, and rounded
                 // from the start it took the trapezoid's place on flat-bottomed (tanh) grooves
                 // for 12 % more iterations.
                 let tip = if floor { (1.0 - R_START_FLOOR) * (xr - xl) / k } else { R_START_PITCH * s.pitch };
-                let rounded = ((xr - xl) - k * tip) / (tl + tr);
+                let rounded = round_v_depth(xl, xr, tl, tr, tip);
                 // (max/min rather than clamp: neither panics on a NaN.) Flanks that do not
                 // meet below the surface (an overhang in the start) leave the start's depth.
                 let d = if from_v.is_some() { rounded.max(0.5 * sharp).min(sharp) } else { s.p0[4].min(rounded) };
@@ -772,6 +772,8 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
 /// by about a reading spacing is barely visible); every standard error includes the spread of
 /// the other models fitted around the value given, by their Akaike weights (Burnham &
 /// Anderson 2002, §4.3: the unconditional variance), since the choice is uncertain too.
+/// `profile`: the sharp V's rounding profile (present where a sharp V was fitted), for the
+/// rounding the readings cannot rule out.
 fn measures_with_errors(
     chosen: &ModelFit,
     fits: &[ModelFit],
@@ -779,6 +781,7 @@ fn measures_with_errors(
     sigma: f64,
     var_surface: f64,
     pitch: f64,
+    profile: Option<&mut RoundingProfile<'_>>,
 ) -> ([f64; MEASURES], [f64; MEASURES]) {
     let mut measures = Measures::values(chosen.model, &chosen.q, chosen.gamma);
     let mut se = measure_errors(chosen, r, var_surface, pitch, true);
@@ -831,8 +834,8 @@ fn measures_with_errors(
         // (a bound) says nothing of it. The profile of χ² over the rounding (likelihood ratio,
         // [`ROUNDING_CHI2`]) bounds the depth and the radius it allows; the k = 2 intervals
         // are widened to hold them.
-        if let (Some(fv), Some(fr)) = (v_fit, r_fit) {
-            if let Some((depth_lo, radius_hi)) = rounding_bound(fv, fr, r, pitch) {
+        if let (Some(profile), Some(fr)) = (profile, r_fit) {
+            if let Some((depth_lo, radius_hi)) = rounding_bound(profile, fr, r.u.len()) {
                 se[DEPTH] = se[DEPTH].max(0.5 * (measures[DEPTH] - depth_lo));
                 se[RADIUS] = se[RADIUS].max(0.5 * (radius_hi - measures[RADIUS]));
             }
@@ -872,11 +875,10 @@ const ROUNDING_CHI2: f64 = 2.706;
 /// parameters) moved one Gauss–Newton step there and the depth held (the profile likelihood,
 /// to first order). The moved parameters and the cost the step predicts; None where the flanks
 /// do not meet below such a tip.
-fn profile_point(fv: &ModelFit, problem: &SectionFit<'_>, radius: f64) -> Option<([f64; 5], f64)> {
+fn profile_point(fv: &ModelFit, problem: &SectionFit<'_>, radius: f64) -> Option<ProfilePoint> {
     let [xl, xr, tl, tr, ..] = fv.q;
-    let t = tl + tr;
-    let depth = ((xr - xl) - (slant(tl) + slant(tr) - t) * radius) / t;
-    if !(t > 0.0 && depth > 0.0) {
+    let depth = round_v_depth(xl, xr, tl, tr, radius);
+    if !(tl + tr > 0.0 && depth > 0.0) {
         return None;
     }
     let q = SVector::<f64, 5>::from([xl, xr, tl, tr, depth]);
@@ -890,24 +892,48 @@ fn profile_point(fv: &ModelFit, problem: &SectionFit<'_>, radius: f64) -> Option
     Some((moved, (cost - 0.5 * g4.dot(&step)).max(0.0)))
 }
 
+/// A round V's parameters on its rounding profile and the cost there ([`profile_point`]).
+type ProfilePoint = ([f64; 5], f64);
+
+/// The round V's χ² profile over its rounding from one sharp V: its [`profile_point`]s at the
+/// radii of [`ROUNDING_PROFILE`], each computed when first asked (the round V's restart and
+/// its rounding bound walk the same points of the same V and readings).
+struct RoundingProfile<'a> {
+    fv: ModelFit,
+    problem: SectionFit<'a>,
+    pitch: f64,
+    points: [Option<Option<ProfilePoint>>; ROUNDING_PROFILE.len()],
+}
+
+impl<'a> RoundingProfile<'a> {
+    fn new(fv: ModelFit, r: &Readings<'a>, pitch: f64) -> Self {
+        Self { problem: r.problem(SectionModel::Round, fv.gamma), fv, pitch, points: [None; ROUNDING_PROFILE.len()] }
+    }
+
+    /// The point at `ROUNDING_PROFILE[i]` pitches.
+    fn point(&mut self, i: usize) -> Option<ProfilePoint> {
+        let (fv, problem, radius) = (&self.fv, &self.problem, ROUNDING_PROFILE[i] * self.pitch);
+        *self.points[i].get_or_insert_with(|| profile_point(fv, problem, radius))
+    }
+}
+
 /// The shallowest depth and the largest tip radius the readings allow a V (Δχ² ≤
 /// [`ROUNDING_CHI2`] against the better of the sharp and the round V, σ̂² from the sharp V's
-/// residuals): the [`profile_point`]s at radii on [`ROUNDING_PROFILE`], the bound interpolated
-/// where it crosses. None when the flanks do not meet.
-fn rounding_bound(fv: &ModelFit, fr: &ModelFit, r: &Readings<'_>, pitch: f64) -> Option<(f64, f64)> {
+/// residuals): the `profile`'s points, the bound interpolated where it crosses. None when the
+/// flanks do not meet.
+fn rounding_bound(profile: &mut RoundingProfile<'_>, fr: &ModelFit, readings: usize) -> Option<(f64, f64)> {
+    let fv = profile.fv;
     let [xl, xr, tl, tr, ..] = fv.q;
-    let t = tl + tr;
-    let depth_at = |radius: f64| ((xr - xl) - (slant(tl) + slant(tr) - t) * radius) / t;
-    if !(t > 0.0 && depth_at(0.0) > 0.0) {
+    let depth_at = |radius: f64| round_v_depth(xl, xr, tl, tr, radius);
+    if !(tl + tr > 0.0 && depth_at(0.0) > 0.0) {
         return None;
     }
-    let sigma2 = 2.0 * fv.cost / r.u.len().saturating_sub(4).max(1) as f64;
+    let sigma2 = 2.0 * fv.cost / readings.saturating_sub(4).max(1) as f64;
     let best = fv.cost.min(fr.cost);
-    let problem = r.problem(SectionModel::Round, fv.gamma);
     let (mut prev_radius, mut prev_chi2) = (0.0, 2.0 * (fv.cost - best) / sigma2);
-    for f in ROUNDING_PROFILE {
-        let radius = f * pitch;
-        let Some((_, predicted)) = profile_point(fv, &problem, radius) else { break };
+    for (i, f) in ROUNDING_PROFILE.into_iter().enumerate() {
+        let radius = f * profile.pitch;
+        let Some((_, predicted)) = profile.point(i) else { break };
         let chi2 = 2.0 * (predicted - best) / sigma2;
         if chi2 > ROUNDING_CHI2 {
             let share =
@@ -930,16 +956,15 @@ fn rounding_bound(fv: &ModelFit, fr: &ModelFit, r: &Readings<'_>, pitch: f64) ->
 const ROUNDING_GAIN: f64 = 4.0;
 
 /// The round V's start where its fit stayed at the sharp V although the readings want a
-/// rounded tip: walking the [`profile_point`]s out from one pitch ([`ROUNDING_PROFILE`]), the
-/// least before the profile rises, if its predicted χ² lies more than [`ROUNDING_GAIN`] below
-/// both fits'. None otherwise. (The walk stops at the first rise: a sharp tip's profile rises
-/// from the first point, and all five points on every V frame had cost a seventh of its time.)
-fn rounding_start(fv: &ModelFit, fr: &ModelFit, r: &Readings<'_>, pitch: f64, sigma: f64) -> Option<[f64; 5]> {
-    let problem = r.problem(SectionModel::Round, fv.gamma);
-    let best = fv.cost.min(fr.cost);
-    let mut least: Option<([f64; 5], f64)> = None;
-    for f in ROUNDING_PROFILE.iter().filter(|&&f| f >= 1.0) {
-        let Some((q, predicted)) = profile_point(fv, &problem, f * pitch) else { break };
+/// rounded tip: walking the `profile` out from one pitch, the least before it rises, if its
+/// predicted χ² lies more than [`ROUNDING_GAIN`] below both fits'. None otherwise. (The walk
+/// stops at the first rise: a sharp tip's profile rises from the first point, and all five
+/// points on every V frame had cost a seventh of its time.)
+fn rounding_start(profile: &mut RoundingProfile<'_>, fr: &ModelFit, sigma: f64) -> Option<[f64; 5]> {
+    let best = profile.fv.cost.min(fr.cost);
+    let mut least: Option<ProfilePoint> = None;
+    for i in (0..ROUNDING_PROFILE.len()).filter(|&i| ROUNDING_PROFILE[i] >= 1.0) {
+        let Some((q, predicted)) = profile.point(i) else { break };
         if predicted >= least.map_or(best, |(_, p)| p) {
             break;
         }
@@ -1436,10 +1461,10 @@ fn fit_groove(
     // A round V that stayed at the sharp V (its tip rounded by less than a pitch) where the
     // readings want a rounded tip is fitted again from its profile's least ([`rounding_start`];
     // looked for on every V frame, the profile had cost a seventh of their time).
-    let at_v = fits.iter().position(|f| f.model == SectionModel::V);
+    let mut profile = fits.iter().find(|f| f.model == SectionModel::V).map(|fv| RoundingProfile::new(*fv, &r, pitch));
     let at_round = fits.iter().position(|f| f.model == SectionModel::Round && f.pieces().r < pitch);
-    if let (Some(iv), Some(iround)) = (at_v, at_round) {
-        if let Some(q0) = rounding_start(&fits[iv], &fits[iround], &r, pitch, sigma) {
+    if let (Some(profile), Some(iround)) = (profile.as_mut(), at_round) {
+        if let Some(q0) = rounding_start(profile, &fits[iround], sigma) {
             let again = fit_model(SectionModel::Round, &r, 0.0, &q0, &o.criteria);
             iterations += again.iterations;
             if again.cost < fits[iround].cost {
@@ -1504,7 +1529,7 @@ fn fit_groove(
     // is read at the surface: width, depth, area, center).
     let x_center = lv.cos * 0.5 * (xl + xr) - lv.sin * lv.b * lv.cos;
     let var_surface = lv.line_variance(x_center, sigma);
-    let (measures, mut se) = measures_with_errors(&chosen, &fits, &r, sigma, var_surface, pitch);
+    let (measures, mut se) = measures_with_errors(&chosen, &fits, &r, sigma, var_surface, pitch, profile.as_mut());
     let (mut measures, mut var) = (measures, se.map(|e| e * e));
     // Flanks the data do not fix (no reading on the flank line: a steep wall, or the top of
     // a U, between two readings): the edge rule places the edge, the flank runs from it to the
@@ -1832,8 +1857,9 @@ mod tests {
         for _ in 0..n {
             let (w, dv) = (0.4 + 0.16 * lcg(&mut seed), 0.27 + 0.08 * lcg(&mut seed));
             let (t, radius, c) = (0.5 * w / dv, 0.03 + 0.03 * lcg(&mut seed), 0.5 * (lcg(&mut seed) - 0.5));
-            let d = (w - 2.0 * (slant(t) - t) * radius) / (2.0 * t);
-            let p = Pieces::of(SectionModel::Round, &[c - 0.5 * w, c + 0.5 * w, t, t, d]);
+            let (xl, xr) = (c - 0.5 * w, c + 0.5 * w);
+            let d = round_v_depth(xl, xr, t, t, radius);
+            let p = Pieces::of(SectionModel::Round, &[xl, xr, t, t, d]);
             let (x, z) = frame(&p, 0.0, 0.002, 0.0, &mut seed);
             let f = fit_frame(&x, &z, &GrooveOptions::default());
             round += usize::from(f.model == FitModel::Section(SectionModel::Round));

@@ -179,6 +179,16 @@ pub(super) fn slant(t: f64) -> f64 {
     (1.0 + t * t).sqrt()
 }
 
+/// The depth of a round V crossing the surface at `xl` < `xr`, its flank cotangents `tl`, `tr`
+/// and its tip an arc of `radius` tangent to both: D = (w − K·r)/T, the inverse of
+/// r1 = (w − T·D)/K (`radius` 0: the sharp V's w/T). Not finite or not positive where the
+/// flanks do not meet below such a tip.
+#[inline(always)]
+pub(super) fn round_v_depth(xl: f64, xr: f64, tl: f64, tr: f64, radius: f64) -> f64 {
+    let t = tl + tr;
+    ((xr - xl) - (slant(tl) + slant(tr) - t) * radius) / t
+}
+
 /// Upper bound of the trapezoid's `s`: its fillet radius `s·r1` is at most `R_T_MAX`.
 fn s_max_trapezoid(q: &[f64]) -> f64 {
     let t = q[2] + q[3];
