@@ -17,7 +17,17 @@ tilt and no lips (so a lower bound for the frames above), averaged over where th
 between two readings: the standard deviation no unbiased estimator can beat, and the median
 |error| it implies (0.674 sd).
 
-    python benchmarks/accuracy_rounded_grooves.py [--frames 1000] [--seed 3]
+Then, with ``--frontier``, what any depth estimator can reach on these frames: each frame's χ²
+profile over the tip radius (the rounded V above fitted with the radius held at 0, 5, …, 75 µm,
+the surface line from readings beyond the lips, the window given the true width: an advantage
+no real call has), and the depths that estimators built on it give: the sharp V, the least
+squares over the whole family, the Akaike average of the sharp V and that least squares (the
+default call's rule), and the posterior median under a prior on the radius: uniform up to the
+largest radius the generator draws (the best a call that knows the process can do), or a
+share p0 at the sharp V and the rest uniform up to that radius (a call serving sharp and
+rounded V's alike).
+
+    python benchmarks/accuracy_rounded_grooves.py [--frames 1000] [--seed 3] [--frontier]
 """
 
 from __future__ import annotations
@@ -26,6 +36,7 @@ import argparse
 import math
 
 import numpy as np
+from scipy.optimize import least_squares
 
 import machscan
 from machscan.synth.frames import _fillet_polyline, _topmost
@@ -101,10 +112,71 @@ def depth_bound(across: float, noise: float = 0.008, w: float = 0.48, d: float =
     return float(np.mean(sds))
 
 
+FRONTIER_RADII = np.arange(0.0, 0.0751, 0.005)
+
+
+def radius_profile(x: np.ndarray, z: np.ndarray, width: float) -> tuple[np.ndarray, np.ndarray]:
+    """One frame's χ² (8 µm noise) and depth with the tip radius held at each of
+    FRONTIER_RADII, the four other section parameters least squares."""
+    centre = x[np.argmin(np.convolve(z, np.ones(5) / 5, "same"))]
+    beyond = np.abs(x - centre) > width / 2 + 0.2  # past the lips
+    a, b = np.polynomial.polynomial.polyfit(x[beyond], z[beyond], 1)
+    h = z - (a + b * x)
+    inside = (np.abs(x - centre) < width / 2 + 0.01) & (h < -0.02)
+    xi, hi = x[inside], h[inside]
+    q = np.array([centre - width / 2, centre + width / 2, centre, -hi.min()])
+    chi2, depth = [], []
+    for r in FRONTIER_RADII:
+        fit = least_squares(lambda p, r=r: (round_v(np.r_[0.0, 0.0, p, r], xi) - hi) / 0.008, q, method="lm")
+        if r == 0.0:
+            q = fit.x  # the sharp V starts every rounded fit
+        chi2.append(2 * fit.cost)
+        depth.append(groove_depth(np.r_[0.0, 0.0, fit.x, r]))
+    return np.array(chi2), np.array(depth)
+
+
+def posterior_median(chi2: np.ndarray, depth: np.ndarray, prior: np.ndarray) -> float:
+    w = prior * np.exp(-0.5 * (chi2 - chi2.min()))
+    order = np.argsort(depth)
+    return float(depth[order][np.searchsorted(np.cumsum(w[order]) / w.sum(), 0.5)])
+
+
+def frontier(frames: int, seed: int) -> None:
+    slab = FRONTIER_RADII > 0
+    estimators = ["sharp V", "least squares", "Akaike average", "prior: the generator's"]
+    estimators += [f"prior: p0 = {p0}" for p0 in (0.1, 0.2, 0.3, 0.5)]
+    sets = [("sharp", "arc", (0.0, 0.0)), ("arc 0-0.1 mm", "arc", (0.0, 0.1)), ("beam 0-0.1 mm", "beam", (0.0, 0.1))]
+    table = {name: [] for name in estimators}
+    for _, kind, across in sets:
+        x, z, width, depth = engraved_frames(frames, seed, across, kind)
+        errors = {name: [] for name in estimators}
+        for k in range(frames):
+            chi2, d = radius_profile(x, z[k], width[k])
+            j = int(np.argmin(chi2))
+            w_sharp = 1.0 / (1.0 + np.exp(0.5 * (chi2[0] - chi2[j]) - 1.0)) if j else 1.0  # AIC: one more parameter
+            # The generator's largest radius for this V: 0.1 mm across, tangent to flanks at atan(2d/w).
+            r_max = across[1] / (2 * math.sin(math.atan2(d[0], width[k] / 2)))
+            generator = (FRONTIER_RADII <= r_max + 1e-9) if across[1] > 0 else ~slab
+            slab_prior = slab & (FRONTIER_RADII <= 0.1 / (2 * math.sin(math.atan2(d[0], width[k] / 2))))
+            got = [d[0], d[j], w_sharp * d[0] + (1 - w_sharp) * d[j], posterior_median(chi2, d, generator.astype(float))]
+            for p0 in (0.1, 0.2, 0.3, 0.5):
+                got.append(posterior_median(chi2, d, np.where(slab, (1 - p0) * slab_prior / slab_prior.sum(), p0)))
+            for name, value in zip(estimators, got):
+                errors[name].append(value - depth[k])
+        for name in estimators:
+            e = np.array(errors[name])
+            table[name].append(f"{100 * np.median(np.abs(e) / depth):6.2f} % {1000 * np.median(e):+5.1f} µm")
+    print("\nWhat an estimator on the radius profile reaches (window given the true width): median |depth error|, bias")
+    print(f"{'estimator':<24}" + "".join(f"{s[0]:>20}" for s in sets))
+    for name in estimators:
+        print(f"{name:<24}" + "".join(f"{cell:>20}" for cell in table[name]))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=3)
+    ap.add_argument("--frontier", action="store_true", help="also what an estimator on the radius profile reaches")
     args = ap.parse_args()
     print(f"{'rounding':<16} {'template':<10} {'|depth| %':>9} {'bias µm':>8} {'|width| µm':>10} {'k=2 holds':>9}  models")
     for kind in ("arc", "beam"):
@@ -125,6 +197,8 @@ def main() -> None:
             print(f"  rounded over {across:.3f} mm: no bound (the arc holds at most one reading: its radius is not fixed)")
             continue
         print(f"  rounded over {across:.3f} mm: sd {1000 * sd:.2f} µm, median |error| {100 * 0.674 * sd / 0.31:.2f} %")
+    if args.frontier:
+        frontier(args.frames, args.seed)
 
 
 if __name__ == "__main__":
