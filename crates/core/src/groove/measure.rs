@@ -671,6 +671,52 @@ fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)
     Some((angle(edge), spread * spread / 12.0, ht))
 }
 
+/// The variance of a fitted edge (a flank line with `on_line` readings on it, crossing the
+/// surface at `edge`) where the readings bracket it more honestly than the linearisation's
+/// `lin` does; None where `lin` stands.
+///
+/// The bracket: the `gap` (where the beams of the last reading within `thr` of the surface and
+/// of the first deeper one cross the surface line, in that order), reaching outward by thr·cot
+/// (that last reading may lie on the flank itself, up to `thr` deep). Its bound: an edge uniform in it, and the
+/// fitted edge's distance beyond it squared.
+/// - Flank line pinned by one or two readings, none deeper than `thr`: they lie on the top
+///   corner, which no model rounds, and the line through them is as uncertain as the bracket
+///   (sheared U's with drafted walls: the linearisation gave 0.5 µm for edges 10–20 µm off).
+/// - One or two readings and a linearisation wider than the bracket: the flank's direction is
+///   not fixed (its parameters held by their prior), the readings still bracket the edge (the
+///   widths of steep trapezoids had standard errors of 0.1–13 mm).
+/// - An edge beyond its bracket contradicts a reading the fit let go: at least the bound.
+#[allow(clippy::too_many_arguments)]
+fn bracketed_edge(
+    p: &Pieces,
+    (us, vs): (&[f64], &[f64]),
+    edge: f64,
+    side: f64,
+    gap: (f64, f64),
+    thr: f64,
+    on_line: usize,
+    lin: f64,
+) -> Option<f64> {
+    let cot = if side < 0.0 { p.tl } else { p.tr };
+    let outer = gap.0 + side * thr * cot.max(0.0);
+    let (a, b) = if outer <= gap.1 { (outer, gap.1) } else { (gap.1, outer) };
+    let outside = (a - edge).max(edge - b).max(0.0);
+    let bound = (b - a) * (b - a) / 12.0 + outside * outside;
+    let (lo, hi) = if side < 0.0 {
+        (p.xl.min(edge), p.cl - p.r / slant(p.tl))
+    } else {
+        (p.cr + p.r / slant(p.tr), p.xr.max(edge))
+    };
+    let deep = us.iter().zip(vs).any(|(&u, &v)| u >= lo && u <= hi && v < -thr);
+    if (on_line <= 2 && !deep) || outside > 0.0 {
+        Some(lin.max(bound))
+    } else if on_line <= 2 && lin > bound {
+        Some(bound)
+    } else {
+        None
+    }
+}
+
 /// Standard errors of the [`Measures`] of a fit by the delta method: the parameters'
 /// covariance `σ̂² (JᵀJ)⁺` (σ̂² from the fit's residuals) and the variance `var_surface` of
 /// the surface line's height at the groove (fitted to other readings: independent). They do
@@ -686,16 +732,74 @@ fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)
 /// `sandwich` false: the classical covariance alone (for a model whose depth and radius only
 /// are averaged in, where the rounding's profile bounds them anyway).
 fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64, sandwich: bool) -> [f64; MEASURES] {
-    if matches!(fit.model, SectionModel::Round | SectionModel::Trapezoid) {
-        let p = fit.pieces();
-        let span = (p.cr + p.r / slant(p.tr)) - (p.cl - p.r / slant(p.tl));
-        if span < pitch {
-            let problem = r.problem(SectionModel::V, fit.gamma);
-            let q = SVector::<f64, 4>::from_fn(|i, _| fit.q[i]);
-            let (a, _, cost) = LeastSquares::<4>::normal_equations(&problem, &q);
-            return measure_errors(&ModelFit::at(&problem, &q, &a, cost), r, var_surface, pitch, sandwich);
-        }
+    FitCovariance::of(fit, r, var_surface, pitch, sandwich).map_or([f64::INFINITY; MEASURES], |c| c.errors())
+}
+
+/// The covariance of a fit's parameters, classical and sandwich, with its measures and their
+/// derivatives: what [`measure_errors`] reads the standard errors from.
+struct FitCovariance {
+    classical: nalgebra::SMatrix<f64, 6, 6>,
+    sandwich: nalgebra::SMatrix<f64, 6, 6>,
+    np: usize,
+    measures: Measures,
+    var_surface: f64,
+}
+
+impl FitCovariance {
+    /// The variance of a quantity with derivative `grad` by the parameters and `surface` by a
+    /// raise of the surface line: the larger of the classical and the sandwich, and the
+    /// surface's part.
+    fn variance(&self, grad: &[f64; 6], surface: f64) -> f64 {
+        let quad_of = |c: &nalgebra::SMatrix<f64, 6, 6>| -> f64 {
+            (0..self.np).map(|i| (0..self.np).map(|j| grad[i] * c[(i, j)] * grad[j]).sum::<f64>()).sum()
+        };
+        quad_of(&self.classical).max(quad_of(&self.sandwich)) + surface * surface * self.var_surface
     }
+
+    /// The standard errors of the measures.
+    fn errors(&self) -> [f64; MEASURES] {
+        let m = &self.measures;
+        std::array::from_fn(|k| {
+            // NaN (a measure the model does not have) stays NaN; `max` would make it 0.
+            if m.values[k].is_nan() {
+                f64::NAN
+            } else {
+                self.variance(&m.grad[k], m.surface[k]).max(0.0).sqrt()
+            }
+        })
+    }
+
+    /// The variances of the left and the right edge (the crossings: center ∓ width/2).
+    fn edge_variances(&self) -> [f64; 2] {
+        let m = &self.measures;
+        [-0.5, 0.5].map(|half| {
+            let grad = std::array::from_fn(|i| m.grad[CENTER][i] + half * m.grad[WIDTH][i]);
+            self.variance(&grad, m.surface[CENTER] + half * m.surface[WIDTH])
+        })
+    }
+
+    fn of(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64, sandwich: bool) -> Option<FitCovariance> {
+        if matches!(fit.model, SectionModel::Round | SectionModel::Trapezoid) {
+            let p = fit.pieces();
+            let span = (p.cr + p.r / slant(p.tr)) - (p.cl - p.r / slant(p.tl));
+            if span < pitch {
+                let problem = r.problem(SectionModel::V, fit.gamma);
+                let q = SVector::<f64, 4>::from_fn(|i, _| fit.q[i]);
+                let (a, _, cost) = LeastSquares::<4>::normal_equations(&problem, &q);
+                return FitCovariance::of(&ModelFit::at(&problem, &q, &a, cost), r, var_surface, pitch, sandwich);
+            }
+        }
+        fit_covariance(fit, r, var_surface, pitch, sandwich)
+    }
+}
+
+fn fit_covariance(
+    fit: &ModelFit,
+    r: &Readings<'_>,
+    var_surface: f64,
+    pitch: f64,
+    sandwich: bool,
+) -> Option<FitCovariance> {
     let m = r.u.len();
     let np = fit.model.n_params();
     // A parameter at a bound (a trapezoid's fillet at zero) is not estimated: it is held,
@@ -726,7 +830,7 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
         (true, false) => fit.jtj[i][j],
         (false, diagonal) => f64::from(u8::from(diagonal)),
     });
-    let Some(cholesky) = a.cholesky() else { return [f64::INFINITY; MEASURES] };
+    let cholesky = a.cholesky()?;
     let mut inv = cholesky.inverse();
     for i in (0..6).filter(|&i| !free[i]) {
         inv.row_mut(i).fill(0.0);
@@ -749,21 +853,13 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
         let h = (row.transpose() * inv * row)[(0, 0)].min(0.99);
         meat += row * row.transpose() * (hit.lambda * hit.lambda / ((1.0 - h) * (1.0 - h)));
     }
-    let (classical, sandwich) = (inv * sigma2, inv * meat * inv);
     // (Without the pass, `sandwich` is zero and the classical stands.)
-    let measures = Measures::of(fit.model, &fit.q, fit.gamma);
-    std::array::from_fn(|k| {
-        let gk = &measures.grad[k];
-        let quad_of = |c: &nalgebra::SMatrix<f64, 6, 6>| -> f64 {
-            (0..np).map(|i| (0..np).map(|j| gk[i] * c[(i, j)] * gk[j]).sum::<f64>()).sum()
-        };
-        let var = quad_of(&classical).max(quad_of(&sandwich)) + measures.surface[k].powi(2) * var_surface;
-        // NaN (a measure the model does not have) stays NaN; `max` would make it 0.
-        if measures.values[k].is_nan() {
-            f64::NAN
-        } else {
-            var.max(0.0).sqrt()
-        }
+    Some(FitCovariance {
+        classical: inv * sigma2,
+        sandwich: inv * meat * inv,
+        np,
+        measures: Measures::of(fit.model, &fit.q, fit.gamma),
+        var_surface,
     })
 }
 
@@ -773,7 +869,8 @@ fn measure_errors(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64
 /// the other models fitted around the value given, by their Akaike weights (Burnham &
 /// Anderson 2002, §4.3: the unconditional variance), since the choice is uncertain too.
 /// `profile`: the sharp V's rounding profile (present where a sharp V was fitted), for the
-/// rounding the readings cannot rule out.
+/// rounding the readings cannot rule out. Also the chosen fit's covariance (None where JᵀJ
+/// has no Cholesky factor: the errors are then infinite).
 fn measures_with_errors(
     chosen: &ModelFit,
     fits: &[ModelFit],
@@ -782,9 +879,10 @@ fn measures_with_errors(
     var_surface: f64,
     pitch: f64,
     profile: Option<&mut RoundingProfile<'_>>,
-) -> ([f64; MEASURES], [f64; MEASURES]) {
+) -> ([f64; MEASURES], [f64; MEASURES], Option<FitCovariance>) {
     let mut measures = Measures::values(chosen.model, &chosen.q, chosen.gamma);
-    let mut se = measure_errors(chosen, r, var_surface, pitch, true);
+    let cov = FitCovariance::of(chosen, r, var_surface, pitch, true);
+    let mut se = cov.as_ref().map_or([f64::INFINITY; MEASURES], FitCovariance::errors);
     // The chosen fit is usually one of `fits` as it was: its errors are not taken twice.
     let errors = |f: &ModelFit| {
         if (f.model, f.q, f.gamma) == (chosen.model, chosen.q, chosen.gamma) {
@@ -841,7 +939,7 @@ fn measures_with_errors(
             }
         }
     }
-    (measures, se)
+    (measures, se, cov)
 }
 
 /// `problem`'s model one Gauss–Newton step from `q0` (projected into its bounds; none when
@@ -1529,14 +1627,23 @@ fn fit_groove(
     // is read at the surface: width, depth, area, center).
     let x_center = lv.cos * 0.5 * (xl + xr) - lv.sin * lv.b * lv.cos;
     let var_surface = lv.line_variance(x_center, sigma);
-    let (measures, mut se) = measures_with_errors(&chosen, &fits, &r, sigma, var_surface, pitch, profile.as_mut());
+    let (measures, mut se, cov) = measures_with_errors(&chosen, &fits, &r, sigma, var_surface, pitch, profile.as_mut());
     let (mut measures, mut var) = (measures, se.map(|e| e * e));
-    // Flanks the data do not fix (no reading on the flank line: a steep wall, or the top of
-    // a U, between two readings): the edge rule places the edge, the flank runs from it to the
-    // fillet, and each measure read at the edge carries the gap's uncertainty.
-    let gaps = [(lv.u[il], lv.u[(il + 1).min(n - 1)]), (lv.u[ir], lv.u[ir.saturating_sub(1)])];
+    // Where the flank lines meet the surface, the readings bracket them: between the beams of
+    // the last reading within `thr` of the surface and of the first one deeper, where those
+    // beams cross the surface line (a deep reading's own u lies |v|·tan(tilt) aside of its
+    // beam's crossing: 20 µm on a 0.4 mm groove tilted by 0.05 rad).
+    let tan = lv.sin / lv.cos;
+    let at_surface = |i: usize| lv.u[i] - lv.v[i] * tan;
+    let gaps = [(at_surface(il), at_surface((il + 1).min(n - 1))), (at_surface(ir), at_surface(ir.saturating_sub(1)))];
     if matches!(chosen.model, SectionModel::Trapezoid | SectionModel::Round) {
-        for (side, gap, edge, angle) in [(-1.0, gaps[0], &mut xl, ANGLE_LEFT), (1.0, gaps[1], &mut xr, ANGLE_RIGHT)] {
+        // Each edge's variance where the readings say more (or less) of it than the
+        // linearisation: None keeps the linearisation's.
+        let mut edge_var = [None, None];
+        let lin = cov.as_ref().map(FitCovariance::edge_variances);
+        for (slot, (side, gap, edge, angle)) in
+            [(-1.0, gaps[0], &mut xl, ANGLE_LEFT), (1.0, gaps[1], &mut xr, ANGLE_RIGHT)].into_iter().enumerate()
+        {
             let (placed, within, on_line) = edge_rule(&p, &us, *edge, side, gap);
             if (1..=2).contains(&on_line) {
                 // One or two readings on the flank line: the model's form (a straight flank
@@ -1548,17 +1655,37 @@ fn fit_groove(
                     var[angle] = var[angle].max(v);
                 }
             }
+            if let (Some(lin), true) = (lin, on_line > 0) {
+                edge_var[slot] = bracketed_edge(&p, (&us, &vs), *edge, side, gap, thr, on_line, lin[slot]);
+            }
             let Some((a, b)) = within else { continue };
-            let var_edge = (b - a) * (b - a) / 12.0;
-            var[WIDTH] += var_edge;
-            var[CENTER] += 0.25 * var_edge;
+            // The edge rule's place is not the gap's middle in general: the second moment of
+            // an edge anywhere in the gap about the place (its angle's likewise).
+            let mid = 0.5 * (a + b);
+            let var_edge = (b - a) * (b - a) / 12.0 + (placed - mid).powi(2);
+            edge_var[slot] = Some(var_edge);
             if let Some((value, v, ht)) = flank_in_gap(&p, chosen.gamma, side, placed, (a, b)) {
                 // The triangle between the fitted flank and the placed one, to the tangent point.
                 measures[AREA] += 0.5 * side * (placed - *edge) * ht;
                 var[AREA] += 0.25 * ht * ht * var_edge;
-                (measures[angle], var[angle]) = (value, v);
+                let off =
+                    flank_in_gap(&p, chosen.gamma, side, mid, (a, b)).map_or(0.0, |(m, _, _)| (m - value).powi(2));
+                (measures[angle], var[angle]) = (value, v + off);
             }
             *edge = placed;
+        }
+        if let (Some(c), Some(lin)) = (&cov, lin) {
+            if edge_var.iter().any(Option::is_some) {
+                // Width and center from the two edges (each edge's own variance; their
+                // covariance, through the bottom both flanks are tangent to, is left out), with
+                // the model spread they carried kept.
+                let m = &c.measures;
+                let (vl, vr) = (edge_var[0].unwrap_or(lin[0]), edge_var[1].unwrap_or(lin[1]));
+                let spread_w = (var[WIDTH] - c.variance(&m.grad[WIDTH], m.surface[WIDTH])).max(0.0);
+                let spread_c = (var[CENTER] - c.variance(&m.grad[CENTER], m.surface[CENTER])).max(0.0);
+                var[WIDTH] = spread_w + vl + vr;
+                var[CENTER] = spread_c + 0.25 * (vl + vr);
+            }
         }
     } else if chosen.model == SectionModel::U && p.hc > 0.0 {
         // A U with walls fixes them vertical; a drafted wall is the round V's (a U with free
