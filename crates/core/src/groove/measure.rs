@@ -1728,6 +1728,15 @@ fn fit_groove(
             }
         }
     }
+    // A flank whose direction the readings do not fix (its cotangent held by the prior of
+    // measure_errors) had a linearised angle variance of up to hundreds of degrees: the angle
+    // is then anywhere a flank can lean, and no more uncertain than uniform over that span.
+    let uniform = super::section::flank_angle_span().powi(2) / 12.0;
+    for k in [ANGLE_LEFT, ANGLE_RIGHT] {
+        if var[k] > uniform {
+            var[k] = uniform; // (`min` would turn a NaN, a measure the model lacks, into it)
+        }
+    }
     let depth = measures[DEPTH];
     se = var.map(f64::sqrt);
     let width = xr - xl;
