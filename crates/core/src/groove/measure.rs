@@ -677,8 +677,8 @@ fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)
 ///
 /// The bracket: the `gap` (where the beams of the last reading within `thr` of the surface and
 /// of the first deeper one cross the surface line, in that order), reaching outward by thr·cot
-/// (that last reading may lie on the flank itself, up to `thr` deep). Its bound: an edge uniform in it, and the
-/// fitted edge's distance beyond it squared.
+/// (that last reading may lie on the flank itself, up to `thr` deep). Its bound: an edge
+/// uniform in it, and the fitted edge's distance beyond it squared.
 /// - Flank line pinned by one or two readings, none deeper than `thr`: they lie on the top
 ///   corner, which no model rounds, and the line through them is as uncertain as the bracket
 ///   (sheared U's with drafted walls: the linearisation gave 0.5 µm for edges 10–20 µm off).
@@ -778,6 +778,9 @@ impl FitCovariance {
         })
     }
 
+    /// The covariance of `fit` (a round V or trapezoid whose bottom spans less than a pitch:
+    /// the sharp V's at its flanks, as [`measure_errors`] says). None where JᵀJ, with the
+    /// priors, has no Cholesky factor.
     fn of(fit: &ModelFit, r: &Readings<'_>, var_surface: f64, pitch: f64, sandwich: bool) -> Option<FitCovariance> {
         if matches!(fit.model, SectionModel::Round | SectionModel::Trapezoid) {
             let p = fit.pieces();
@@ -793,6 +796,7 @@ impl FitCovariance {
     }
 }
 
+/// [`FitCovariance::of`] for `fit` as it stands.
 fn fit_covariance(
     fit: &ModelFit,
     r: &Readings<'_>,
