@@ -8,7 +8,8 @@ median |error| and the median standard error. Frame sets:
   pitch, 8 µm noise, lips, tilt, dropouts; the step's truth is 0), and the U's tilted by a
   shear instead of a rotation (their sections lean);
 - shapes the generators do not make, drawn here: V's with unequal flanks (30–60° left, 45–75°
-  right), trapezoids with unequal flanks, half-ellipses cut below their axis (0.5–0.7 mm
+  right), trapezoids with unequal flanks, U's whose walls are drafted by up to 5° either way
+  (bottom radius 0.15–0.3 mm, walls 0.05–0.2 mm), half-ellipses cut below their axis (0.5–0.7 mm
   across, 0.18–0.26 mm semi-axis down: a section no model has), and gap-and-flush profiles (a V gap with the right
   surface 0–50 µm above or below the left: the step), at a 20 µm pitch with 5 µm noise;
 - laser-engraved V's with rounded bottoms (0–0.1 mm across: ``accuracy_rounded_grooves.py``).
@@ -67,6 +68,16 @@ def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, 
                 [0, rng.uniform(0, 0.02), rng.uniform(0, 0.02), rng.uniform(0, 0.02), rng.uniform(0, 0.02), 0],
             )
             left, right = floor / 2 + left, floor / 2 + right
+        elif kind == "drafted_u_walls":
+            # A round bottom under walls drafted either way (a worn or tilted cutter): the
+            # generators' U's with walls hold them within a degree or two of vertical.
+            r, wall, draft = rng.uniform(0.15, 0.3), rng.uniform(0.05, 0.2), math.radians(rng.uniform(-5, 5))
+            t = np.linspace(math.pi, 2 * math.pi, 2001)
+            left = right = r + wall * math.tan(draft)
+            bottom = np.c_[r * np.cos(t), -wall + r * np.sin(t)]
+            poly = np.vstack([[(-far, 0.0), (-left, 0.0)], bottom, [(right, 0.0), (far, 0.0)]])
+            a_l = a_r = math.degrees(math.atan2(wall, wall * math.tan(draft)))
+            truth["bottom_radius"][k] = r
         elif kind == "half_ellipse":
             # An elliptic section cut below its axis (no model has it: a ball cutter on a tilted
             # axis, or a beam's profile): semi-axes a across, b down.
@@ -144,7 +155,7 @@ def main() -> None:
     sets += [(f"synth {s}, sheared", lambda s=s: generator_frames(s, args.frames, args.seed, "shear"))
              for s in ("u", "u_walls")]
     sets += [(k.replace("_", " "), lambda k=k: other_shapes(k, args.frames, args.seed))
-             for k in ("asymmetric_v", "asymmetric_trapezoid", "half_ellipse", "gap_flush")]
+             for k in ("asymmetric_v", "asymmetric_trapezoid", "drafted_u_walls", "half_ellipse", "gap_flush")]
     sets += [("engraved V, rounded 0-0.1 mm", lambda: engraved(args.frames, args.seed))]
     print(f"k = 2 coverage of the groove measures, default call, {args.frames} frames per set (seed {args.seed})")
     print(f"  {'set':<30} {'measure':<18} {'frames':>6} {'k=2 holds':>9} {'median |error|':>15} {'median se':>10}")

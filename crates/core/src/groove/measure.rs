@@ -677,8 +677,9 @@ fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)
 ///
 /// The bracket: the `gap` (where the beams of the last reading within `thr` of the surface and
 /// of the first deeper one cross the surface line, in that order), reaching outward by thr·cot
-/// (that last reading may lie on the flank itself, up to `thr` deep). Its bound: an edge
-/// uniform in it, and the fitted edge's distance beyond it squared.
+/// (that last reading may lie on the flank itself, up to `thr` deep). Its bound: the second
+/// moment about the fitted edge of an edge uniform in it, (b − a)²/12 + (edge − middle)² (an
+/// edge at the bracket's end is as far from the truth as the bracket is wide).
 /// - Flank line pinned by one or two readings, none deeper than `thr`: they lie on the top
 ///   corner, which no model rounds, and the line through them is as uncertain as the bracket
 ///   (sheared U's with drafted walls: the linearisation gave 0.5 µm for edges 10–20 µm off).
@@ -701,7 +702,7 @@ fn bracketed_edge(
     let outer = gap.0 + side * thr * cot.max(0.0);
     let (a, b) = if outer <= gap.1 { (outer, gap.1) } else { (gap.1, outer) };
     let outside = (a - edge).max(edge - b).max(0.0);
-    let bound = (b - a) * (b - a) / 12.0 + outside * outside;
+    let bound = (b - a) * (b - a) / 12.0 + (edge - 0.5 * (a + b)).powi(2);
     let (lo, hi) = if side < 0.0 {
         (p.xl.min(edge), p.cl - p.r / slant(p.tl))
     } else {
@@ -1640,11 +1641,11 @@ fn fit_groove(
     let tan = lv.sin / lv.cos;
     let at_surface = |i: usize| lv.u[i] - lv.v[i] * tan;
     let gaps = [(at_surface(il), at_surface((il + 1).min(n - 1))), (at_surface(ir), at_surface(ir.saturating_sub(1)))];
+    // Each edge's variance where the readings say more (or less) of it than the
+    // linearisation: None keeps the linearisation's.
+    let mut edge_var = [None, None];
+    let lin = cov.as_ref().map(FitCovariance::edge_variances);
     if matches!(chosen.model, SectionModel::Trapezoid | SectionModel::Round) {
-        // Each edge's variance where the readings say more (or less) of it than the
-        // linearisation: None keeps the linearisation's.
-        let mut edge_var = [None, None];
-        let lin = cov.as_ref().map(FitCovariance::edge_variances);
         for (slot, (side, gap, edge, angle)) in
             [(-1.0, gaps[0], &mut xl, ANGLE_LEFT), (1.0, gaps[1], &mut xr, ANGLE_RIGHT)].into_iter().enumerate()
         {
@@ -1678,19 +1679,6 @@ fn fit_groove(
             }
             *edge = placed;
         }
-        if let (Some(c), Some(lin)) = (&cov, lin) {
-            if edge_var.iter().any(Option::is_some) {
-                // Width and center from the two edges (each edge's own variance; their
-                // covariance, through the bottom both flanks are tangent to, is left out), with
-                // the model spread they carried kept.
-                let m = &c.measures;
-                let (vl, vr) = (edge_var[0].unwrap_or(lin[0]), edge_var[1].unwrap_or(lin[1]));
-                let spread_w = (var[WIDTH] - c.variance(&m.grad[WIDTH], m.surface[WIDTH])).max(0.0);
-                let spread_c = (var[CENTER] - c.variance(&m.grad[CENTER], m.surface[CENTER])).max(0.0);
-                var[WIDTH] = spread_w + vl + vr;
-                var[CENTER] = spread_c + 0.25 * (vl + vr);
-            }
-        }
     } else if chosen.model == SectionModel::U && p.hc > 0.0 {
         // A U with walls fixes them vertical; a drafted wall is the round V's (a U with free
         // flanks). One Gauss–Newton step of the round V from the U (which it contains: flanks
@@ -1700,14 +1688,48 @@ fn fit_groove(
         let free = round_from_u(&r, chosen.gamma, &p);
         let pf = free.pieces();
         let m = Measures::values(free.model, &free.q, free.gamma);
-        let e = measure_errors(&free, &r, var_surface, pitch, true);
+        let free_cov = FitCovariance::of(&free, &r, var_surface, pitch, true);
+        let e = free_cov.as_ref().map_or([f64::INFINITY; MEASURES], FitCovariance::errors);
+        let free_edges = free_cov.as_ref().map(FitCovariance::edge_variances);
         let (cl, cr) = pf.crossings();
-        for (side, gap, crossing, angle) in [(-1.0, gaps[0], cl, ANGLE_LEFT), (1.0, gaps[1], cr, ANGLE_RIGHT)] {
+        for (slot, (side, gap, crossing, angle, edge)) in
+            [(-1.0, gaps[0], cl, ANGLE_LEFT, &mut xl), (1.0, gaps[1], cr, ANGLE_RIGHT, &mut xr)].into_iter().enumerate()
+        {
             (measures[angle], var[angle]) = (m[angle], e[angle] * e[angle]);
             let (placed, within, _) = edge_rule(&pf, &us, crossing, side, gap);
             if let Some((value, v, _)) = within.and_then(|g| flank_in_gap(&pf, free.gamma, side, placed, g)) {
                 (measures[angle], var[angle]) = (value, v);
             }
+            // The wall's edge where those angles put it: a wall without a reading may be
+            // drafted, and the vertical one had left the widths of walls drafted by up to 5°
+            // inside their k = 2 intervals in 69 % of frames (coverage_grooves.py). Its variance:
+            // the gap's second moment about it, or the step's own where readings lie on the
+            // wall (no more than the gap's). The centre keeps the circle's: a cutter drafts
+            // both walls alike, and a lean is the lean rival's.
+            let (a, b) = if gap.0 <= gap.1 { gap } else { (gap.1, gap.0) };
+            let in_gap = |e: f64| (b - a) * (b - a) / 12.0 + (e - 0.5 * (a + b)).powi(2);
+            let (moved, var_edge) = match (within, free_edges) {
+                (Some(_), _) => (placed, in_gap(placed)),
+                (None, Some(fe)) => (crossing, fe[slot].min(in_gap(crossing))),
+                (None, None) => continue,
+            };
+            // (The area stays the U's: the triangle a draft adds or takes is within its
+            // variance, which held the drafted walls' areas in 95.6 % of frames; with the
+            // triangle and its variance, 99.1 %.)
+            *edge = moved;
+            edge_var[slot] = Some(var_edge);
+        }
+    } else if chosen.model == SectionModel::Ellipse && p.hc > 0.0 {
+        // The elliptic U's walls are held vertical too, and no round V follows an ellipse's
+        // bottom: each wall, from its foot (where the ellipse is widest, hc deep) to an edge
+        // anywhere in the gap, as the second moment about the vertical one (its variance had
+        // been none: a wall drafted by 5° lay 5° from an angle stated exact).
+        for (side, gap, foot, angle) in [(-1.0, gaps[0], xl, ANGLE_LEFT), (1.0, gaps[1], xr, ANGLE_RIGHT)] {
+            let (a, b) = if gap.0 <= gap.1 { gap } else { (gap.1, gap.0) };
+            let at = |e: f64| p.hc.atan2(side * (e - (foot - chosen.gamma * p.hc))).to_degrees();
+            let spread = at(a) - at(b);
+            let v = spread * spread / 12.0 + (at(0.5 * (a + b)) - measures[angle]).powi(2);
+            var[angle] = var[angle].max(v);
         }
     }
     if let Some(rival) = lean_rival {
@@ -1729,6 +1751,21 @@ fn fit_groove(
                 WIDTH => (xl, xr) = (xl - 0.5 * share * d, xr + 0.5 * share * d),
                 CENTER => (xl, xr) = (xl + share * d, xr + share * d),
                 _ => measures[k] += share * d,
+            }
+        }
+    }
+    if let (Some(c), Some(lin)) = (&cov, lin) {
+        if edge_var.iter().any(Option::is_some) {
+            // Width and center from the two edges (each edge's own variance; their
+            // covariance, through the bottom both flanks are tangent to, is left out), with
+            // the model spread they carried kept; a U's center is its circle's (above).
+            let m = &c.measures;
+            let (vl, vr) = (edge_var[0].unwrap_or(lin[0]), edge_var[1].unwrap_or(lin[1]));
+            let spread_w = (var[WIDTH] - c.variance(&m.grad[WIDTH], m.surface[WIDTH])).max(0.0);
+            var[WIDTH] = spread_w + vl + vr;
+            if chosen.model != SectionModel::U {
+                let spread_c = (var[CENTER] - c.variance(&m.grad[CENTER], m.surface[CENTER])).max(0.0);
+                var[CENTER] = spread_c + 0.25 * (vl + vr);
             }
         }
     }
