@@ -653,22 +653,46 @@ fn edge_rule(p: &Pieces, fitted: &[f64], e: f64, side: f64, gap: (f64, f64)) -> 
     (0.5 * (a + b), Some((a, b)), 0)
 }
 
-/// A flank the data do not fix, placed by [`edge_rule`] at `edge` in the gap `(a, b)`: its angle
-/// (degrees) is the line's from the edge to the fillet's tangent point (fixed by the fillet's
-/// readings; leaning by `gamma`), and its variance that of an edge anywhere in the gap
-/// (uniform: the angles at the gap's ends, spread²/12). `side` −1 left, +1 right. None when
-/// the flank has no length (the arc meets the surface); also the tangent point's depth.
-fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, (a, b): (f64, f64)) -> Option<(f64, f64, f64)> {
+/// A flank from `edge` on the surface to a foot `(ut, ht deep)`, its edge anywhere in the gap
+/// `(a, b)`: the angle at `edge` (degrees), the variance of an edge uniform in the gap (the
+/// angles at the gap's ends: spread²/12) and the angle at the gap's middle. `side` −1 left,
+/// +1 right.
+struct GapFlank {
+    angle: f64,
+    var: f64,
+    mid: f64,
+}
+
+impl GapFlank {
+    fn new(ut: f64, ht: f64, side: f64, edge: f64, (a, b): (f64, f64)) -> Self {
+        let angle = |e: f64| ht.atan2(side * (e - ut)).to_degrees();
+        let spread = angle(a) - angle(b);
+        GapFlank { angle: angle(edge), var: spread * spread / 12.0, mid: angle(0.5 * (a + b)) }
+    }
+
+    /// The variance about the angle at `edge` (the second moment, not about the mean).
+    fn var_about_edge(&self) -> f64 {
+        self.var + (self.mid - self.angle).powi(2)
+    }
+}
+
+/// The second moment about `x` of a point uniform between `a` and `b` (in either order).
+fn gap_moment((a, b): (f64, f64), x: f64) -> f64 {
+    (b - a) * (b - a) / 12.0 + (x - 0.5 * (a + b)).powi(2)
+}
+
+/// A flank the data do not fix, placed by [`edge_rule`] at `edge` in the gap: the line from the
+/// edge to the fillet's tangent point (fixed by the fillet's readings; leaning by `gamma`), as
+/// [`GapFlank`]. None when the flank has no length (the arc meets the surface); also the
+/// tangent point's depth.
+fn flank_in_gap(p: &Pieces, gamma: f64, side: f64, edge: f64, gap: (f64, f64)) -> Option<(GapFlank, f64)> {
     let (al, ar) = (slant(p.tl), slant(p.tr));
     let (htl, htr) = p.tangent_depths();
     let (ut, ht) = if side < 0.0 { (p.cl - p.r / al, htl) } else { (p.cr + p.r / ar, htr) };
     if !(ht > 1e-9) {
         return None;
     }
-    let ut = ut - gamma * ht;
-    let angle = |e: f64| ht.atan2(side * (e - ut)).to_degrees();
-    let spread = angle(a) - angle(b);
-    Some((angle(edge), spread * spread / 12.0, ht))
+    Some((GapFlank::new(ut - gamma * ht, ht, side, edge, gap), ht))
 }
 
 /// The variance of a fitted edge (a flank line with `on_line` readings on it, crossing the
@@ -702,7 +726,7 @@ fn bracketed_edge(
     let outer = gap.0 + side * thr * cot.max(0.0);
     let (a, b) = if outer <= gap.1 { (outer, gap.1) } else { (gap.1, outer) };
     let outside = (a - edge).max(edge - b).max(0.0);
-    let bound = (b - a) * (b - a) / 12.0 + (edge - 0.5 * (a + b)).powi(2);
+    let bound = gap_moment((a, b), edge);
     let (lo, hi) = if side < 0.0 {
         (p.xl.min(edge), p.cl - p.r / slant(p.tl))
     } else {
@@ -1644,7 +1668,9 @@ fn fit_groove(
     // Each edge's variance where the readings say more (or less) of it than the
     // linearisation: None keeps the linearisation's.
     let mut edge_var = [None, None];
-    let lin = cov.as_ref().map(FitCovariance::edge_variances);
+    let edged = matches!(chosen.model, SectionModel::Trapezoid | SectionModel::Round)
+        || (chosen.model == SectionModel::U && p.hc > 0.0);
+    let lin = cov.as_ref().filter(|_| edged).map(FitCovariance::edge_variances);
     if matches!(chosen.model, SectionModel::Trapezoid | SectionModel::Round) {
         for (slot, (side, gap, edge, angle)) in
             [(-1.0, gaps[0], &mut xl, ANGLE_LEFT), (1.0, gaps[1], &mut xr, ANGLE_RIGHT)].into_iter().enumerate()
@@ -1656,8 +1682,8 @@ fn fit_groove(
                 // not round) turns it as much as they do, so its angle is at least as uncertain
                 // as a flank's from anywhere in the gap (steep trapezoid flanks under corners
                 // rounded by 20–30 µm: k = 2 held the angle in 83 % of frames, now 91 %).
-                if let Some((_, v, _)) = flank_in_gap(&p, chosen.gamma, side, *edge, gap) {
-                    var[angle] = var[angle].max(v);
+                if let Some((f, _)) = flank_in_gap(&p, chosen.gamma, side, *edge, gap) {
+                    var[angle] = var[angle].max(f.var);
                 }
             }
             if let (Some(lin), true) = (lin, on_line > 0) {
@@ -1666,16 +1692,13 @@ fn fit_groove(
             let Some((a, b)) = within else { continue };
             // The edge rule's place is not the gap's middle in general: the second moment of
             // an edge anywhere in the gap about the place (its angle's likewise).
-            let mid = 0.5 * (a + b);
-            let var_edge = (b - a) * (b - a) / 12.0 + (placed - mid).powi(2);
+            let var_edge = gap_moment((a, b), placed);
             edge_var[slot] = Some(var_edge);
-            if let Some((value, v, ht)) = flank_in_gap(&p, chosen.gamma, side, placed, (a, b)) {
+            if let Some((f, ht)) = flank_in_gap(&p, chosen.gamma, side, placed, (a, b)) {
                 // The triangle between the fitted flank and the placed one, to the tangent point.
                 measures[AREA] += 0.5 * side * (placed - *edge) * ht;
                 var[AREA] += 0.25 * ht * ht * var_edge;
-                let off =
-                    flank_in_gap(&p, chosen.gamma, side, mid, (a, b)).map_or(0.0, |(m, _, _)| (m - value).powi(2));
-                (measures[angle], var[angle]) = (value, v + off);
+                (measures[angle], var[angle]) = (f.angle, f.var_about_edge());
             }
             *edge = placed;
         }
@@ -1697,8 +1720,8 @@ fn fit_groove(
         {
             (measures[angle], var[angle]) = (m[angle], e[angle] * e[angle]);
             let (placed, within, _) = edge_rule(&pf, &us, crossing, side, gap);
-            if let Some((value, v, _)) = within.and_then(|g| flank_in_gap(&pf, free.gamma, side, placed, g)) {
-                (measures[angle], var[angle]) = (value, v);
+            if let Some((f, _)) = within.and_then(|g| flank_in_gap(&pf, free.gamma, side, placed, g)) {
+                (measures[angle], var[angle]) = (f.angle, f.var);
             }
             // The wall's edge where those angles put it: a wall without a reading may be
             // drafted, and the vertical one had left the widths of walls drafted by up to 5°
@@ -1706,11 +1729,9 @@ fn fit_groove(
             // the gap's second moment about it, or the step's own where readings lie on the
             // wall (no more than the gap's). The centre keeps the circle's: a cutter drafts
             // both walls alike, and a lean is the lean rival's.
-            let (a, b) = if gap.0 <= gap.1 { gap } else { (gap.1, gap.0) };
-            let in_gap = |e: f64| (b - a) * (b - a) / 12.0 + (e - 0.5 * (a + b)).powi(2);
             let (moved, var_edge) = match (within, free_edges) {
-                (Some(_), _) => (placed, in_gap(placed)),
-                (None, Some(fe)) => (crossing, fe[slot].min(in_gap(crossing))),
+                (Some(_), _) => (placed, gap_moment(gap, placed)),
+                (None, Some(fe)) => (crossing, fe[slot].min(gap_moment(gap, crossing))),
                 (None, None) => continue,
             };
             // (The area stays the U's: the triangle a draft adds or takes is within its
@@ -1725,11 +1746,8 @@ fn fit_groove(
         // anywhere in the gap, as the second moment about the vertical one (its variance had
         // been none: a wall drafted by 5° lay 5° from an angle stated exact).
         for (side, gap, foot, angle) in [(-1.0, gaps[0], xl, ANGLE_LEFT), (1.0, gaps[1], xr, ANGLE_RIGHT)] {
-            let (a, b) = if gap.0 <= gap.1 { gap } else { (gap.1, gap.0) };
-            let at = |e: f64| p.hc.atan2(side * (e - (foot - chosen.gamma * p.hc))).to_degrees();
-            let spread = at(a) - at(b);
-            let v = spread * spread / 12.0 + (at(0.5 * (a + b)) - measures[angle]).powi(2);
-            var[angle] = var[angle].max(v);
+            let wall = GapFlank::new(foot - chosen.gamma * p.hc, p.hc, side, foot, gap);
+            var[angle] = var[angle].max(wall.var + (wall.mid - measures[angle]).powi(2));
         }
     }
     if let Some(rival) = lean_rival {
