@@ -2,6 +2,7 @@
 //! models of `measure.rs` by default, the paper's tanh template of `tanh.rs`), the frames in
 //! parallel, and the view of one frame for figures.
 use super::measure::{measure_grooves, MeasureSettings};
+use super::rounding::{RoundingCurve, RoundingPrior};
 use super::options::{window_range, FitModel, GrooveFit, GrooveOptions, GrooveSelect, GrooveStatus, TemplateKind};
 use super::section::SectionModel;
 use super::tanh::{fit_tanh, fit_tanh_detailed};
@@ -188,19 +189,32 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Groov
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
         return Err(Error::invalid("x", format!("must be finite, found {} at index {i}", x[i])));
     }
-    if options.select != GrooveSelect::All {
-        let fits: Vec<GrooveFit> =
-            z.par_chunks(n).map(|row| fit_frame(x, &options.valid.masked(row), options)).collect();
-        return Ok(GrooveRows { frame: (0..fits.len() as u32).collect(), fits });
-    }
-    let per_frame: Vec<Vec<GrooveFit>> =
-        z.par_chunks(n).map(|row| fit_frame_grooves(x, &options.valid.masked(row), options)).collect();
     let mut rows = GrooveRows::default();
-    for (f, fits) in per_frame.into_iter().enumerate() {
-        rows.frame.extend(std::iter::repeat_n(f as u32, fits.len()));
-        rows.fits.extend(fits);
+    if options.select != GrooveSelect::All {
+        rows.fits = z.par_chunks(n).map(|row| fit_frame(x, &options.valid.masked(row), options)).collect();
+        rows.frame = (0..rows.fits.len() as u32).collect();
+    } else {
+        let per_frame: Vec<Vec<GrooveFit>> =
+            z.par_chunks(n).map(|row| fit_frame_grooves(x, &options.valid.masked(row), options)).collect();
+        for (f, fits) in per_frame.into_iter().enumerate() {
+            rows.frame.extend(std::iter::repeat_n(f as u32, fits.len()));
+            rows.fits.extend(fits);
+        }
     }
+    pool_rounding(&mut rows.fits);
     Ok(rows)
+}
+
+/// The V's of a call measured under the rounding prior their profiles pool to
+/// ([`RoundingPrior::pooled`]; each keeps its own where there are too few).
+fn pool_rounding(fits: &mut [GrooveFit]) {
+    let curves: Vec<RoundingCurve> = fits.iter().filter_map(|f| f.rounding).collect();
+    let Some(prior) = RoundingPrior::pooled(&curves) else { return };
+    fits.par_iter_mut().for_each(|f| {
+        if let Some(p) = f.rounding.and_then(|c| c.posterior(&prior)) {
+            (f.depth, f.se_depth) = (p.depth, p.se_depth);
+        }
+    });
 }
 
 #[cfg(test)]

@@ -26,6 +26,7 @@
 //!    [`measures_with_errors`]).
 use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
+use super::rounding::RoundingCurve;
 use super::section::{
     beam_gradient, pieces_jacobian, round_v_depth, slant, Beams, Measures, Pieces, SectionModel, ANGLE_LEFT,
     ANGLE_RIGHT, AREA, CENTER, DEPTH, MEASURES, RADIUS, WIDTH,
@@ -908,7 +909,7 @@ fn measures_with_errors(
     var_surface: f64,
     pitch: f64,
     profile: Option<&mut RoundingProfile<'_>>,
-) -> ([f64; MEASURES], [f64; MEASURES], Option<FitCovariance>) {
+) -> ([f64; MEASURES], [f64; MEASURES], Option<FitCovariance>, Option<RoundingCurve>) {
     let mut measures = Measures::values(chosen.model, &chosen.q, chosen.gamma);
     let cov = FitCovariance::of(chosen, r, var_surface, pitch, true);
     let mut se = cov.as_ref().map_or([f64::INFINITY; MEASURES], FitCovariance::errors);
@@ -925,11 +926,13 @@ fn measures_with_errors(
     let v_fit = fits.iter().find(|f| f.model == SectionModel::V);
     let r_fit = fits.iter().find(|f| f.model == SectionModel::Round);
     let mut averaged = false;
+    let mut se_v_depth = f64::NAN;
     if let (true, Some(fv), Some(fr)) = (matches!(chosen.model, SectionModel::V | SectionModel::Round), v_fit, r_fit) {
         averaged = true;
         let (wv, wr) = ((weight(fv) - top).exp(), (weight(fr) - top).exp());
         let (mv, mr) = (Measures::values(fv.model, &fv.q, fv.gamma), Measures::values(fr.model, &fr.q, fr.gamma));
         let (ev, er) = (errors(fv), errors(fr));
+        se_v_depth = ev[DEPTH];
         for k in [DEPTH, RADIUS] {
             let mean = (wv * mv[k] + wr * mr[k]) / (wv + wr);
             let (sv, sr) = (ev[k], er[k]);
@@ -966,10 +969,43 @@ fn measures_with_errors(
                 se[DEPTH] = se[DEPTH].max(0.5 * (measures[DEPTH] - depth_lo));
                 se[RADIUS] = se[RADIUS].max(0.5 * (radius_hi - measures[RADIUS]));
             }
+            let curve = rounding_curve(profile, fr, se_v_depth);
+            return (measures, se, cov, curve);
         }
     }
-    (measures, se, cov)
+    (measures, se, cov, None)
 }
+
+/// The V's χ² profile over its tip radius for the call's pooled prior ([`RoundingCurve`]):
+/// the sharp V, the `profile`'s points and the round V `fr`.
+fn rounding_curve(profile: &mut RoundingProfile<'_>, fr: &ModelFit, se_depth: f64) -> Option<RoundingCurve> {
+    let (fv, pitch) = (profile.fv, profile.pitch);
+    let round = fr.pieces();
+    // A round V beyond the profile's reach is a round bottom the readings fix, not a tip
+    // whose rounding they cannot tell.
+    if !(round.r <= ROUNDING_PROFILE[ROUNDING_PROFILE.len() - 1] * pitch) {
+        return None;
+    }
+    // The noise from the better fit's residuals; the V's depth error at a fixed radius: its
+    // own, less the misfit of a sharp tip on a rounded one.
+    let least = fr.cost.min(fv.cost);
+    let sigma2 = 2.0 * least / profile.problem.u.len().saturating_sub(5).max(1) as f64;
+    let se_fixed = se_depth * (least / fv.cost).sqrt();
+    let mut points = vec![(0.0, fv.cost, fv.pieces().d), (round.r, fr.cost, round.d)];
+    for (i, f) in ROUNDING_PROFILE.into_iter().enumerate() {
+        let Some((q, predicted)) = profile.point(i) else { break };
+        points.push((f * pitch, predicted, q[4]));
+        // Past the round V, where the readings rule a rounding out, the rest weighs nothing
+        // (and half the V's had cost a fifth of their time in points beyond).
+        if f * pitch > round.r && 2.0 * (predicted - least) / sigma2 > CURVE_END_CHI2 {
+            break;
+        }
+    }
+    RoundingCurve::new(&points, sigma2, pitch, se_fixed)
+}
+
+/// Δχ² past which a rounding weighs under e⁻¹⁵ of the best ([`rounding_curve`]).
+const CURVE_END_CHI2: f64 = 30.0;
 
 /// `problem`'s model one Gauss–Newton step from `q0` (projected into its bounds; none when
 /// the readings do not fix it), with its JᵀJ at `q0` and the cost the step predicts.
@@ -991,7 +1027,10 @@ fn round_from_u(r: &Readings<'_>, gamma: f64, p: &Pieces) -> ModelFit {
 }
 
 /// Tip radii (reading pitches) of the χ² profile over a V's rounding ([`rounding_bound`]).
-const ROUNDING_PROFILE: [f64; 5] = [0.5, 1.0, 2.0, 3.0, 5.0];
+const ROUNDING_PROFILE: [f64; 8] = [0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0];
+/// The profile's points [`rounding_start`] walks (on every frame with a V: a finer walk
+/// costs every frame, the finer points only the V's whose rounding is pooled).
+const ROUNDING_WALK: [f64; 4] = [1.0, 2.0, 3.0, 5.0];
 /// Δχ² of the profile's bound: a rounding is one-sided (r ≥ 0), so its 95 % bound is the
 /// one-sided likelihood ratio's, 1.645². (Δχ² = 4, the two-sided bound, covered the depths of
 /// rounded V's in 96–99 % of frames: wider than k = 2 means.)
@@ -1090,7 +1129,7 @@ const ROUNDING_GAIN: f64 = 4.0;
 fn rounding_start(profile: &mut RoundingProfile<'_>, fr: &ModelFit, sigma: f64) -> Option<[f64; 5]> {
     let best = profile.fv.cost.min(fr.cost);
     let mut least: Option<ProfilePoint> = None;
-    for i in (0..ROUNDING_PROFILE.len()).filter(|&i| ROUNDING_PROFILE[i] >= 1.0) {
+    for i in (0..ROUNDING_PROFILE.len()).filter(|&i| ROUNDING_WALK.contains(&ROUNDING_PROFILE[i])) {
         let Some((q, predicted)) = profile.point(i) else { break };
         if predicted >= least.map_or(best, |(_, p)| p) {
             break;
@@ -1656,7 +1695,8 @@ fn fit_groove(
     // is read at the surface: width, depth, area, center).
     let x_center = lv.cos * 0.5 * (xl + xr) - lv.sin * lv.b * lv.cos;
     let var_surface = lv.line_variance(x_center, sigma);
-    let (measures, mut se, cov) = measures_with_errors(&chosen, &fits, &r, sigma, var_surface, pitch, profile.as_mut());
+    let (measures, mut se, cov, rounding) =
+        measures_with_errors(&chosen, &fits, &r, sigma, var_surface, pitch, profile.as_mut());
     let (mut measures, mut var) = (measures, se.map(|e| e * e));
     // Where the flank lines meet the surface, the readings bracket them: between the beams of
     // the last reading within `thr` of the surface and of the first one deeper, where those
@@ -1841,6 +1881,7 @@ fn fit_groove(
         status: if chosen.converged { GrooveStatus::Converged } else { GrooveStatus::MaxIterations },
         model: super::options::FitModel::Section(chosen.model),
         groove: -1,
+        rounding,
     };
     (fit, shape)
 }

@@ -6,6 +6,7 @@ mod fit;
 mod measure;
 mod options;
 mod robust;
+mod rounding;
 mod section;
 mod tanh;
 mod template;
@@ -16,6 +17,7 @@ pub use options::{
     FitCriteria, FitModel, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, GrooveStatus, TemplateKind,
     TANH_CRITERIA,
 };
+pub use rounding::{RoundingCurve, RoundingPosterior, RoundingPrior};
 pub use section::{Beams, Pieces, SectionModel};
 pub use tanh::{level_frame, LevelledFrame};
 pub use template::TanhTemplate;

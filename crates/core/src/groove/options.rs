@@ -393,6 +393,9 @@ pub struct GrooveFit {
     /// The groove's place among the frame's grooves, from the left (0 = leftmost); −1 when
     /// no groove was found.
     pub groove: i32,
+    /// A V's χ² profile over its tip radius (V's and round V's of the default call), for the
+    /// prior the call pools over its frames.
+    pub rounding: Option<super::rounding::RoundingCurve>,
 }
 
 impl GrooveFit {
@@ -424,6 +427,7 @@ impl GrooveFit {
         status: GrooveStatus::Failed,
         model: FitModel::None,
         groove: -1,
+        rounding: None,
     };
 
     pub(super) fn failed(status: GrooveStatus, n_used: usize) -> Self {

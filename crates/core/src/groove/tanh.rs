@@ -401,6 +401,7 @@ pub(super) fn fit_tanh_detailed(
         model: FitModel::Tanh,
         // The template measures the one groove of its window.
         groove: 0,
+        rounding: None,
         ..GrooveFit::UNMEASURED
     };
     (fit, Some((frame, p)))
