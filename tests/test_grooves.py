@@ -494,13 +494,15 @@ def test_the_selection_picks_the_groove_asked_for():
 
 def test_validity_limits_pass_over_grooves_outside_them():
     g = synth.multi_groove_frames(100, seed=33, shared=0.0)
-    every = machscan.fit_grooves(g.x, g.z, select="all")
-    limited = machscan.fit_grooves(g.x, g.z, select="all", min_width=0.5, max_depth=0.3)
+    # Each frame's own depths (a pooled rounding prior depends on the grooves pooled, and the
+    # limits judge each groove's own measure): the selection's rule, exactly.
+    every = machscan.fit_grooves(g.x, g.z, select="all", rounding="frame")
+    limited = machscan.fit_grooves(g.x, g.z, select="all", min_width=0.5, max_depth=0.3, rounding="frame")
     ok = limited.ok
     assert ok.any() and np.all(limited.width[ok] >= 0.5) and np.all(limited.depth[ok] <= 0.3)
     inside = every.ok & (every.width >= 0.5) & (every.depth <= 0.3)
     assert ok.sum() == inside.sum()
-    deepest = machscan.fit_grooves(g.x, g.z, max_depth=0.3)
+    deepest = machscan.fit_grooves(g.x, g.z, max_depth=0.3, rounding="frame")
     for k in np.flatnonzero(deepest.ok):
         rows = np.flatnonzero((every.frame == k) & every.ok & (every.depth <= 0.3))
         assert deepest.depth[k] == pytest.approx(every.depth[rows].max(), abs=1e-12) or len(rows) == 0

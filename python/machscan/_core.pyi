@@ -97,6 +97,7 @@ __version__: str
 SENTINEL: float
 ALLOWANCE_NEIGHBORS: int
 GRINDING_FEED_STEP: float
+ROUNDING_POOLED_FRAMES: int
 
 _Path = str | PathLike[str]
 _F64 = NDArray[np.float64]
@@ -306,6 +307,7 @@ class _GrooveFitArrays(TypedDict):
     model: NDArray[np.uint8]
     groove: NDArray[np.int32]
     frame: NDArray[np.int32]
+    rounding_prior: tuple[float, float] | None
 
 class _FrameViewArrays(TypedDict):
     x: _F64
@@ -340,6 +342,7 @@ class _GrooveOptions(TypedDict):
     min_width: float | None
     max_width: float | None
     max_depth: float | None
+    rounding: Literal["pooled", "frame"]
 
 class _Criteria(TypedDict):
     max_iterations: int

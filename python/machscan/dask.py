@@ -103,7 +103,8 @@ def _groove_dtype(n_readings: int, options: _grooves.GrooveOptions) -> np.dtype:
     """The record of one frame's fit: the GrooveFits arrays' names and dtypes, from a call on no
     frames (one source for them: the in-memory result)."""
     empty = _grooves.fit_grooves(np.arange(n_readings, dtype=np.float64), np.empty((0, n_readings)), options=options)
-    return np.dtype([(f.name, getattr(empty, f.name).dtype) for f in fields(empty) if f.name != "template"])
+    scalars = ("template", "rounding_prior")
+    return np.dtype([(f.name, getattr(empty, f.name).dtype) for f in fields(empty) if f.name not in scalars])
 
 
 def _valid_readings(block: np.ndarray, profiler: Profiler) -> np.ndarray:
@@ -138,6 +139,7 @@ class DaskGrooveFits:
 
     records: da.Array
     template: str
+    rounding_prior: tuple[float, float] | None = None
 
     def __getattr__(self, name: str) -> da.Array:
         names = self.records.dtype.names or ()
@@ -154,7 +156,9 @@ class DaskGrooveFits:
     def to_fits(self, records: np.ndarray) -> _grooves.GrooveFits:
         """The :class:`machscan.GrooveFits` of computed ``records``."""
         return _grooves.GrooveFits(
-            **{name: np.ascontiguousarray(records[name]) for name in records.dtype.names or ()}, template=self.template
+            **{name: np.ascontiguousarray(records[name]) for name in records.dtype.names or ()},
+            template=self.template,
+            rounding_prior=self.rounding_prior,
         )
 
     def compute(self, **kwargs: Any) -> _grooves.GrooveFits:
@@ -220,12 +224,15 @@ def fit_grooves(
     if x.ndim != 1 or x.shape[0] != frames.shape[1]:
         raise ValueError(f"x: expected shape ({frames.shape[1]},) (one abscissa per reading of frames), got {x.shape}")
     options = _grooves.groove_options(options, changes, "machscan.dask.fit_grooves")
+    # The chunks measure under the prior the in-memory call pools to: the frames it pools
+    # (every k-th) are fitted first, here, eagerly.
+    prior, options = _grooves.settled_rounding(x, frames, options)
     dtype = _groove_dtype(x.shape[0], options)
     fit = functools.partial(_fit_block, x=x, options=options, dtype=dtype, threads=threads)
     # A row per groove: how many a chunk gives is known only once it is fitted.
     rows = ((np.nan,) * frames.numblocks[0],) if options.select == "all" else None
     records = frames.map_blocks(fit, dtype=dtype, drop_axis=1, chunks=rows, meta=np.empty((0,), dtype))
-    return DaskGrooveFits(records, options.template)
+    return DaskGrooveFits(records, options.template, prior)
 
 
 # ---- frames to points -----------------------------------------------------------------------

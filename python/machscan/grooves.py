@@ -32,12 +32,14 @@ from machscan._options import changed
 __all__ = [
     "CRITERIA_DEFAULTS",
     "DEFAULTS",
+    "ROUNDING_POOLED_FRAMES",
     "FitCriteria",
     "GrooveFits",
     "GrooveModel",
     "GrooveOptions",
     "GrooveStatus",
     "LevelledFrame",
+    "Rounding",
     "Select",
     "Template",
     "fit_grooves",
@@ -59,6 +61,12 @@ Template = Literal["auto", "trapezoid", "v", "round", "u", "ellipse", "tanh"]
 #: Which of a frame's grooves are measured: the deepest, the ``index``-th from the left or
 #: right, the one nearest ``near``, or all of them (a row per groove).
 Select = Literal["deepest", "left", "right", "nearest", "all"]
+#: How a V's tip rounding is settled: a prior pooled over the call's V's, or each frame on its
+#: own (or, as the option's value, a prior (share, r_max mm) given).
+Rounding = Literal["pooled", "frame"]
+
+#: Most frames a pooled rounding prior is estimated from (every k-th frame of a call).
+ROUNDING_POOLED_FRAMES: int = _core.ROUNDING_POOLED_FRAMES
 
 
 @dataclass(frozen=True)
@@ -146,6 +154,16 @@ class GrooveOptions:
         Validity limits, mm: a groove measured outside them is not one of the part's (a
         scratch, a neighbouring feature) and is passed over (``min_depth`` is the lower depth
         limit).
+    rounding : "pooled", "frame" or (share, r_max)
+        How a V's tip rounding is settled, which one frame's readings cannot tell from a
+        sharp tip (a rounding over a reading or two moves the depth by 5–25 µm). "pooled": a
+        prior on the tip radius — ``share`` of the V's sharp, the rest rounded uniformly up to
+        ``r_max`` mm — estimated from the call's V's (every k-th frame, at most
+        :data:`ROUNDING_POOLED_FRAMES` frames; the frames of one scan share a tool or a beam),
+        each V's depth the median of its posterior under it (:attr:`GrooveFits.rounding_prior`
+        says which; below 30 V's, each frame's own rule). "frame": each frame on its own (the
+        Akaike-weighted mean of the sharp and the round V). ``(share, r_max)``: that prior (a
+        process the plant knows, or a pooled call's, to measure one frame alike).
 
     Examples
     --------
@@ -172,6 +190,7 @@ class GrooveOptions:
     min_width: float | None = DEFAULTS["min_width"]
     max_width: float | None = DEFAULTS["max_width"]
     max_depth: float | None = DEFAULTS["max_depth"]
+    rounding: Rounding | tuple[float, float] = DEFAULTS["rounding"]
 
     def __post_init__(self) -> None:
         if not isinstance(self.criteria, FitCriteria):
@@ -293,6 +312,9 @@ class GrooveFits:
         The frame of each row.
     template : str
         The ``template`` option used.
+    rounding_prior : (float, float) or None
+        The prior the V's tip rounding was settled with: the share of sharp tips and the
+        largest radius, mm (``rounding`` pooled or given); None: each frame's own rule.
     """
 
     x0: NDArray[np.float64]
@@ -323,6 +345,7 @@ class GrooveFits:
     groove: NDArray[np.int32]
     frame: NDArray[np.int32]
     template: str = DEFAULTS["template"]
+    rounding_prior: tuple[float, float] | None = None
 
     def __len__(self) -> int:
         return len(self.status)
@@ -347,8 +370,9 @@ class GrooveFits:
 
     def select(self, index: ArrayLike) -> GrooveFits:
         """The fits of a subset of frames (boolean mask or indices)."""
-        arrays = {f.name: getattr(self, f.name)[index] for f in fields(self) if f.name != "template"}
-        return GrooveFits(**arrays, template=self.template)
+        scalars = ("template", "rounding_prior")
+        arrays = {f.name: getattr(self, f.name)[index] for f in fields(self) if f.name not in scalars}
+        return GrooveFits(**arrays, template=self.template, rounding_prior=self.rounding_prior)
 
     def summary(self) -> str:
         """Width and depth statistics over the converged frames, the models fitted and the
@@ -375,6 +399,11 @@ class GrooveFits:
                     lines.append(f"  {name}: {v.mean():.{digits}f} ± {v.std():.{digits}f}{unit} ({len(v)} fits)")
             models = {k: v for k, v in self.model_counts().items() if v}
             lines.append("  models: " + ", ".join(f"{k} {v}" for k, v in models.items()))
+            if self.rounding_prior is not None:
+                share, r_max = self.rounding_prior
+                lines.append(
+                    f"  V tip rounding prior: {100 * share:.0f} % sharp, the rest rounded up to {1000 * r_max:.1f} µm"
+                )
         bad = {k: v for k, v in self.counts().items() if v and k != "converged"}
         if bad:
             lines.append("  not fitted: " + ", ".join(f"{k} {v}" for k, v in bad.items()))
@@ -412,8 +441,9 @@ def fit_grooves(
     The models are fitted in the order the groove's first outline suggests, and one that
     already fits the readings within their noise rules out those that could not beat it (a V
     that fits leaves the trapezoid and the U out): 1.1–1.6 times faster than fitting all four.
-    For V's the depth is the Akaike-weighted mean of the sharp and the round-bottomed V, since a
-    tip rounded by about one reading spacing is barely visible at 8 µm noise. Accuracy,
+    A V's tip rounded by a reading spacing or two is barely visible at 8 µm noise, so its
+    rounding is settled over the call's V's (``rounding``, :class:`GrooveOptions`): a prior on
+    the tip radius they pool to, and each V's depth the median of its posterior. Accuracy,
     measured on V, U and trapezoid grooves 0.2–1.2 mm wide and 0.05–0.5 mm deep with 8 µm
     noise, lips, ±0.1 rad tilt, dropouts and spikes: median |width error| 5–6 µm, |depth
     error| 0.4–1.5 %, |center error| 1.4–2.9 µm, ≥ 99.5 % of frames measured (BENCHMARKS.md).
@@ -460,16 +490,37 @@ def fit_grooves(
     if frames is None or frames.ndim != 2 or len(frames) == 0:  # the core names a shape error
         return GrooveFits(**_core.fit_grooves(x, z, options), template=options.template)
     z = frames
+    # The blocks measure under the prior the whole call pools to (the same frames pooled).
+    prior, block_options = settled_rounding(x, z, options)
     step = max(PROGRESS_BLOCK, -(-len(z) // 50))
     parts = []
     with _progress.bar(len(z), "frames", True, "groove fits") as shown:
         for start in range(0, len(z), step):
-            part = _core.fit_grooves(x, z[start : start + step], options)
+            part = _core.fit_grooves(x, z[start : start + step], block_options)
             part["frame"] += start
             parts.append(part)
             shown.update(len(z[start : start + step]))
-    merged: dict[str, Any] = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}  # type: ignore[literal-required]
-    return GrooveFits(**merged, template=options.template)
+    merged: dict[str, Any] = {
+        name: np.concatenate([p[name] for p in parts])  # type: ignore[literal-required]
+        for name in parts[0]
+        if name != "rounding_prior"
+    }
+    return GrooveFits(**merged, template=options.template, rounding_prior=prior)
+
+
+def settled_rounding(
+    x: ArrayLike, frames: Any, options: GrooveOptions
+) -> tuple[tuple[float, float] | None, GrooveOptions]:
+    """For a call measured in parts (blocks, chunks): the rounding prior the whole call
+    pools to — fitted on the frames it pools, every k-th — and the options that measure each
+    part under it (``rounding`` given, or "frame" where too few V's pool). Other ``rounding``
+    options are returned as they are."""
+    if options.rounding != "pooled" or options.template == "tanh":
+        return (options.rounding if isinstance(options.rounding, tuple) else None), options
+    stride = max(1, -(-len(frames) // ROUNDING_POOLED_FRAMES))
+    sample = np.asarray(frames[::stride], dtype=np.float64)
+    prior = _core.fit_grooves(x, sample, options)["rounding_prior"] if len(sample) else None
+    return prior, options.with_changes({"rounding": prior if prior is not None else "frame"})
 
 
 @dataclass(frozen=True, eq=False, repr=False)

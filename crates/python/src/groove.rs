@@ -4,8 +4,8 @@
 use super::convert::{count, count_opt, enter, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::groove::{
-    fit_frames, view_frame, FitCriteria, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, TemplateKind,
-    SECTION_CRITERIA, TANH_CRITERIA,
+    fit_frames, view_frame, FitCriteria, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, RoundingPrior,
+    RoundingRule, TemplateKind, POOLED_FRAMES, SECTION_CRITERIA, TANH_CRITERIA,
 };
 use machscan_core::kinematics::ValidReadings;
 use pyo3::exceptions::PyValueError;
@@ -43,10 +43,27 @@ struct Options {
     min_width: Option<f64>,
     max_width: Option<f64>,
     max_depth: Option<f64>,
+    rounding: Py<PyAny>,
+}
+
+/// The `rounding` option: "pooled", "frame" or a prior (share, r_max mm).
+fn rounding_rule(py: Python<'_>, value: &Py<PyAny>) -> PyResult<RoundingRule> {
+    let v = value.bind(py);
+    if let Ok(name) = v.extract::<String>() {
+        return RoundingRule::parse(&name).py();
+    }
+    if let Ok((share, r_max)) = v.extract::<(f64, f64)>() {
+        return Ok(RoundingRule::Given(RoundingPrior { share, r_max }));
+    }
+    Err(PyValueError::new_err(format!(
+        "rounding: expected \"pooled\", \"frame\" or (share, r_max) with r_max in mm, got {}",
+        v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
+    )))
 }
 
 impl Options {
-    fn core(self) -> PyResult<GrooveOptions> {
+    fn core(self, py: Python<'_>) -> PyResult<GrooveOptions> {
+        let rounding = rounding_rule(py, &self.rounding)?;
         let c = self.criteria;
         Ok(GrooveOptions {
             template: TemplateKind::parse(&self.template).py()?,
@@ -67,6 +84,7 @@ impl Options {
             valid: ValidReadings::new(self.valid_range, self.sentinel).py()?,
             select: GrooveSelect::parse(&self.select, count("index", self.index)?, self.near).py()?,
             limits: GrooveLimits { min_width: self.min_width, max_width: self.max_width, max_depth: self.max_depth },
+            rounding,
         })
     }
 }
@@ -77,7 +95,7 @@ fn options(obj: &Bound<'_, PyAny>) -> PyResult<GrooveOptions> {
         .map_err(|e| {
             PyValueError::new_err(format!("options: expected a machscan.GrooveOptions ({})", e.value(obj.py())))
         })?
-        .core()
+        .core(obj.py())
 }
 
 /// The defaults of the groove options (``GrooveOptions::default()`` in the core), by name; the
@@ -112,6 +130,7 @@ fn groove_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("min_width", o.limits.min_width)?;
     d.set_item("max_width", o.limits.max_width)?;
     d.set_item("max_depth", o.limits.max_depth)?;
+    d.set_item("rounding", o.rounding.name())?;
     Ok(d)
 }
 
@@ -187,6 +206,7 @@ fn fit_grooves<'py>(
     let rows = enter(py, || fit_frames(xs, zs, &o))?;
     let d = PyDict::new(py);
     fit_arrays(py, &d, &rows.fits, &rows.frame)?;
+    d.set_item("rounding_prior", rows.rounding_prior.map(|p| (p.share, p.r_max)))?;
     Ok(d)
 }
 
@@ -216,6 +236,11 @@ fn view_groove_frame<'py>(
     d.set_item("tilt", view.tilt)?;
     let fit = PyDict::new(py);
     fit_arrays(py, &fit, &[view.fit], &[0])?;
+    let given = match o.rounding {
+        RoundingRule::Given(p) => Some((p.share, p.r_max)),
+        _ => None,
+    };
+    fit.set_item("rounding_prior", given)?;
     d.set_item("fit", fit)?;
     Ok(d)
 }
@@ -225,5 +250,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit_criteria_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(fit_grooves, m)?)?;
     m.add_function(wrap_pyfunction!(view_groove_frame, m)?)?;
+    m.add("ROUNDING_POOLED_FRAMES", POOLED_FRAMES)?;
     Ok(())
 }

@@ -2,8 +2,10 @@
 //! models of `measure.rs` by default, the paper's tanh template of `tanh.rs`), the frames in
 //! parallel, and the view of one frame for figures.
 use super::measure::{measure_grooves, MeasureSettings};
-use super::rounding::{RoundingCurve, RoundingPrior};
-use super::options::{window_range, FitModel, GrooveFit, GrooveOptions, GrooveSelect, GrooveStatus, TemplateKind};
+use super::options::{
+    window_range, FitModel, GrooveFit, GrooveOptions, GrooveSelect, GrooveStatus, RoundingRule, TemplateKind,
+};
+use super::rounding::{pooled_stride, RoundingCurve, RoundingPrior};
 use super::section::SectionModel;
 use super::tanh::{fit_tanh, fit_tanh_detailed};
 use super::template::TanhTemplate;
@@ -137,7 +139,11 @@ pub fn view_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> Result<FrameView> 
         });
     }
     let (lo, hi) = window_range(x.len(), o);
-    let (fit, detail) = super::measure::measure_frame_detailed(&x[lo..hi], &z[lo..hi], &section_settings(o));
+    let (mut fit, detail) = super::measure::measure_frame_detailed(&x[lo..hi], &z[lo..hi], &section_settings(o));
+    // One frame pools nothing: a given prior is used, else the frame's own rule.
+    if let RoundingRule::Given(prior) = o.rounding {
+        fit.settle_rounding(&prior);
+    }
     let Some(d) = detail else { return Ok(empty(fit)) };
     // Levelled as `v = −s·x + c·z − b·c`: the absolute levelled height adds b·c back.
     let lift = d.b * d.cos;
@@ -160,6 +166,8 @@ pub fn view_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> Result<FrameView> 
 pub struct GrooveRows {
     pub frame: Vec<u32>,
     pub fits: Vec<GrooveFit>,
+    /// The prior the V's tip rounding was settled with (None: each frame's own rule).
+    pub rounding_prior: Option<RoundingPrior>,
 }
 
 /// All frames of `z (F, N)` row-major sharing the abscissae `x (N,)`, in parallel. Each frame
@@ -201,20 +209,25 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Groov
             rows.fits.extend(fits);
         }
     }
-    pool_rounding(&mut rows.fits);
-    Ok(rows)
-}
-
-/// The V's of a call measured under the rounding prior their profiles pool to
-/// ([`RoundingPrior::pooled`]; each keeps its own where there are too few).
-fn pool_rounding(fits: &mut [GrooveFit]) {
-    let curves: Vec<RoundingCurve> = fits.iter().filter_map(|f| f.rounding).collect();
-    let Some(prior) = RoundingPrior::pooled(&curves) else { return };
-    fits.par_iter_mut().for_each(|f| {
-        if let Some(p) = f.rounding.and_then(|c| c.posterior(&prior)) {
-            (f.depth, f.se_depth) = (p.depth, p.se_depth);
+    rows.rounding_prior = match options.rounding {
+        RoundingRule::Pooled => {
+            let stride = pooled_stride(z.len() / n) as u32;
+            let curves: Vec<RoundingCurve> = rows
+                .frame
+                .iter()
+                .zip(&rows.fits)
+                .filter(|(f, _)| *f % stride == 0)
+                .filter_map(|(_, g)| g.rounding)
+                .collect();
+            RoundingPrior::pooled(&curves)
         }
-    });
+        RoundingRule::Frame => None,
+        RoundingRule::Given(prior) => Some(prior),
+    };
+    if let Some(prior) = rows.rounding_prior {
+        rows.fits.par_iter_mut().for_each(|f| f.settle_rounding(&prior));
+    }
+    Ok(rows)
 }
 
 #[cfg(test)]

@@ -14,10 +14,10 @@ mod template;
 pub use fit::{fit_frame, fit_frame_grooves, fit_frames, view_frame, FrameView, GrooveRows};
 pub use measure::SECTION_CRITERIA;
 pub use options::{
-    FitCriteria, FitModel, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, GrooveStatus, TemplateKind,
-    TANH_CRITERIA,
+    FitCriteria, FitModel, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, GrooveStatus, RoundingRule,
+    TemplateKind, TANH_CRITERIA,
 };
-pub use rounding::{RoundingCurve, RoundingPosterior, RoundingPrior};
+pub use rounding::{pooled_stride, RoundingCurve, RoundingPosterior, RoundingPrior, MIN_POOLED, POOLED_FRAMES};
 pub use section::{Beams, Pieces, SectionModel};
 pub use tanh::{level_frame, LevelledFrame};
 pub use template::TanhTemplate;

@@ -289,6 +289,46 @@ pub struct GrooveOptions {
     pub select: GrooveSelect,
     /// What counts as a groove beyond `min_depth`.
     pub limits: GrooveLimits,
+    /// How a V's tip rounding is settled ([`RoundingRule`]).
+    pub rounding: RoundingRule,
+}
+
+/// How a V's tip rounding, which one frame's readings cannot tell from a sharp tip, is
+/// settled (docs/grooves.md, step 9).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum RoundingRule {
+    /// A prior pooled over the call's V's ([`super::RoundingPrior::pooled`], from every k-th
+    /// frame, at most [`super::rounding::POOLED_FRAMES`]); each frame's own rule where fewer
+    /// than [`super::rounding::MIN_POOLED`] V's are among them.
+    #[default]
+    Pooled,
+    /// Each frame on its own: the Akaike average of the sharp and the round V.
+    Frame,
+    /// This prior (a process the plant knows, or one a pooled call reported).
+    Given(super::RoundingPrior),
+}
+
+impl RoundingRule {
+    /// "pooled" or "frame" (a given prior has no name).
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "pooled" => Ok(Self::Pooled),
+            "frame" => Ok(Self::Frame),
+            other => Err(Error::invalid(
+                "rounding",
+                format!("expected \"pooled\", \"frame\" or (share, r_max) with r_max in mm, got {other:?}"),
+            )),
+        }
+    }
+
+    /// The name [`RoundingRule::parse`] reads; "given" for a given prior.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Pooled => "pooled",
+            Self::Frame => "frame",
+            Self::Given(_) => "given",
+        }
+    }
 }
 
 impl Default for GrooveOptions {
@@ -307,6 +347,7 @@ impl Default for GrooveOptions {
             valid: ValidReadings::default(),
             select: GrooveSelect::Deepest,
             limits: GrooveLimits::default(),
+            rounding: RoundingRule::Pooled,
         }
     }
 }
@@ -341,6 +382,14 @@ impl GrooveOptions {
             ));
         }
         self.limits.check(self.min_depth)?;
+        if let RoundingRule::Given(p) = self.rounding {
+            if !(0.0..=1.0).contains(&p.share) {
+                return Err(Error::invalid("rounding", format!("share must be within 0..1, got {}", p.share)));
+            }
+            if !(p.r_max.is_finite() && p.r_max >= 0.0) {
+                return Err(Error::invalid("rounding", format!("r_max must be a radius >= 0 mm, got {}", p.r_max)));
+            }
+        }
         self.criteria.check()
     }
 }
@@ -429,6 +478,14 @@ impl GrooveFit {
         groove: -1,
         rounding: None,
     };
+
+    /// The depth of a V with a rounding profile as its posterior under `prior` says (its
+    /// median; the standard error with the posterior's spread), unchanged without one.
+    pub fn settle_rounding(&mut self, prior: &super::RoundingPrior) {
+        if let Some(p) = self.rounding.and_then(|c| c.posterior(prior)) {
+            (self.depth, self.se_depth) = (p.depth, p.se_depth);
+        }
+    }
 
     pub(super) fn failed(status: GrooveStatus, n_used: usize) -> Self {
         GrooveFit { n_used: n_used as u32, status, ..GrooveFit::UNMEASURED }

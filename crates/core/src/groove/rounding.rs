@@ -22,12 +22,17 @@ const STEPS_PER_PITCH: f64 = 8.0;
 
 /// Fewest profiles a pooled prior is estimated from; below, each frame keeps its own rule
 /// (the Akaike average of the sharp and the round V).
-pub(super) const MIN_POOLED: usize = 30;
+pub const MIN_POOLED: usize = 30;
 
-/// Most profiles the prior's estimate reads (every k-th, evenly across the call): two
-/// numbers are fixed long before, and the estimate's work then does not grow with the call.
-const MAX_POOLED: usize = 1024;
+/// Most frames the prior's estimate reads (every k-th frame of the call, k = ⌈F / this⌉):
+/// two numbers are fixed long before, the estimate's work then does not grow with the call,
+/// and a call over chunks (`machscan.dask`) can pool the same frames first.
+pub const POOLED_FRAMES: usize = 4096;
 
+/// The k of [`POOLED_FRAMES`] for a call of `frames` frames.
+pub fn pooled_stride(frames: usize) -> usize {
+    frames.div_ceil(POOLED_FRAMES).max(1)
+}
 
 /// One frame's χ² profile over its V's tip radius: the depth and the cost (½Σλ²) at each of
 /// up to [`CURVE_POINTS`] radii (mm, increasing), the noise variance the costs are read
@@ -161,15 +166,13 @@ fn weighted_median_and_variance(values: &[f64], w: &[f64], total: f64) -> (f64, 
 }
 
 impl RoundingPrior {
-    /// The prior of most marginal likelihood over `curves` (every k-th of them past
-    /// [`MAX_POOLED`]): for each largest radius on the profiles' grid, the sharp tip's share
+    /// The prior of most marginal likelihood over `curves`: for each largest radius on the profiles' grid, the sharp tip's share
     /// of most likelihood ([`best_share`]). None with fewer than [`MIN_POOLED`] curves.
     pub fn pooled(curves: &[RoundingCurve]) -> Option<Self> {
         if curves.len() < MIN_POOLED {
             return None;
         }
-        let stride = curves.len().div_ceil(MAX_POOLED);
-        let used: Vec<&RoundingCurve> = curves.iter().step_by(stride).collect();
+        let used: Vec<&RoundingCurve> = curves.iter().collect();
         // One grid for all: the finest step, out to the farthest profile.
         let step = used.iter().map(|c| c.step()).fold(f64::INFINITY, f64::min);
         let reach = used.iter().map(|c| c.radius[c.len - 1]).fold(0.0, f64::max);
@@ -197,7 +200,8 @@ impl RoundingPrior {
                 (a[i], b[i]) = (l0, sums[i * points + g] / (g + 1) as f64);
             }
             let share = best_share(&a, &b);
-            let ll: f64 = a.iter().zip(&b).map(|(a, b)| (share * a + (1.0 - share) * b).max(f64::MIN_POSITIVE).ln()).sum();
+            let ll: f64 =
+                a.iter().zip(&b).map(|(a, b)| (share * a + (1.0 - share) * b).max(f64::MIN_POSITIVE).ln()).sum();
             if ll > best.0 {
                 best = (ll, Self { share, r_max: g as f64 * step });
             }
