@@ -6,8 +6,10 @@ rounding) either by a circular arc tangent to both flanks ("arc") or by the shar
 with a Gaussian of 2σ = across/2 ("beam"), top corners rounded by 10 µm, recast lips of
 10–30 µm beside both edges, a tilt up to ±0.05 rad, 8 µm noise. Against the exact truth:
 median |depth error| (% of the depth), median depth bias (µm), median |width error| (µm), the
-share of frames whose k = 2 depth interval holds the truth, and the models the default call
-chose; then each section model alone on the same frames. Issue #35 targets for the default
+share of frames whose k = 2 depth interval holds the truth, the models the default call
+chose and the tip-rounding prior it pooled over the set's V's; then the default models with
+each frame's rounding on its own (``rounding="frame"``) and each V model alone on the same
+frames. Issue #35 targets for the default
 call: |depth| <= 1.5 %, bias <= 2 µm, |width| <= 10 µm on roundings of 0-0.1 mm.
 
 Then the floor: the Cramér–Rao bound of the depth for the true shape family (a V whose tip is
@@ -182,11 +184,15 @@ def main() -> None:
     for kind in ("arc", "beam"):
         for across in ((0.0, 0.0), (0.0, 0.05), (0.05, 0.1), (0.0, 0.1)):
             x, z, width, depth = engraved_frames(args.frames, args.seed, across, kind)
-            for template in ("auto", "v", "round"):
-                f = machscan.fit_grooves(x, z, template=template)
+            for template in ("auto", "frame", "v", "round"):
+                # "frame": the default models, each frame's rounding on its own (no pooled prior).
+                f = (machscan.fit_grooves(x, z, rounding="frame") if template == "frame"
+                     else machscan.fit_grooves(x, z, template=template))
                 ok = f.ok
                 e = (f.depth - depth)[ok]
                 models = ", ".join(f"{k} {v}" for k, v in f.model_counts().items() if v) if template == "auto" else ""
+                if template == "auto" and f.rounding_prior is not None:
+                    models += f"; prior {100 * f.rounding_prior[0]:.0f} % sharp, up to {1000 * f.rounding_prior[1]:.1f} µm"
                 print(f"{kind} {across[0]:.2f}-{across[1]:.2f} mm {template:<10} {100 * np.median(np.abs(e) / depth[ok]):9.2f}"
                       f" {1000 * np.median(e):+8.1f} {1000 * np.median(np.abs(f.width - width)[ok]):10.1f}"
                       f" {100 * np.mean(np.abs(e) <= 2 * f.se_depth[ok]):8.0f}%  {models}")

@@ -18,6 +18,7 @@ __all__ = [
     "SENTINEL",
     "ALLOWANCE_NEIGHBORS",
     "GRINDING_FEED_STEP",
+    "ROUNDING_POOLED_FRAMES",
     "FileFormatError",
     "KinematicChain",
     "ab_mirror_support_points",

@@ -1026,7 +1026,10 @@ fn round_from_u(r: &Readings<'_>, gamma: f64, p: &Pieces) -> ModelFit {
     one_step::<5>(&r.problem(SectionModel::Round, gamma), &[p.xl, p.xr, 0.0, 0.0, p.d])
 }
 
-/// Tip radii (reading pitches) of the χ² profile over a V's rounding ([`rounding_bound`]).
+/// Tip radii (reading pitches) of the χ² profile over a V's rounding ([`rounding_bound`],
+/// [`rounding_curve`]). Read linearly between points for the pooled prior: with points at 0.5,
+/// 1, 2, 3 and 5 pitches only, V's rounded over 0–0.1 mm at 25 µm pitch had a median |depth
+/// error| of 1.63 %, with these 1.47 %.
 const ROUNDING_PROFILE: [f64; 8] = [0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0];
 /// The profile's points [`rounding_start`] walks (on every frame with a V: a finer walk
 /// costs every frame, the finer points only the V's whose rounding is pooled).
