@@ -270,7 +270,8 @@ class GrooveFits:
         Groove center (the midpoint of the flank crossings) and the surface height there, mm,
         in the coordinates of the x and z given.
     depth : ndarray (F,)
-        Deepest point of the groove below the surface line, mm (tanh template: its d).
+        Deepest point of the groove below the surface line, mm (tanh template: its d; a V's:
+        the median of its posterior under the tip-rounding prior, ``rounding_prior``).
     width : ndarray (F,)
         Distance between the flanks where they meet the surface line, mm (tanh template: its w).
     alpha : ndarray (F,)
@@ -288,7 +289,8 @@ class GrooveFits:
         Cross-section area between the surface line and the section, mm².
     bottom_radius : ndarray (F,)
         Radius of the round bottom, mm: a U's, a round V's (for V's the Akaike-weighted mean
-        of the sharp V's 0 and the round V's, as the depth); NaN for a trapezoid's flat floor.
+        of the sharp V's 0 and the round V's, whatever ``rounding``); NaN for a trapezoid's flat
+        floor.
     step : ndarray (F,)
         Surface step across the groove: the right surface minus the left, along the surface
         line's normal, mm (two parallel lines fitted to the surface readings beside the groove,
