@@ -76,6 +76,20 @@ def test_grooves_command_selects_the_groove_asked_for(small):
     assert np.all(np.diff(rows["frame"]) >= 0) and rows["groove"].max() >= 0
 
 
+def test_grooves_command_settles_the_tip_rounding_as_asked(small, capsys):
+    d, scan, truth = small
+    for rule in ("pooled", "frame"):
+        out = d / f"rounding_{rule}"
+        assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--rounding", rule, "--out", str(out)]) == 0
+        ref = inspect_grooves(scan, truth.nominal_polylines, rounding=rule)
+        rows = np.genfromtxt(out / "frames.csv", delimiter=",", names=True)
+        np.testing.assert_allclose(rows["depth_mm"], ref.fits.depth, atol=1e-9)  # CSV: 0.1 nm
+        # The prior a pooled call used is printed with its units.
+        printed = capsys.readouterr().out
+        assert ("V tip rounding prior" in printed) == (ref.fits.rounding_prior is not None)
+    assert inspect_grooves(scan, truth.nominal_polylines).fits.rounding_prior is not None
+
+
 def test_grooves_command_fits_the_template_asked_for(small):
     d, scan, truth = small
     out = d / "out_tanh"
