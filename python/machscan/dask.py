@@ -199,7 +199,9 @@ def fit_grooves(
     -------
     DaskGrooveFits
         ``.compute()`` gives the :class:`machscan.GrooveFits` of the in-memory call, bit for bit
-        (every frame is fitted on its own).
+        (every frame is fitted on its own; with ``rounding="pooled"``, the default, under the
+        tip-rounding prior of the frames the in-memory call pools, every k-th frame, which are
+        read and fitted first, eagerly: one pass over the chunks before the lazy one).
 
     Examples
     --------
