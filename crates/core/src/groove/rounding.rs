@@ -244,3 +244,47 @@ fn best_share(a: &[f64], b: &[f64]) -> f64 {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A profile whose χ² is (r − r0)²/s² about a radius r0 (mm), the depth falling by 0.6·r.
+    fn curve(r0: f64, s: f64) -> RoundingCurve {
+        let pitch = 0.025;
+        let points: Vec<(f64, f64, f64)> = [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0]
+            .iter()
+            .map(|f| {
+                let r = f * pitch;
+                (r, 0.5 * ((r - r0) / s).powi(2) * 1e-4, 0.3 - 0.6 * r)
+            })
+            .collect();
+        RoundingCurve::new(&points, 1e-4, pitch, 0.002).unwrap()
+    }
+
+    #[test]
+    fn a_given_prior_at_the_sharp_tip_keeps_the_sharp_depth() {
+        let c = curve(0.03, 0.01);
+        let p = c.posterior(&RoundingPrior { share: 1.0, r_max: 0.05 }).unwrap();
+        assert!((p.depth - 0.3).abs() < 1e-12 && (p.se_depth - 0.002).abs() < 1e-12, "{p:?}");
+        // No share at the sharp tip: the posterior sits at the profile's least, 0.03 mm.
+        let p = c.posterior(&RoundingPrior { share: 0.0, r_max: 0.1 }).unwrap();
+        assert!((p.radius - 0.03).abs() < 0.004 && (p.depth - (0.3 - 0.018)).abs() < 0.003, "{p:?}");
+        assert!(p.se_depth > 0.002);
+    }
+
+    #[test]
+    fn the_pooled_prior_follows_what_the_profiles_say() {
+        // Sharp tips only: the share goes to them (or the radius to nothing).
+        let sharp: Vec<RoundingCurve> = (0..200).map(|_| curve(0.0, 0.005)).collect();
+        let p = RoundingPrior::pooled(&sharp).unwrap();
+        assert!(p.share > 0.9 || p.r_max <= 0.0032, "{p:?}");
+        // Tips rounded evenly up to 0.05 mm: no share at the sharp tip, the largest radius near
+        // 0.05 mm.
+        let rounded: Vec<RoundingCurve> = (0..200).map(|k| curve(0.05 * (k as f64 + 0.5) / 200.0, 0.004)).collect();
+        let p = RoundingPrior::pooled(&rounded).unwrap();
+        assert!(p.share < 0.1 && (p.r_max - 0.05).abs() < 0.008, "{p:?}");
+        // Too few to pool.
+        assert!(RoundingPrior::pooled(&rounded[..MIN_POOLED - 1]).is_none());
+    }
+}
