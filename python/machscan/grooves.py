@@ -198,6 +198,15 @@ class GrooveOptions:
         if self.valid_range is not None:
             lo, hi = self.valid_range
             object.__setattr__(self, "valid_range", (lo, hi))
+        if not isinstance(self.rounding, str):
+            # A prior as any pair (a list, an array); the core checks the values.
+            try:
+                share, r_max = (float(v) for v in self.rounding)
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f'rounding: expected "pooled", "frame" or (share, r_max) with r_max in mm, got {self.rounding!r}'
+                ) from None
+            object.__setattr__(self, "rounding", (share, r_max))
 
     def with_changes(self, changes: Mapping[str, Any], where: str = "options") -> GrooveOptions:
         """These options with ``changes`` (option names and values) made; an unknown name is an
