@@ -171,7 +171,9 @@ pub struct GrooveRows {
 }
 
 /// All frames of `z (F, N)` row-major sharing the abscissae `x (N,)`, in parallel. Each frame
-/// is fitted on its own, so the result is identical whatever the thread count.
+/// is fitted on its own, so the result is identical whatever the thread count; then, with
+/// `RoundingRule::Pooled`, the V's depths are settled under the prior their profiles pool to
+/// (from every k-th frame, [`pooled_stride`]), or under a given one.
 pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<GrooveRows> {
     options.validate()?;
     let n = x.len();
