@@ -35,7 +35,7 @@ pub fn pooled_stride(frames: usize) -> usize {
 }
 
 /// One frame's χ² profile over its V's tip radius: the depth and the cost (½Σλ²) at each of
-/// up to [`CURVE_POINTS`] radii (mm, increasing), the noise variance the costs are read
+/// up to `CURVE_POINTS` radii (mm, increasing), the noise variance the costs are read
 /// with, and the depth's standard error at a fixed radius.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RoundingCurve {
@@ -167,7 +167,7 @@ fn weighted_median_and_variance(values: &[f64], w: &[f64], total: f64) -> (f64, 
 
 impl RoundingPrior {
     /// The prior of most marginal likelihood over `curves`: for each largest radius on the profiles' grid, the sharp tip's share
-    /// of most likelihood ([`best_share`]). None with fewer than [`MIN_POOLED`] curves.
+    /// of most likelihood (`best_share`). None with fewer than [`MIN_POOLED`] curves.
     pub fn pooled(curves: &[RoundingCurve]) -> Option<Self> {
         if curves.len() < MIN_POOLED {
             return None;
