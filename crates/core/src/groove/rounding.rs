@@ -166,25 +166,25 @@ fn weighted_median_and_variance(values: &[f64], w: &[f64], total: f64) -> (f64, 
 }
 
 impl RoundingPrior {
-    /// The prior of most marginal likelihood over `curves`: for each largest radius on the profiles' grid, the sharp tip's share
-    /// of most likelihood (`best_share`). None with fewer than [`MIN_POOLED`] curves.
+    /// The prior of most marginal likelihood over `curves`: for each largest radius on the
+    /// profiles' grid, the sharp tip's share of most likelihood (`best_share`). None with
+    /// fewer than [`MIN_POOLED`] curves.
     pub fn pooled(curves: &[RoundingCurve]) -> Option<Self> {
         if curves.len() < MIN_POOLED {
             return None;
         }
-        let used: Vec<&RoundingCurve> = curves.iter().collect();
         // One grid for all: the finest step, out to the farthest profile.
-        let step = used.iter().map(|c| c.step()).fold(f64::INFINITY, f64::min);
-        let reach = used.iter().map(|c| c.radius[c.len - 1]).fold(0.0, f64::max);
+        let step = curves.iter().map(|c| c.step()).fold(f64::INFINITY, f64::min);
+        let reach = curves.iter().map(|c| c.radius[c.len - 1]).fold(0.0, f64::max);
         let points = (reach / step + 1e-9).floor() as usize + 1;
         if points < 2 {
             return None;
         }
         // Each profile's likelihood at the sharp tip and its running sums over the grid: the
         // marginal of (share, up to g) is share·L₀ + (1 − share)·S_g/(g + 1).
-        let mut sharp = Vec::with_capacity(used.len());
-        let mut sums = Vec::with_capacity(used.len() * points);
-        for c in &used {
+        let mut sharp = Vec::with_capacity(curves.len());
+        let mut sums = Vec::with_capacity(curves.len() * points);
+        for c in curves {
             let (like, _) = c.on_grid(step, points);
             sharp.push(like[0]);
             let mut s = 0.0;
@@ -194,7 +194,7 @@ impl RoundingPrior {
             }
         }
         let mut best = (f64::NEG_INFINITY, Self { share: 1.0, r_max: 0.0 });
-        let (mut a, mut b) = (vec![0.0; used.len()], vec![0.0; used.len()]);
+        let (mut a, mut b) = (vec![0.0; curves.len()], vec![0.0; curves.len()]);
         for g in 1..points {
             for (i, &l0) in sharp.iter().enumerate() {
                 (a[i], b[i]) = (l0, sums[i * points + g] / (g + 1) as f64);
