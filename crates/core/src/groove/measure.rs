@@ -149,6 +149,11 @@ impl ModelFit {
 /// Akaike weight in the model spread is not changed.
 const ELLIPSE_EVIDENCE: f64 = 6.63 - KAPPA;
 
+/// How far above a well-fitting V's Akaike criterion a U's, predicted by one Gauss–Newton
+/// step from its start, may lie and the U still be fitted: an Akaike weight of e⁻⁵ (0.7 %)
+/// against the V.
+const U_SCREEN: f64 = 10.0;
+
 /// Iterations of the elliptic U fitted only as the U's rival (a stretch near 1 settles in
 /// two or three).
 const ELLIPSE_RIVAL_ITERATIONS: usize = 3;
@@ -449,7 +454,16 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 v_q = Some(v.q);
                 v_fitted = to_noise(v.cost);
                 if several && well(v.cost) {
-                    (want[Trapezoid.index()], want[U.index()]) = (false, false);
+                    want[Trapezoid.index()] = false;
+                    // A V that fits well leaves no room for a U only where the U could not
+                    // compete: on a shallow groove a flat V and an arc fit alike, the U has a
+                    // parameter fewer, and without it the spread of the two was missing from
+                    // the errors (sheared U's chosen as V's: angles 20° off, se 1.4°). One
+                    // Gauss–Newton step from the U's start screens it.
+                    let bar = v.criterion(s.sigma) + U_SCREEN;
+                    if akaike(predicted_cost(U, r, 0.0, &u_start(r, s)), U, s.sigma) >= bar {
+                        want[U.index()] = false;
+                    }
                 }
                 if u_first.is_some_and(|c| v.criterion(s.sigma) < c) {
                     want[Round.index()] = allowed[Round.index()];
@@ -523,6 +537,11 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
 /// The U from an algebraic circle through the clearly-in-groove readings, widened to contain
 /// every one of them.
 fn fit_u(r: &Readings<'_>, s: &Start, options: &BoundedLmOptions) -> ModelFit {
+    fit_model(SectionModel::U, r, 0.0, &u_start(r, s), options)
+}
+
+/// The U's start: [`fit_u`]'s circle.
+fn u_start(r: &Readings<'_>, s: &Start) -> [f64; 3] {
     let deep = select_pairs(r.u, r.v, |i| r.v[i] < -0.1 * s.depth0);
     let (mut xc, mut rad, d) = match kasa_circle(&deep.0, &deep.1) {
         Some((uc, vc, rad)) if rad < 5.0 => (uc, rad, rad - vc),
@@ -540,7 +559,7 @@ fn fit_u(r: &Readings<'_>, s: &Start, options: &BoundedLmOptions) -> ModelFit {
     if !xc.is_finite() {
         xc = s.u_bottom;
     }
-    fit_model(SectionModel::U, r, 0.0, &[xc, rad, d], options)
+    [xc, rad, d]
 }
 
 /// The same models fitted again after outliers were dropped, each from where it ended: a few
