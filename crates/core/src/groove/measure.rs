@@ -943,7 +943,16 @@ fn measures_with_errors(
     let weight = |f: &ModelFit| -0.5 * f.criterion(sigma);
     let top = fits.iter().map(weight).fold(weight(chosen), f64::max);
     let v_fit = fits.iter().find(|f| f.model == SectionModel::V);
-    let r_fit = fits.iter().find(|f| f.model == SectionModel::Round);
+    // A round V chosen leaning (a frame tilted by a shear) is the round V of the pair: the
+    // upright one among `fits` is its rival, and a sharp V leans with its flanks alone. (The
+    // pair had been the upright two: the depth a leaning round V was chosen for was not the
+    // one given, and on readings nearly free of noise both upright weights fell to zero
+    // under the leaning choice's, so the depth was 0/0.)
+    let r_fit = if chosen.model == SectionModel::Round {
+        Some(chosen)
+    } else {
+        fits.iter().find(|f| f.model == SectionModel::Round)
+    };
     let mut averaged = false;
     let mut se_v_depth = f64::NAN;
     if let (true, Some(fv), Some(fr)) = (matches!(chosen.model, SectionModel::V | SectionModel::Round), v_fit, r_fit) {
