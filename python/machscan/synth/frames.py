@@ -172,9 +172,11 @@ class GrooveFrames:
         Readings, mm; NaN where a reading was lost.
     width : ndarray (F,)
         Distance between the flanks where they meet the surface line (straight flanks extended
-        through any rounded top corner; a circular U where the arc meets the surface), mm.
+        through any rounded top corner; a circular U where the arc meets the surface), along
+        it, mm (a shear stretches it by √(1 + k²)).
     depth : ndarray (F,)
-        Deepest point of the groove below the surface line, mm.
+        Distance of the groove's deepest point from the surface line, mm (a shear shortens it
+        by √(1 + k²)).
     center : ndarray (F, 2)
         (x, z) of the midpoint of the two crossings, in the frame, mm.
     tilt : ndarray (F,)
@@ -273,6 +275,10 @@ def groove_frames(
             # angle from (1, k) to the sheared (t, k·t − 1) is atan2(1, t(1 + k²) − k), and
             # mirrored on the right.
             shear = math.tan(theta)
+            # The crossings lie w apart in x on the line z = k·x, so w·√(1 + k²) along it; the
+            # deepest point, d below the line in z, lies d/√(1 + k²) from it.
+            width[k] *= math.hypot(1.0, shear)
+            depth[k] /= math.hypot(1.0, shear)
             cot = [1 / math.tan(math.radians(a)) for a in section.flank_angles]
             flank_angle[k] = [
                 math.degrees(math.atan2(1.0, cot[0] * (1 + shear * shear) - shear)),
@@ -447,6 +453,9 @@ def multi_groove_frames(
                     v = np.where(v < 0, v, v + bead)
             width[f, j], depth[f, j], center[f, j] = w, -poly[:, 1].min(), c
         tilt = rng.uniform(-max_tilt, max_tilt)
+        # Measured along and across the sheared surface line (as groove_frames' truth).
+        width[f, :k] *= math.hypot(1.0, math.tan(tilt))
+        depth[f, :k] /= math.hypot(1.0, math.tan(tilt))
         zf = np.interp(x, u, v) + math.tan(tilt) * x + rng.uniform(-0.3, 0.3)
         zf += noise * rng.standard_normal(readings)
         zf[rng.random(readings) < dropout] = np.nan

@@ -2106,7 +2106,8 @@ mod tests {
             let p = Pieces::of(SectionModel::U, &[0.5 * (lcg(&mut seed) - 0.5), 0.5 * w, d]);
             let z: Vec<f64> = x.iter().map(|&u| p.value(u) + k * u + 0.008 * gauss(&mut seed)).collect();
             let f = fit_frame(&x, &z, &GrooveOptions::default());
-            let e = (f.depth - d).abs();
+            // The depth below the sheared surface line z = k·x: d/√(1 + k²).
+            let e = (f.depth - d / k.hypot(1.0)).abs();
             far_off += usize::from(!(e <= 0.008));
             held += usize::from(e <= 2.0 * f.se_depth);
         }
