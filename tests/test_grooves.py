@@ -473,6 +473,20 @@ def test_flank_angles_area_and_radius_against_the_generators_truth(shape):
         assert np.mean(np.abs(err) <= 2 * se[keep]) > 0.85, name
 
 
+def test_a_bottom_states_its_depth_area_and_radius_by_its_own_readings():
+    """A U with walls drafted or not and top corners rounded or not (the generator's): the
+    walls and corners misfit the U, and a σ̂² that carried that misfit into the bottom's
+    measures held them at k = 2 in 97.6-98.8 % of frames on this seed. The bottom's depth,
+    area and radius now take the sandwich (each reading's own residual): 95.7-97.1 %."""
+    g = synth.groove_frames("u_walls", 1000, seed=11)
+    f = machscan.fit_grooves(g.x, g.z)
+    for name, truth, high in (("depth", g.depth, 0.97), ("area", g.area, 0.97), ("bottom_radius", g.bottom_radius, 0.98)):
+        est, se = getattr(f, name), getattr(f, "se_" + name)
+        keep = f.ok & np.isfinite(truth) & np.isfinite(est)
+        held = np.mean(np.abs(est - truth)[keep] <= 2 * se[keep])
+        assert 0.93 <= held <= high, (name, held)
+
+
 def test_the_paper_template_has_no_section_measures():
     z = template(X, 0.05, 0.0, 0.3, 0.48)[None, :]
     f = machscan.fit_grooves(X, z, template="tanh")
