@@ -405,6 +405,8 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     // The criterion of a U that fitted well before any V: the round V is then fitted only if
     // the V beats it (a shallow arc and a flat V can look alike).
     let mut u_first = None;
+    // The U's start where the V's screen already drew it (the U is fitted from the same).
+    let mut u_q0 = None;
     for model in order {
         if !want[model.index()] {
             continue;
@@ -432,7 +434,8 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 t
             }
             U => {
-                let u = fit_u(r, s, options);
+                let q0 = u_q0.unwrap_or_else(|| u_start(r, s));
+                let u = fit_model(U, r, 0.0, &q0, options);
                 if several && to_noise(u.cost) && u.cost <= t_cost && u.q[2] > u.q[1] {
                     want = [false; 5];
                 }
@@ -461,7 +464,8 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                     // the errors (sheared U's chosen as V's: angles 20° off, se 1.4°). One
                     // Gauss–Newton step from the U's start screens it.
                     let bar = v.criterion(s.sigma) + U_SCREEN;
-                    if akaike(predicted_cost(U, r, 0.0, &u_start(r, s)), U, s.sigma) >= bar {
+                    let q0 = *u_q0.insert(u_start(r, s));
+                    if akaike(predicted_cost(U, r, 0.0, &q0), U, s.sigma) >= bar {
                         want[U.index()] = false;
                     }
                 }
