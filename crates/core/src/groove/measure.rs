@@ -371,9 +371,10 @@ fn reading_pitch(x: &[f64]) -> f64 {
 ///   Akaike-weighted mean of the two);
 /// - a round V fitting well, the V not fitted before it, rules out the trapezoid and the V.
 ///
-/// On fewer than [`SCREEN_READINGS`] readings a model ruled out is still fitted where one
-/// Gauss–Newton step from its start predicts an Akaike criterion within [`U_SCREEN`] of the
-/// best: there the χ² test has too little power to tell the sections apart.
+/// On fewer than [`SCREEN_READINGS`] readings any model ruled out, and on any groove the
+/// trapezoid and V a U ruled out, are still fitted where one Gauss–Newton step from their
+/// start predicts an Akaike criterion within [`U_SCREEN`] of the best: there the χ² test has
+/// too little power to tell the sections apart.
 ///
 /// "To the noise": χ² within 3 standard deviations of its expectation; "well": within one, so
 /// close that a skipped model would rarely have been the AIC's choice. Measured on the
@@ -415,6 +416,8 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
     let mut u_first = None;
     // The U's start where the V's screen already drew it (the U is fitted from the same).
     let mut u_q0 = None;
+    // The straight-flanked models the U ruled out (screened below).
+    let mut by_u = [false; 5];
     for model in order {
         if !want[model.index()] {
             continue;
@@ -445,13 +448,16 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 let q0 = u_q0.unwrap_or_else(|| u_start(r, s));
                 let u = fit_model(U, r, 0.0, &q0, options);
                 if several && to_noise(u.cost) && u.cost <= t_cost && u.q[2] > u.q[1] {
+                    by_u[Trapezoid.index()] = want[Trapezoid.index()];
                     want = [false; 5];
                 }
                 if several && well(u.cost) {
+                    by_u[Trapezoid.index()] |= want[Trapezoid.index()];
                     want[Trapezoid.index()] = false;
                     if v_q.is_none() {
                         want[Round.index()] = false;
                         if steep {
+                            by_u[V.index()] |= want[V.index()];
                             want[V.index()] = false;
                         } else {
                             u_first = Some(u.criterion(s.sigma));
@@ -499,13 +505,19 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
         };
         fits.push(fit);
     }
-    // On few readings a χ² test cannot tell the sections apart: a U fitted narrow V's at a
-    // 50 µm pitch "well", its χ² 9 where the V's was 0.1, and ruled them out (widths 25 %
-    // short, k = 2 held them in 74 % of frames). There the models ruled out are screened.
-    if several && r.u.len() < SCREEN_READINGS {
+    // A χ² test cannot tell the sections apart on few readings, nor a U from the straight
+    // flanks it rules out where the noise hides their corners: a U fitted narrow V's at a
+    // 50 µm pitch "well" (its χ² 9 where the V's was 0.1; widths 25 % short, k = 2 held them
+    // in 74 % of frames), and trapezoids under 20 µm noise (a third taken for U's, their
+    // depths held in 79 %). There a model ruled out is screened: fitted where one
+    // Gauss–Newton step from its start comes within U_SCREEN of the best Akaike criterion.
+    // (Not the round V the U rules out: a round V tangent to the arc is the U itself, it
+    // always passes, and its fit had cost a tenth of a U frame.)
+    let few = r.u.len() < SCREEN_READINGS;
+    if several && (few || by_u.contains(&true)) {
         let best = fits.iter().map(|f| f.criterion(s.sigma)).fold(f64::INFINITY, f64::min);
         for model in order {
-            if !allowed[model.index()] || fits.iter().any(|f| f.model == model) {
+            if !allowed[model.index()] || !(few || by_u[model.index()]) || fits.iter().any(|f| f.model == model) {
                 continue;
             }
             let mut q0 = s.p0;
