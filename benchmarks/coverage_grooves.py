@@ -11,7 +11,9 @@ median |error| and the median standard error. Frame sets:
   right), trapezoids with unequal flanks, U's whose walls are drafted by up to 5° either way
   (bottom radius 0.15–0.3 mm, walls 0.05–0.2 mm), half-ellipses cut below their axis (0.5–0.7 mm
   across, 0.18–0.26 mm semi-axis down: a section no model has), and gap-and-flush profiles (a V gap with the right
-  surface 0–50 µm above or below the left: the step), at a 20 µm pitch with 5 µm noise;
+  surface 0–50 µm above or below the left: the step), at a 20 µm pitch with 5 µm noise; and
+  the unequal V's on a coarse profiler (50 µm pitch, 12 µm noise: 2–20 readings across), the
+  unequal trapezoids on a noisy one (25 µm pitch, 20 µm noise);
 - laser-engraved V's with rounded bottoms (0–0.1 mm across: ``accuracy_rounded_grooves.py``).
 
     python benchmarks/coverage_grooves.py [--frames 1000] [--seed 3]
@@ -37,12 +39,19 @@ def polyline_area(poly: np.ndarray) -> float:
     return float(-np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(u)))
 
 
+# Profilers other than the generators' (pitch, noise in mm): a coarse one on the V's, a noisy
+# one on the trapezoids; the other shapes at a 20 µm pitch with 5 µm noise.
+PROFILERS = {"coarse_v": (0.05, 0.012), "noisy_trapezoid": (0.025, 0.02)}
+
+
 def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """Frames of 250 readings at 20 µm, 5 µm noise, lips up to 20 µm, tilt ±0.05 rad (a
-    rotation), across one groove of ``kind``; the truth of every measure it defines (NaN
-    where it does not)."""
+    """Frames 5 mm long at 20 µm (``PROFILERS``: the pitch and noise of the coarse and noisy
+    sets), 5 µm noise, lips up to 20 µm, tilt ±0.05 rad (a rotation), across one groove of
+    ``kind``; the truth of every measure it defines (NaN where it does not)."""
     rng = np.random.default_rng(seed)
-    pitch, readings, far = 0.02, 250, 4.0
+    pitch, noise = PROFILERS.get(kind, (0.02, 0.005))
+    kind = {"coarse_v": "asymmetric_v", "noisy_trapezoid": "asymmetric_trapezoid"}.get(kind, kind)
+    readings, far = round(5.0 / pitch), 4.0
     x = (np.arange(readings) - readings // 2) * pitch
     z = np.empty((n, readings))
     truth = {m: np.full(n, np.nan) for m in MEASURES}
@@ -113,7 +122,7 @@ def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, 
         # The groove's center (the midpoint of the crossings) in the frame, and the surface there.
         mid = 0.5 * (right - left) if kind != "gap_flush" else np.nan
         truth["x0"][k], truth["z0"][k] = xc + mid * c, z_off + mid * s
-        z[k] = _topmost(xc + u * c - v * s, z_off + u * s + v * c, x) + 0.005 * rng.standard_normal(readings)
+        z[k] = _topmost(xc + u * c - v * s, z_off + u * s + v * c, x) + noise * rng.standard_normal(readings)
     if kind != "gap_flush":
         truth["step"][:] = 0.0
     return x, z, truth
@@ -155,7 +164,8 @@ def main() -> None:
     sets += [(f"synth {s}, sheared", lambda s=s: generator_frames(s, args.frames, args.seed, "shear"))
              for s in ("u", "u_walls")]
     sets += [(k.replace("_", " "), lambda k=k: other_shapes(k, args.frames, args.seed))
-             for k in ("asymmetric_v", "asymmetric_trapezoid", "drafted_u_walls", "half_ellipse", "gap_flush")]
+             for k in ("asymmetric_v", "asymmetric_trapezoid", "drafted_u_walls", "half_ellipse", "gap_flush",
+                       "coarse_v", "noisy_trapezoid")]
     sets += [("engraved V, rounded 0-0.1 mm", lambda: engraved(args.frames, args.seed))]
     print(f"k = 2 coverage of the groove measures, default call, {args.frames} frames per set (seed {args.seed})")
     print(f"  {'set':<30} {'measure':<18} {'frames':>6} {'k=2 holds':>9} {'median |error|':>15} {'median se':>10}")
