@@ -39,18 +39,18 @@ def polyline_area(poly: np.ndarray) -> float:
     return float(-np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(u)))
 
 
-# Profilers other than the generators' (pitch, noise in mm): a coarse one on the V's, a noisy
-# one on the trapezoids; the other shapes at a 20 µm pitch with 5 µm noise.
-PROFILERS = {"coarse_v": (0.05, 0.012), "noisy_trapezoid": (0.025, 0.02)}
+# Profilers other than the generators' (the shape, pitch and noise in mm): a coarse one on the
+# unequal V's, a noisy one on the unequal trapezoids; the other shapes at a 20 µm pitch with
+# 5 µm noise.
+PROFILERS = {"coarse_v": ("asymmetric_v", 0.05, 0.012), "noisy_trapezoid": ("asymmetric_trapezoid", 0.025, 0.02)}
 
 
 def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """Frames 5 mm long at 20 µm (``PROFILERS``: the pitch and noise of the coarse and noisy
-    sets), 5 µm noise, lips up to 20 µm, tilt ±0.05 rad (a rotation), across one groove of
+    """Frames 5 mm long at 20 µm (``PROFILERS``: the shape, pitch and noise of the coarse and
+    noisy sets), 5 µm noise, lips up to 20 µm, tilt ±0.05 rad (a rotation), across one groove of
     ``kind``; the truth of every measure it defines (NaN where it does not)."""
     rng = np.random.default_rng(seed)
-    pitch, noise = PROFILERS.get(kind, (0.02, 0.005))
-    kind = {"coarse_v": "asymmetric_v", "noisy_trapezoid": "asymmetric_trapezoid"}.get(kind, kind)
+    kind, pitch, noise = PROFILERS.get(kind, (kind, 0.02, 0.005))
     readings, far = round(5.0 / pitch), 4.0
     x = (np.arange(readings) - readings // 2) * pitch
     z = np.empty((n, readings))

@@ -158,6 +158,11 @@ const U_SCREEN: f64 = 10.0;
 /// ([`fit_models`]); below, each model ruled out is screened by one Gauss–Newton step.
 const SCREEN_READINGS: usize = 16;
 
+/// The trapezoid's budget among several models: half the iterations ([`fit_models`]).
+fn half_budget(options: &BoundedLmOptions) -> BoundedLmOptions {
+    BoundedLmOptions { max_iterations: options.max_iterations.div_ceil(2), ..*options }
+}
+
 /// Iterations of the elliptic U fitted only as the U's rival (a stretch near 1 settles in
 /// two or three).
 const ELLIPSE_RIVAL_ITERATIONS: usize = 3;
@@ -429,7 +434,7 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
                 // (a chosen trapezoid that has not converged is finished later). After a U that
                 // did not fit to the noise it is the likely choice and gets the whole budget: a
                 // finish restarts the damping, and cost 8–17 % of the trapezoids' time.
-                let screen = BoundedLmOptions { max_iterations: options.max_iterations.div_ceil(2), ..*options };
+                let screen = half_budget(options);
                 let likely = fits.iter().any(|f| f.model == U && !to_noise(f.cost));
                 let t = fit_model(Trapezoid, r, 0.0, &s.p0, if several && !likely { &screen } else { options });
                 if several && to_noise(t.cost) {
@@ -529,9 +534,8 @@ fn fit_models(models: &[SectionModel], r: &Readings<'_>, s: &Start, options: &Bo
             }
             let q0 = &q0[..model.n_params()];
             if akaike(predicted_cost(model, r, 0.0, q0), model, s.sigma) < best + U_SCREEN {
-                // (The trapezoid on the half budget it has among several models.)
-                let half = BoundedLmOptions { max_iterations: options.max_iterations.div_ceil(2), ..*options };
-                fits.push(fit_model(model, r, 0.0, q0, if model == Trapezoid { &half } else { options }));
+                let budget = if model == Trapezoid { half_budget(options) } else { *options };
+                fits.push(fit_model(model, r, 0.0, q0, &budget));
             }
         }
     }
@@ -621,7 +625,7 @@ fn u_start(r: &Readings<'_>, s: &Start) -> [f64; 3] {
 /// first pass cost (the trapezoid screen keeps its half budget).
 #[inline(always)]
 fn refit_models(fits: &[ModelFit], r: &Readings<'_>, options: &BoundedLmOptions) -> Vec<ModelFit> {
-    let screen = BoundedLmOptions { max_iterations: options.max_iterations.div_ceil(2), ..*options };
+    let screen = half_budget(options);
     fits.iter()
         .map(|f| {
             let budget = if f.model == SectionModel::Trapezoid && fits.len() > 1 { &screen } else { options };
