@@ -448,6 +448,33 @@ def test_a_trapezoid_under_heavy_noise_is_not_taken_for_a_u():
         assert low <= np.mean(np.abs(err) <= 2 * se) <= 0.99, name
 
 
+def test_no_flank_angle_past_what_a_flank_may_lean():
+    """Shallow trapezoids (0.08-0.2 mm deep, flanks of 35-85 degrees) at a 25 um pitch under
+    20 um noise: where a section's arc crossed the surface above its widest point, or a wall
+    was placed inside its foot, flank angles of 100-180 degrees had come out (24 of 1200
+    here, with standard errors of a degree or two). No flank the profiler sees overhangs past
+    the models' bound (98.5 degrees); such an angle is held there, with the standard error of
+    an angle anywhere a flank may lean (27.6 degrees)."""
+    rng = np.random.default_rng(12)
+    x = (np.arange(200) - 100) * 0.025
+    z = np.empty((600, x.size))
+    for i in range(600):
+        d, floor = rng.uniform(0.08, 0.2), rng.uniform(0.1, 0.6)
+        a_l, a_r, c = rng.uniform(35, 85), rng.uniform(35, 85), rng.uniform(-0.5, 0.5)
+        rl, rr = d / np.tan(np.radians(a_l)), d / np.tan(np.radians(a_r))
+        lo, hi = c - floor / 2, c + floor / 2
+        pts = np.array([(-4, 0), (lo - rl, 0), (lo, -d), (hi, -d), (hi + rr, 0), (4, 0)])
+        z[i] = np.interp(x, pts[:, 0], pts[:, 1]) + 0.02 * rng.standard_normal(x.size)
+    f = machscan.fit_grooves(x, z)
+    ok = f.ok
+    angles = np.concatenate([f.flank_angle_left[ok], f.flank_angle_right[ok]])
+    se = np.concatenate([f.se_flank_angle_left[ok], f.se_flank_angle_right[ok]])
+    assert ok.mean() > 0.95
+    assert angles.min() >= 2.8 and angles.max() <= 98.6
+    at_bound = angles > 98.5
+    assert np.allclose(se[at_bound], 95.67 / np.sqrt(12), rtol=0.01)
+
+
 def test_a_u_whose_walls_are_drafted_states_the_width_the_readings_allow():
     """U's with walls 0.05-0.2 mm tall drafted by up to 5 degrees either way (a worn or tilted
     cutter), 20 um pitch, 5 um noise: no reading lies on a wall, the U holds its walls

@@ -1944,6 +1944,32 @@ fn fit_groove(
     // measure_errors) had a linearised angle variance of up to hundreds of degrees: the angle
     // is then anywhere a flank can lean, and no more uncertain than uniform over that span.
     let uniform = super::section::flank_angle_span().powi(2) / 12.0;
+    // A flank whose cotangent the fit pressed against a bound (an overhang, or flat or steep
+    // past what the model allows) is held there, not estimated: its linearisation gave it no
+    // variance, yet the readings pulled it further. Its angle is as loose as one the prior
+    // holds.
+    if matches!(chosen.model, SectionModel::V | SectionModel::Round | SectionModel::Trapezoid) {
+        let (lo, hi) = chosen.model.bounds(&chosen.q);
+        for (i, k) in [(2, ANGLE_LEFT), (3, ANGLE_RIGHT)] {
+            let tol = 1e-9 * chosen.q[i].abs().max(1.0);
+            if chosen.q[i] <= lo[i] + tol || chosen.q[i] >= hi[i] - tol {
+                var[k] = var[k].max(uniform);
+            }
+        }
+    }
+    // An angle past what a flank line may lean (the lean's own included) is no flank the
+    // readings show: an arc crossing the surface above its widest point (a round V or U
+    // wider than a half circle, up to 180°), or a wall placed in a gap inside its foot. The
+    // profiler sees no overhang; the angle is held at the bound, as loose as one the prior
+    // holds (such angles had been 100–180° for flanks of 50–80°, with errors of a degree).
+    let (lo, hi) = super::section::flank_angle_bounds();
+    let lean = chosen.gamma.abs().atan().to_degrees();
+    for k in [ANGLE_LEFT, ANGLE_RIGHT] {
+        if measures[k] < lo - lean || measures[k] > hi + lean {
+            measures[k] = measures[k].clamp(lo - lean, hi + lean);
+            var[k] = uniform;
+        }
+    }
     for k in [ANGLE_LEFT, ANGLE_RIGHT] {
         if var[k] > uniform {
             var[k] = uniform; // (`min` would turn a NaN, a measure the model lacks, into it)

@@ -32,9 +32,14 @@
 /// vertical in the sensor frame leans by the tilt once the frame is levelled.
 pub const T_MAX: f64 = 20.0;
 const T_OVERHANG: f64 = 0.15;
-/// The span of the flank angles the cotangent bounds allow, degrees (2.9° to 98.5°).
+/// The flank angles the cotangent bounds allow, degrees (2.9° to 98.5°).
+pub fn flank_angle_bounds() -> (f64, f64) {
+    (1.0f64.atan2(T_MAX).to_degrees(), 1.0f64.atan2(-T_OVERHANG).to_degrees())
+}
+/// The span of [`flank_angle_bounds`], degrees.
 pub fn flank_angle_span() -> f64 {
-    (1.0f64.atan2(-T_OVERHANG) - 1.0f64.atan2(T_MAX)).to_degrees()
+    let (lo, hi) = flank_angle_bounds();
+    hi - lo
 }
 /// A sharp V's flanks are at most this steep (cotangent): steeper is a U's wall.
 const T_MIN_V: f64 = 0.01;
