@@ -288,12 +288,17 @@ class GrooveFits:
     rms : ndarray (F,)
         Residual RMS of the fit, mm (along the sensor beam for the section models).
     se_depth, se_width : ndarray (F,)
-        Standard errors of depth and width from the fit covariance ``σ̂² (JᵀJ)⁻¹`` and the
-        surface line's, mm.
+        Standard errors of depth and width, mm: the fit's covariance (the larger of the
+        classical ``σ̂² (JᵀJ)⁻¹``, scaled by Student's t for its m − p degrees of freedom, and
+        the HC3 sandwich), the surface line's, the spread of the other models fitted by their
+        Akaike weights, and for an edge between two readings the gap it may lie in
+        (``docs/grooves.md``, step 11). value ± 2·se is meant to hold the truth 95 % of the time.
     flank_angle_left, flank_angle_right : ndarray (F,)
         Angle between each flank and the surface line where they meet, degrees (90: a
-        vertical wall; a circular U shallower than its radius: the arc's angle there). NaN for
-        the tanh template, as are the measures below.
+        vertical wall; a circular U shallower than its radius: the arc's angle there), within
+        2.9–98.5° and the section's lean (a profiler sees no deeper overhang: an angle the fit
+        put past that is held at the bound, its standard error that of an angle anywhere in
+        the span, 27.6°). NaN for the tanh template, as are the measures below.
     area : ndarray (F,)
         Cross-section area between the surface line and the section, mm².
     bottom_radius : ndarray (F,)
@@ -305,9 +310,9 @@ class GrooveFits:
         line's normal, mm (two parallel lines fitted to the surface readings beside the groove,
         lips left out; NaN when a side has fewer than three, as beside a shared corner).
     se_x0, se_z0, se_flank_angle_left, se_flank_angle_right, se_area, se_bottom_radius, se_step : ndarray (F,)
-        Standard errors of those measures, in their units (mm, degrees, mm²): from the fit's
-        covariance and the surface line's by the delta method; the step's from its own line
-        fit. The model choice is not in them (except for the V's depth and bottom radius).
+        Standard errors of those measures, in their units (mm, degrees, mm²), as ``se_depth``:
+        the fit's covariance and the surface line's by the delta method, and the model spread;
+        the step's from its own line fit.
     tilt : ndarray (F,)
         Surface slope angle used for levelling, rad.
     iterations, n_used : ndarray of int32 (F,)
