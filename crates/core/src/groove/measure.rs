@@ -139,6 +139,15 @@ impl ModelFit {
     fn choice(&self, sigma: f64) -> f64 {
         self.criterion(sigma) + if self.model == SectionModel::Ellipse { ELLIPSE_EVIDENCE } else { 0.0 }
     }
+
+    /// The parameters the fit left at a bound: held there, not estimated.
+    fn held(&self) -> [bool; 6] {
+        let (lo, hi) = self.model.bounds(&self.q);
+        std::array::from_fn(|i| {
+            let tol = 1e-9 * self.q[i].abs().max(1.0);
+            self.q[i] <= lo[i] + tol || self.q[i] >= hi[i] - tol
+        })
+    }
 }
 
 /// The elliptic U is chosen over a circle only on strong evidence: a χ² at least 6.63 lower
@@ -935,12 +944,8 @@ fn fit_covariance(
     // readings give a parameter they fix, so it moves nothing the readings fix and bounds what
     // they do not.
     let sigma2 = 2.0 * fit.cost / (m.saturating_sub(np).max(1)) as f64;
-    let (lo, hi) = fit.model.bounds(&fit.q);
-    let held = |i: usize| {
-        let tol = 1e-9 * fit.q[i].abs().max(1.0);
-        fit.q[i] <= lo[i] + tol || fit.q[i] >= hi[i] - tol
-    };
-    let free: [bool; 6] = std::array::from_fn(|i| i < np && !held(i));
+    let held = fit.held();
+    let free: [bool; 6] = std::array::from_fn(|i| i < np && !held[i]);
     let (left, right) = fit.pieces().crossings();
     let size = (right - left).abs().max(pitch);
     let range = |i: usize| match (fit.model, i) {
@@ -1968,29 +1973,22 @@ fn fit_groove(
     // A flank whose direction the readings do not fix (its cotangent held by the prior of
     // measure_errors) had a linearised angle variance of up to hundreds of degrees: the angle
     // is then anywhere a flank can lean, and no more uncertain than uniform over that span.
-    let uniform = super::section::flank_angle_span().powi(2) / 12.0;
-    // A flank whose cotangent the fit pressed against a bound (an overhang, or flat or steep
-    // past what the model allows) is held there, not estimated: its linearisation gave it no
-    // variance, yet the readings pulled it further. Its angle is as loose as one the prior
-    // holds.
-    if matches!(chosen.model, SectionModel::V | SectionModel::Round | SectionModel::Trapezoid) {
-        let (lo, hi) = chosen.model.bounds(&chosen.q);
-        for (i, k) in [(2, ANGLE_LEFT), (3, ANGLE_RIGHT)] {
-            let tol = 1e-9 * chosen.q[i].abs().max(1.0);
-            if chosen.q[i] <= lo[i] + tol || chosen.q[i] >= hi[i] - tol {
-                var[k] = var[k].max(uniform);
-            }
-        }
-    }
-    // An angle past what a flank line may lean (the lean's own included) is no flank the
-    // readings show: an arc crossing the surface above its widest point (a round V or U
-    // wider than a half circle, up to 180°), or a wall placed in a gap inside its foot. The
-    // profiler sees no overhang; the angle is held at the bound, as loose as one the prior
-    // holds (such angles had been 100–180° for flanks of 50–80°, with errors of a degree).
     let (lo, hi) = super::section::flank_angle_bounds();
+    let uniform = (hi - lo).powi(2) / 12.0;
+    // Two more flanks are as loose as that:
+    // - one whose cotangent the fit pressed against a bound (an overhang, or flat or steep past
+    //   what the model allows): held there, not estimated, its linearisation gave it no
+    //   variance, yet the readings pulled it further;
+    // - an angle past what a flank line may lean (the lean's own included), which is no flank
+    //   the readings show: an arc crossing the surface above its widest point (a round V or U
+    //   wider than a half circle, up to 180°), or a wall placed in a gap inside its foot. The
+    //   profiler sees no overhang; the angle is held at the bound (such angles had been
+    //   100–180° for flanks of 50–80°, with errors of a degree).
+    let cotangents = matches!(chosen.model, SectionModel::V | SectionModel::Round | SectionModel::Trapezoid);
+    let held = chosen.held();
     let lean = chosen.gamma.abs().atan().to_degrees();
-    for k in [ANGLE_LEFT, ANGLE_RIGHT] {
-        if measures[k] < lo - lean || measures[k] > hi + lean {
+    for (i, k) in [(2, ANGLE_LEFT), (3, ANGLE_RIGHT)] {
+        if (cotangents && held[i]) || measures[k] < lo - lean || measures[k] > hi + lean {
             measures[k] = measures[k].clamp(lo - lean, hi + lean);
             var[k] = uniform;
         }
@@ -2248,9 +2246,6 @@ mod tests {
         assert!(held * 100 >= 92 * n, "k = 2 held the depth in {held} of {n}");
     }
 
-    /// V's whose tip is rounded by 30–60 µm (an arc over 2–3 readings), 2 µm noise: the round V
-    /// must reach its rounding. Started barely rounded it had stayed at the sharp V on a third
-    /// of them, leaving them to a trapezoid (63 of 200 frames with the build before).
     #[test]
     fn student_quantiles_match_the_tables() {
         // scipy.stats.t.ppf(norm.cdf(z), ν) for z = 2 and z = 1.959964 (97.5 %).
@@ -2266,6 +2261,9 @@ mod tests {
         assert!((student_factor(1e9) - 1.0).abs() < 1e-8);
     }
 
+    /// V's whose tip is rounded by 30–60 µm (an arc over 2–3 readings), 2 µm noise: the round V
+    /// must reach its rounding. Started barely rounded it had stayed at the sharp V on a third
+    /// of them, leaving them to a trapezoid (63 of 200 frames with the build before).
     #[test]
     fn a_rounded_v_tip_is_fitted_as_rounded() {
         let mut seed = 11u64;

@@ -36,11 +36,6 @@ const T_OVERHANG: f64 = 0.15;
 pub fn flank_angle_bounds() -> (f64, f64) {
     (1.0f64.atan2(T_MAX).to_degrees(), 1.0f64.atan2(-T_OVERHANG).to_degrees())
 }
-/// The span of [`flank_angle_bounds`], degrees.
-pub fn flank_angle_span() -> f64 {
-    let (lo, hi) = flank_angle_bounds();
-    hi - lo
-}
 /// A sharp V's flanks are at most this steep (cotangent): steeper is a U's wall.
 const T_MIN_V: f64 = 0.01;
 /// The trapezoid's fillets are at most this large (mm): round bottoms are R's and U's.
