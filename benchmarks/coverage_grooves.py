@@ -10,13 +10,15 @@ median |error| and the median standard error. Frame sets:
 - shapes the generators do not make, drawn here: V's with unequal flanks (30–60° left, 45–75°
   right), trapezoids with unequal flanks, U's whose walls are drafted by up to 5° either way
   (bottom radius 0.15–0.3 mm, walls 0.05–0.2 mm), half-ellipses cut below their axis (0.5–0.7 mm
-  across, 0.18–0.26 mm semi-axis down: a section no model has), and gap-and-flush profiles (a V gap with the right
-  surface 0–50 µm above or below the left: the step), at a 20 µm pitch with 5 µm noise; and
+  across, 0.18–0.26 mm semi-axis down: a section no model has), gap-and-flush profiles (a V gap with the right
+  surface 0–50 µm above or below the left: the step), and bowls ``v = −d·(1 − |2u/w|^e)``, parabolic
+  (e = 2) and quartic (e = 4), 0.35–0.7 mm wide and 0.08–0.3 mm deep (curved flanks, sections
+  no model has), at a 20 µm pitch with 5 µm noise; and
   the unequal V's on a coarse profiler (50 µm pitch, 12 µm noise: 2–20 readings across), the
   unequal trapezoids on a noisy one (25 µm pitch, 20 µm noise);
 - laser-engraved V's with rounded bottoms (0–0.1 mm across: ``accuracy_rounded_grooves.py``).
 
-    python benchmarks/coverage_grooves.py [--frames 1000] [--seed 3]
+    python benchmarks/coverage_grooves.py [--frames 1000] [--seed 3] [--only TEXT]
 """
 
 from __future__ import annotations
@@ -100,6 +102,21 @@ def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, 
             # curvature is a²/b.
             a_l = a_r = math.degrees(math.atan2(b * b * left, a * a * cut)) if cut > 0 else 90.0
             truth["bottom_radius"][k] = a * a / b
+        elif kind in ("parabolic_bowl", "quartic_bowl"):
+            # A bowl v = −d·(1 − |2u/w|^e), e = 2 or 4: curved flanks and a bottom no model
+            # holds (a worn or ablating tool; the quartic's floor is flat, its walls steep).
+            # Its flank angle is the tangent's where it meets the surface; only the parabola
+            # has a bottom radius, (w/2)²/(2d).
+            e = 2 if kind == "parabolic_bowl" else 4
+            w, d = rng.uniform(0.35, 0.7), rng.uniform(0.08, 0.3)
+            left = right = w / 2
+            uu = np.concatenate([[-far], np.linspace(-left, right, 4001), [far]])
+            vv = -d * (1 - np.abs(uu / left) ** e)
+            vv[[0, -1]] = 0.0
+            poly = np.c_[uu, vv]
+            a_l = a_r = math.degrees(math.atan(e * d / left))
+            if e == 2:
+                truth["bottom_radius"][k] = left * left / (2 * d)
         else:  # gap and flush: a V gap, the right surface `step` above the left
             d, a = rng.uniform(0.1, 0.3), rng.uniform(40, 70)
             step = rng.uniform(-0.05, 0.05)
@@ -158,6 +175,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=3)
+    ap.add_argument("--only", metavar="TEXT", help="run only the sets whose name contains TEXT")
     args = ap.parse_args()
     sets = [(f"synth {s}", lambda s=s: generator_frames(s, args.frames, args.seed)) for s in ("v", "u", "u_walls", "trapezoid")]
     # Tilted by a shear (a groove cut square to the machine on a tilted surface): the arcs lean.
@@ -165,8 +183,9 @@ def main() -> None:
              for s in ("u", "u_walls")]
     sets += [(k.replace("_", " "), lambda k=k: other_shapes(k, args.frames, args.seed))
              for k in ("asymmetric_v", "asymmetric_trapezoid", "drafted_u_walls", "half_ellipse", "gap_flush",
-                       "coarse_v", "noisy_trapezoid")]
+                       "coarse_v", "noisy_trapezoid", "parabolic_bowl", "quartic_bowl")]
     sets += [("engraved V, rounded 0-0.1 mm", lambda: engraved(args.frames, args.seed))]
+    sets = [(name, make) for name, make in sets if args.only is None or args.only in name]
     print(f"k = 2 coverage of the groove measures, default call, {args.frames} frames per set (seed {args.seed})")
     print(f"  {'set':<30} {'measure':<18} {'frames':>6} {'k=2 holds':>9} {'median |error|':>15} {'median se':>10}")
     for name, make in sets:

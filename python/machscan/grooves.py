@@ -292,7 +292,11 @@ class GrooveFits:
         classical ``σ̂² (JᵀJ)⁻¹``, scaled by Student's t for its m − p degrees of freedom, and
         the HC3 sandwich), the surface line's, the spread of the other models fitted by their
         Akaike weights, and for an edge between two readings the gap it may lie in
-        (``docs/grooves.md``, step 11). value ± 2·se is meant to hold the truth 95 % of the time.
+        (``docs/grooves.md``, step 11). value ± 2·se is meant to hold the truth 95 % of the time
+        on sections the models hold (V, rounded V, U, U with walls, elliptic U, trapezoid). On a
+        section none holds, the nearest model's bias is not in it: on parabolic and quartic
+        bowls (curved flanks) ±2·se held the depth in 28–59 % of frames, the flank angles in
+        19–68 % (``benchmarks/coverage_grooves.py``); compare ``rms`` with the profiler's noise.
     flank_angle_left, flank_angle_right : ndarray (F,)
         Angle between each flank and the surface line where they meet, degrees (90: a
         vertical wall; a circular U shallower than its radius: the arc's angle there), within
