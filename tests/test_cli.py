@@ -90,6 +90,17 @@ def test_grooves_command_settles_the_tip_rounding_as_asked(small, capsys):
     assert inspect_grooves(scan, truth.nominal_polylines).fits.rounding_prior is not None
 
 
+def test_grooves_command_takes_the_misfit_rule_as_asked(small):
+    d, scan, truth = small
+    for rule in ("pooled", "none"):
+        out = d / f"misfit_{rule}"
+        assert main(["grooves", str(d / "scan.npz"), str(d / "cad.csv"), "--misfit", rule, "--out", str(out)]) == 0
+        ref = inspect_grooves(scan, truth.nominal_polylines, misfit=rule)
+        assert (ref.fits.misfit is None) == (rule == "none")
+        rows = np.genfromtxt(out / "frames.csv", delimiter=",", names=True)
+        np.testing.assert_allclose(rows["se_depth_mm"], ref.fits.se_depth, atol=1e-9)
+
+
 def test_grooves_command_fits_the_template_asked_for(small):
     d, scan, truth = small
     out = d / "out_tanh"

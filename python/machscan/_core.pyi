@@ -309,6 +309,7 @@ class _GrooveFitArrays(TypedDict):
     groove: NDArray[np.int32]
     frame: NDArray[np.int32]
     rounding_prior: tuple[float, float] | None
+    misfit: dict[str, float] | None
 
 class _FrameViewArrays(TypedDict):
     x: _F64
@@ -344,6 +345,7 @@ class _GrooveOptions(TypedDict):
     max_width: float | None
     max_depth: float | None
     rounding: Literal["pooled", "frame"]
+    misfit: Literal["pooled", "none"]
 
 class _Criteria(TypedDict):
     max_iterations: int

@@ -103,8 +103,7 @@ def _groove_dtype(n_readings: int, options: _grooves.GrooveOptions) -> np.dtype:
     """The record of one frame's fit: the GrooveFits arrays' names and dtypes, from a call on no
     frames (one source for them: the in-memory result)."""
     empty = _grooves.fit_grooves(np.arange(n_readings, dtype=np.float64), np.empty((0, n_readings)), options=options)
-    scalars = ("template", "rounding_prior")
-    return np.dtype([(f.name, getattr(empty, f.name).dtype) for f in fields(empty) if f.name not in scalars])
+    return np.dtype([(f.name, getattr(empty, f.name).dtype) for f in fields(empty) if f.name not in _grooves._CALL_FIELDS])
 
 
 def _valid_readings(block: np.ndarray, profiler: Profiler) -> np.ndarray:
@@ -140,6 +139,7 @@ class DaskGrooveFits:
     records: da.Array
     template: str
     rounding_prior: tuple[float, float] | None = None
+    misfit: dict[str, float] | None = None
 
     def __getattr__(self, name: str) -> da.Array:
         names = self.records.dtype.names or ()
@@ -159,6 +159,7 @@ class DaskGrooveFits:
             **{name: np.ascontiguousarray(records[name]) for name in records.dtype.names or ()},
             template=self.template,
             rounding_prior=self.rounding_prior,
+            misfit=self.misfit,
         )
 
     def compute(self, **kwargs: Any) -> _grooves.GrooveFits:
@@ -199,9 +200,10 @@ def fit_grooves(
     -------
     DaskGrooveFits
         ``.compute()`` gives the :class:`machscan.GrooveFits` of the in-memory call, bit for bit
-        (every frame is fitted on its own; with ``rounding="pooled"``, the default, under the
-        tip-rounding prior of the frames the in-memory call pools, every k-th frame, which are
-        read and fitted first, eagerly: one pass over the chunks before the lazy one).
+        (every frame is fitted on its own; with ``rounding="pooled"`` and ``misfit="pooled"``,
+        the defaults, under the tip-rounding prior and the misfit of the frames the in-memory
+        call pools, every k-th frame, which are read and fitted first, eagerly: one pass over
+        the chunks before the lazy one).
 
     Examples
     --------
@@ -226,15 +228,15 @@ def fit_grooves(
     if x.ndim != 1 or x.shape[0] != frames.shape[1]:
         raise ValueError(f"x: expected shape ({frames.shape[1]},) (one abscissa per reading of frames), got {x.shape}")
     options = _grooves.groove_options(options, changes, "machscan.dask.fit_grooves")
-    # The chunks measure under the prior the in-memory call pools to: the frames it pools
-    # (every k-th) are fitted first, here, eagerly.
-    prior, options = _grooves.settled_rounding(x, frames, options)
+    # The chunks measure under what the in-memory call pools to (the rounding prior, the
+    # misfit): the frames it pools (every k-th) are fitted first, here, eagerly.
+    pooled, options = _grooves.settled_pools(x, frames, options)
     dtype = _groove_dtype(x.shape[0], options)
     fit = functools.partial(_fit_block, x=x, options=options, dtype=dtype, threads=threads)
     # A row per groove: how many a chunk gives is known only once it is fitted.
     rows = ((np.nan,) * frames.numblocks[0],) if options.select == "all" else None
     records = frames.map_blocks(fit, dtype=dtype, drop_axis=1, chunks=rows, meta=np.empty((0,), dtype))
-    return DaskGrooveFits(records, options.template, prior)
+    return DaskGrooveFits(records, options.template, **pooled)
 
 
 # ---- frames to points -----------------------------------------------------------------------

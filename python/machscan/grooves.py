@@ -39,6 +39,7 @@ __all__ = [
     "GrooveOptions",
     "GrooveStatus",
     "LevelledFrame",
+    "Misfit",
     "Rounding",
     "Select",
     "Template",
@@ -65,8 +66,16 @@ Select = Literal["deepest", "left", "right", "nearest", "all"]
 #: own (or, as the option's value, a prior (share, r_max mm) given).
 Rounding = Literal["pooled", "frame"]
 
+#: How the misfit of the chosen section at the groove's bottom enters the depth's error: its
+#: variance pooled over the call's frames, or none (or, as the option's value, variances by
+#: model name, mm², given).
+Misfit = Literal["pooled", "none"]
+
 #: Most frames a pooled rounding prior is estimated from (every k-th frame of a call).
 ROUNDING_POOLED_FRAMES: int = _core.ROUNDING_POOLED_FRAMES
+
+#: The fields of :class:`GrooveFits` that are one value for the call, not a row each.
+_CALL_FIELDS = ("template", "rounding_prior", "misfit")
 
 
 @dataclass(frozen=True)
@@ -164,6 +173,17 @@ class GrooveOptions:
         says which; below 30 V's, each frame's own rule). "frame": each frame on its own (the
         Akaike-weighted mean of the sharp and the round V). ``(share, r_max)``: that prior (a
         process the plant knows, or a pooled call's, to measure one frame alike).
+    misfit : "pooled", "none" or {model: variance}
+        How the misfit of the chosen section at the groove's bottom enters ``se_depth``. A
+        section no model holds (a bowl with curved flanks) is measured as the nearest model's,
+        whose bias one frame's readings barely show. "pooled": per model chosen, the variance
+        of the residual at the bottom beyond the noise, estimated over the call's frames (the
+        frames pooled for ``rounding``; a model chosen in fewer than 30 of them is left as it
+        is); each frame's ``se_depth`` takes its own residual's share of it
+        (:attr:`GrooveFits.misfit` says what was pooled; 0 where the models hold the section).
+        "none": the models' errors alone. ``{"u": 4e-6, ...}``: those variances, mm² (a pooled
+        call's, to measure one frame alike). V's whose depth the rounding settles are left to
+        it.
 
     Examples
     --------
@@ -191,6 +211,7 @@ class GrooveOptions:
     max_width: float | None = DEFAULTS["max_width"]
     max_depth: float | None = DEFAULTS["max_depth"]
     rounding: Rounding | tuple[float, float] = DEFAULTS["rounding"]
+    misfit: Misfit | Mapping[str, float] | tuple[tuple[str, float], ...] = DEFAULTS["misfit"]
 
     def __post_init__(self) -> None:
         if not isinstance(self.criteria, FitCriteria):
@@ -207,6 +228,16 @@ class GrooveOptions:
                     f'rounding: expected "pooled", "frame" or (share, r_max) with r_max in mm, got {self.rounding!r}'
                 ) from None
             object.__setattr__(self, "rounding", (share, r_max))
+        if not isinstance(self.misfit, str):
+            # Variances by model name as (name, mm²) pairs, so that the options stay hashable;
+            # the core checks the names and values.
+            try:
+                pairs = tuple((str(k), float(v)) for k, v in dict(self.misfit).items())
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f'misfit: expected "pooled", "none" or variances by model name (mm²), got {self.misfit!r}'
+                ) from None
+            object.__setattr__(self, "misfit", pairs)
 
     def with_changes(self, changes: Mapping[str, Any], where: str = "options") -> GrooveOptions:
         """These options with ``changes`` (option names and values) made; an unknown name is an
@@ -292,11 +323,11 @@ class GrooveFits:
         classical ``σ̂² (JᵀJ)⁻¹``, scaled by Student's t for its m − p degrees of freedom, and
         the HC3 sandwich), the surface line's, the spread of the other models fitted by their
         Akaike weights, and for an edge between two readings the gap it may lie in
-        (``docs/grooves.md``, step 11). value ± 2·se is meant to hold the truth 95 % of the time
-        on sections the models hold (V, rounded V, U, U with walls, elliptic U, trapezoid). On a
-        section none holds, the nearest model's bias is not in it: on parabolic and quartic
-        bowls (curved flanks) ±2·se held the depth in 28–59 % of frames, the flank angles in
-        19–68 % (``benchmarks/coverage_grooves.py``); compare ``rms`` with the profiler's noise.
+        (``docs/grooves.md``, step 11); ``se_depth`` also the misfit the call's bottoms pool to
+        (``misfit``). value ± 2·se is meant to hold the truth 95 % of the time. On a section no
+        model holds (a bowl with curved flanks) the nearest model's bias is in ``se_depth``
+        through the pooled misfit, but not in the other errors: on parabolic and quartic bowls
+        ±2·se held the flank angles in 19–68 % of frames (``benchmarks/coverage_grooves.py``).
     flank_angle_left, flank_angle_right : ndarray (F,)
         Angle between each flank and the surface line where they meet, degrees (90: a
         vertical wall; a circular U shallower than its radius: the arc's angle there), within
@@ -335,6 +366,10 @@ class GrooveFits:
     rounding_prior : (float, float) or None
         The prior the V's tip rounding was settled with: the share of sharp tips and the
         largest radius, mm (``rounding`` pooled or given); None: each frame's own rule.
+    misfit : dict or None
+        The variance of the section's residual at the bottom beyond the noise that
+        ``se_depth`` took in, mm², by model name (``misfit`` pooled: the models chosen in at
+        least 30 of the frames pooled; or given); None: ``misfit="none"``.
     """
 
     x0: NDArray[np.float64]
@@ -366,6 +401,7 @@ class GrooveFits:
     frame: NDArray[np.int32]
     template: str = DEFAULTS["template"]
     rounding_prior: tuple[float, float] | None = None
+    misfit: dict[str, float] | None = None
 
     def __len__(self) -> int:
         return len(self.status)
@@ -390,9 +426,8 @@ class GrooveFits:
 
     def select(self, index: ArrayLike) -> GrooveFits:
         """The fits of a subset of frames (boolean mask or indices)."""
-        scalars = ("template", "rounding_prior")
-        arrays = {f.name: getattr(self, f.name)[index] for f in fields(self) if f.name not in scalars}
-        return GrooveFits(**arrays, template=self.template, rounding_prior=self.rounding_prior)
+        arrays = {f.name: getattr(self, f.name)[index] for f in fields(self) if f.name not in _CALL_FIELDS}
+        return GrooveFits(**arrays, template=self.template, rounding_prior=self.rounding_prior, misfit=self.misfit)
 
     def summary(self) -> str:
         """Width and depth statistics over the converged frames, the models fitted and the
@@ -419,15 +454,24 @@ class GrooveFits:
                     lines.append(f"  {name}: {v.mean():.{digits}f} ± {v.std():.{digits}f}{unit} ({len(v)} fits)")
             models = {k: v for k, v in self.model_counts().items() if v}
             lines.append("  models: " + ", ".join(f"{k} {v}" for k, v in models.items()))
-            if self.rounding_prior is not None:
-                share, r_max = self.rounding_prior
-                lines.append(
-                    f"  V tip rounding prior: {100 * share:.0f} % sharp, the rest rounded up to {1000 * r_max:.1f} µm"
-                )
+            lines += ["  " + line for line in self.pooled_lines()]
         bad = {k: v for k, v in self.counts().items() if v and k != "converged"}
         if bad:
             lines.append("  not fitted: " + ", ".join(f"{k} {v}" for k, v in bad.items()))
         return "\n".join(lines)
+
+    def pooled_lines(self) -> list[str]:
+        """What the call pooled over its frames, a line each, with units: the V tip-rounding
+        prior, and the misfit at the bottom that ``se_depth`` took in (as standard
+        deviations, by model; the models whose misfit is 0 are left out)."""
+        lines = []
+        if self.rounding_prior is not None:
+            share, r_max = self.rounding_prior
+            lines.append(f"V tip rounding prior: {100 * share:.0f} % sharp, the rest rounded up to {1000 * r_max:.1f} µm")
+        misfit = {k: v for k, v in (self.misfit or {}).items() if v > 0}
+        if misfit:
+            lines.append("bottom misfit in se_depth (sd): " + ", ".join(f"{k} {1000 * v**0.5:.1f} µm" for k, v in misfit.items()))
+        return lines
 
     def __repr__(self) -> str:
         return f"GrooveFits({len(self)} rows, {int(self.ok.sum())} converged)"
@@ -510,8 +554,8 @@ def fit_grooves(
     if frames is None or frames.ndim != 2 or len(frames) == 0:  # the core names a shape error
         return GrooveFits(**_core.fit_grooves(x, z, options), template=options.template)
     z = frames
-    # The blocks measure under the prior the whole call pools to (the same frames pooled).
-    prior, block_options = settled_rounding(x, z, options)
+    # The blocks measure under what the whole call pools to (the same frames pooled).
+    pooled, block_options = settled_pools(x, z, options)
     step = max(PROGRESS_BLOCK, -(-len(z) // 50))
     parts = []
     with _progress.bar(len(z), "frames", True, "groove fits") as shown:
@@ -523,24 +567,35 @@ def fit_grooves(
     merged: dict[str, Any] = {
         name: np.concatenate([p[name] for p in parts])  # type: ignore[literal-required]
         for name in parts[0]
-        if name != "rounding_prior"
+        if name not in _CALL_FIELDS
     }
-    return GrooveFits(**merged, template=options.template, rounding_prior=prior)
+    return GrooveFits(**merged, template=options.template, **pooled)
 
 
-def settled_rounding(
-    x: ArrayLike, frames: Any, options: GrooveOptions
-) -> tuple[tuple[float, float] | None, GrooveOptions]:
-    """For a call measured in parts (blocks, chunks): the rounding prior the whole call
-    pools to — fitted on the frames it pools, every k-th — and the options that measure each
-    part under it (``rounding`` given, or "frame" where too few V's pool). Other ``rounding``
-    options are returned as they are."""
-    if options.rounding != "pooled" or options.template == "tanh":
-        return (options.rounding if isinstance(options.rounding, tuple) else None), options
-    stride = max(1, -(-len(frames) // ROUNDING_POOLED_FRAMES))
-    sample = np.asarray(frames[::stride], dtype=np.float64)
-    prior = _core.fit_grooves(x, sample, options)["rounding_prior"] if len(sample) else None
-    return prior, options.with_changes({"rounding": prior if prior is not None else "frame"})
+def settled_pools(x: ArrayLike, frames: Any, options: GrooveOptions) -> tuple[dict[str, Any], GrooveOptions]:
+    """For a call measured in parts (blocks, chunks): what the whole call pools to — the
+    rounding prior and the misfit variances, fitted on the frames it pools, every k-th — as
+    the :class:`GrooveFits` fields ``rounding_prior`` and ``misfit``, and the options that
+    measure each part under them (given, or ``rounding="frame"`` where too few V's pool).
+    Options that pool nothing are returned as they are."""
+    # What the in-memory call gives where nothing is pooled: the given values, or none; a
+    # pooled misfit over no frames (or the tanh template's, which has no bottom residuals)
+    # has no model.
+    rounding = options.rounding if isinstance(options.rounding, tuple) else None
+    misfit = None if options.misfit == "none" else dict(options.misfit) if isinstance(options.misfit, tuple) else {}
+    pools = options.template != "tanh" and "pooled" in (options.rounding, options.misfit)
+    if pools and len(frames):
+        stride = max(1, -(-len(frames) // ROUNDING_POOLED_FRAMES))
+        sample = _core.fit_grooves(x, np.asarray(frames[::stride], dtype=np.float64), options)
+        changes: dict[str, Any] = {}
+        if options.rounding == "pooled":
+            rounding = sample["rounding_prior"]
+            changes["rounding"] = rounding if rounding is not None else "frame"
+        if options.misfit == "pooled":
+            misfit = sample["misfit"] or {}
+            changes["misfit"] = misfit
+        options = options.with_changes(changes)
+    return {"rounding_prior": rounding, "misfit": misfit}, options
 
 
 @dataclass(frozen=True, eq=False, repr=False)

@@ -365,9 +365,7 @@ class GrooveReport:
         bad = {k: v for k, v in f.counts().items() if v and k != "converged"}
         if bad:
             lines.append("  frames not fitted: " + ", ".join(f"{k} {v}" for k, v in bad.items()))
-        if f.rounding_prior is not None:
-            share, r_max = f.rounding_prior
-            lines.append(f"  V tip rounding prior: {100 * share:.0f} % sharp, the rest rounded up to {1000 * r_max:.1f} µm")
+        lines += ["  " + line for line in f.pooled_lines()]
         if self.suspect.any():
             lines.append(f"  fits left out as suspect (standard error far above the median): {int(self.suspect.sum())}")
         problem = self.matching_problem()

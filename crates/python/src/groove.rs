@@ -4,8 +4,8 @@
 use super::convert::{count, count_opt, enter, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::groove::{
-    fit_frames, view_frame, FitCriteria, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, RoundingPrior,
-    RoundingRule, TemplateKind, POOLED_FRAMES, SECTION_CRITERIA, TANH_CRITERIA,
+    fit_frames, view_frame, FitCriteria, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, MisfitPrior, MisfitRule,
+    RoundingPrior, RoundingRule, SectionModel, TemplateKind, POOLED_FRAMES, SECTION_CRITERIA, TANH_CRITERIA,
 };
 use machscan_core::kinematics::ValidReadings;
 use pyo3::exceptions::PyValueError;
@@ -44,6 +44,7 @@ struct Options {
     max_width: Option<f64>,
     max_depth: Option<f64>,
     rounding: Py<PyAny>,
+    misfit: Py<PyAny>,
 }
 
 /// The `rounding` option: "pooled", "frame" or a prior (share, r_max mm).
@@ -61,9 +62,54 @@ fn rounding_rule(py: Python<'_>, value: &Py<PyAny>) -> PyResult<RoundingRule> {
     )))
 }
 
+/// The `misfit` option: "pooled", "none" or variances by model name, mm² ((name, variance)
+/// pairs, as `machscan.GrooveOptions` keeps a mapping).
+fn misfit_rule(py: Python<'_>, value: &Py<PyAny>) -> PyResult<MisfitRule> {
+    let v = value.bind(py);
+    if let Ok(name) = v.extract::<String>() {
+        return MisfitRule::parse(&name).py();
+    }
+    let given = || -> PyResult<MisfitPrior> {
+        let mut prior = MisfitPrior::default();
+        for (name, variance) in v.extract::<Vec<(String, f64)>>()? {
+            let Some(model) = SectionModel::ALL.iter().find(|m| m.name() == name) else {
+                let names: Vec<&str> = SectionModel::ALL.iter().map(|m| m.name()).collect();
+                return Err(PyValueError::new_err(format!(
+                    "misfit: {name:?} is no section model (expected one of {})",
+                    names.join(", ")
+                )));
+            };
+            prior.variance[model.index()] = Some(variance);
+        }
+        Ok(prior)
+    };
+    match given() {
+        Ok(prior) => Ok(MisfitRule::Given(prior)),
+        Err(e) if e.is_instance_of::<PyValueError>(py) => Err(e),
+        Err(_) => Err(PyValueError::new_err(format!(
+            "misfit: expected \"pooled\", \"none\" or variances by model name (mm²), got {}",
+            v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
+        ))),
+    }
+}
+
+/// Misfit variances by model name, mm² (the models they were estimated or given for); None
+/// for none.
+fn misfit_dict<'py>(py: Python<'py>, prior: Option<&MisfitPrior>) -> PyResult<Option<Bound<'py, PyDict>>> {
+    let Some(prior) = prior else { return Ok(None) };
+    let d = PyDict::new(py);
+    for m in SectionModel::ALL {
+        if let Some(v) = prior.variance[m.index()] {
+            d.set_item(m.name(), v)?;
+        }
+    }
+    Ok(Some(d))
+}
+
 impl Options {
     fn core(self, py: Python<'_>) -> PyResult<GrooveOptions> {
         let rounding = rounding_rule(py, &self.rounding)?;
+        let misfit = misfit_rule(py, &self.misfit)?;
         let c = self.criteria;
         Ok(GrooveOptions {
             template: TemplateKind::parse(&self.template).py()?,
@@ -85,6 +131,7 @@ impl Options {
             select: GrooveSelect::parse(&self.select, count("index", self.index)?, self.near).py()?,
             limits: GrooveLimits { min_width: self.min_width, max_width: self.max_width, max_depth: self.max_depth },
             rounding,
+            misfit,
         })
     }
 }
@@ -131,6 +178,7 @@ fn groove_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("max_width", o.limits.max_width)?;
     d.set_item("max_depth", o.limits.max_depth)?;
     d.set_item("rounding", o.rounding.name())?;
+    d.set_item("misfit", o.misfit.name())?;
     Ok(d)
 }
 
@@ -207,6 +255,7 @@ fn fit_grooves<'py>(
     let d = PyDict::new(py);
     fit_arrays(py, &d, &rows.fits, &rows.frame)?;
     d.set_item("rounding_prior", rows.rounding_prior.map(|p| (p.share, p.r_max)))?;
+    d.set_item("misfit", misfit_dict(py, rows.misfit.as_ref())?)?;
     Ok(d)
 }
 
@@ -241,6 +290,11 @@ fn view_groove_frame<'py>(
         _ => None,
     };
     fit.set_item("rounding_prior", given)?;
+    let given = match &o.misfit {
+        MisfitRule::Given(p) => Some(p),
+        _ => None,
+    };
+    fit.set_item("misfit", misfit_dict(py, given)?)?;
     d.set_item("fit", fit)?;
     Ok(d)
 }

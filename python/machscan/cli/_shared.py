@@ -239,7 +239,7 @@ def _scan_arguments(p: argparse.ArgumentParser, *, optional: bool = False) -> No
 def _groove_arguments(p: argparse.ArgumentParser) -> None:
     """The groove inspection's options, shared by `grooves` and `batch grooves`; the defaults are
     InspectionOptions' (one source)."""
-    from machscan.grooves import Rounding, Select, Template
+    from machscan.grooves import Misfit, Rounding, Select, Template
     from machscan.inspection import InspectionOptions
 
     default = InspectionOptions()
@@ -281,6 +281,13 @@ def _groove_arguments(p: argparse.ArgumentParser) -> None:
         default=default.groove.rounding,
         help="a V's tip rounding, which one frame cannot tell from a sharp tip: a prior pooled over the scan's V's, "
         "or each frame on its own (default: %(default)s)",
+    )
+    p.add_argument(
+        "--misfit",
+        choices=get_args(Misfit),
+        default=default.groove.misfit,
+        help="the section's misfit at the groove's bottom in the depth's standard error: its variance pooled over "
+        "the scan's frames, or none (the models' errors alone) (default: %(default)s)",
     )
     p.add_argument("--index", type=int, default=default.groove.index, help="with --select left/right: which one (0: outermost)")
     p.add_argument("--near", type=float, default=default.groove.near, help="with --select nearest: x in the line, mm")
@@ -333,6 +340,7 @@ def _groove_options(args: argparse.Namespace) -> InspectionOptions:
             nominal_width=args.nominal_width,
             select=args.select,
             rounding=args.rounding,
+            misfit=args.misfit,
             index=args.index,
             near=args.near,
             min_width=args.min_width,

@@ -2,8 +2,10 @@
 //! models of `measure.rs` by default, the paper's tanh template of `tanh.rs`), the frames in
 //! parallel, and the view of one frame for figures.
 use super::measure::{measure_grooves, MeasureSettings};
+use super::misfit::{BottomResidual, MisfitPrior};
 use super::options::{
-    window_range, FitModel, GrooveFit, GrooveOptions, GrooveSelect, GrooveStatus, RoundingRule, TemplateKind,
+    window_range, FitModel, GrooveFit, GrooveOptions, GrooveSelect, GrooveStatus, MisfitRule, RoundingRule,
+    TemplateKind,
 };
 use super::rounding::{pooled_stride, RoundingCurve, RoundingPrior};
 use super::section::SectionModel;
@@ -144,6 +146,9 @@ pub fn view_frame(x: &[f64], z: &[f64], o: &GrooveOptions) -> Result<FrameView> 
     if let RoundingRule::Given(prior) = o.rounding {
         fit.settle_rounding(&prior);
     }
+    if let MisfitRule::Given(prior) = o.misfit {
+        fit.settle_misfit(&prior);
+    }
     let Some(d) = detail else { return Ok(empty(fit)) };
     // Levelled as `v = −s·x + c·z − b·c`: the absolute levelled height adds b·c back.
     let lift = d.b * d.cos;
@@ -168,12 +173,16 @@ pub struct GrooveRows {
     pub fits: Vec<GrooveFit>,
     /// The prior the V's tip rounding was settled with (None: each frame's own rule).
     pub rounding_prior: Option<RoundingPrior>,
+    /// The misfit variances the depths' errors were settled with (None: `MisfitRule::None`).
+    pub misfit: Option<MisfitPrior>,
 }
 
 /// All frames of `z (F, N)` row-major sharing the abscissae `x (N,)`, in parallel. Each frame
 /// is fitted on its own, so the result is identical whatever the thread count; then, with
 /// `RoundingRule::Pooled`, the V's depths are settled under the prior their profiles pool to
-/// (from every k-th frame, [`pooled_stride`]), or under a given one.
+/// (from every k-th frame, [`pooled_stride`]), or under a given one; and with
+/// `MisfitRule::Pooled` the depths' errors take the misfit their bottoms pool to (the same
+/// frames), or a given one.
 pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<GrooveRows> {
     options.validate()?;
     let n = x.len();
@@ -228,6 +237,25 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Groov
     };
     if let Some(prior) = rows.rounding_prior {
         rows.fits.par_iter_mut().for_each(|f| f.settle_rounding(&prior));
+    }
+    // The misfit after the rounding: a depth the rounding settles has no bottom residual.
+    rows.misfit = match options.misfit {
+        MisfitRule::Pooled => {
+            let stride = pooled_stride(z.len() / n) as u32;
+            let residuals: Vec<BottomResidual> = rows
+                .frame
+                .iter()
+                .zip(&rows.fits)
+                .filter(|(f, _)| *f % stride == 0)
+                .filter_map(|(_, g)| g.misfit)
+                .collect();
+            Some(MisfitPrior::pooled(&residuals))
+        }
+        MisfitRule::None => None,
+        MisfitRule::Given(prior) => Some(prior),
+    };
+    if let Some(prior) = rows.misfit {
+        rows.fits.par_iter_mut().for_each(|f| f.settle_misfit(&prior));
     }
     Ok(rows)
 }

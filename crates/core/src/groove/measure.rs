@@ -24,6 +24,7 @@
 //!    groove; each with a standard error that holds what the fit leaves uncertain (the
 //!    surface line, the model choice, flanks without readings, a rounding too small to see:
 //!    [`measures_with_errors`]).
+use super::misfit::BottomResidual;
 use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
 use super::rounding::RoundingCurve;
@@ -2011,6 +2012,16 @@ fn fit_groove(
     if depth < o.min_depth {
         return (GrooveFit::failed(GrooveStatus::NoGroove, us.len()), shape);
     }
+    // The section's residual at its bottom, for the misfit the call pools (where no rounding
+    // curve settles a V's depth: its tip's shape is that curve's to weigh). The bottom of a
+    // leaning section lies γ·D aside of its upright place.
+    let misfit = if rounding.is_none() {
+        let beams = Beams::new(p, lv.sin, lv.cos, chosen.gamma);
+        let bottom = p.stretched(0.5 * (p.cl + p.cr)) - chosen.gamma * p.d;
+        BottomResidual::at(chosen.model, &us, |i| -beams.hit(us[i], vs[i]).lambda, bottom, pitch, sigma)
+    } else {
+        None
+    };
     let (uc, vc) = (0.5 * (xl + xr), lv.b * lv.cos);
     let bound = |i: usize, end: usize| (i != end).then(|| lv.u[i]);
     let (step, se_step) = surface_step(lv, lv.u[il], lv.u[ir], (bound(within.0, 0), bound(within.1, n - 1)), sigma);
@@ -2044,6 +2055,7 @@ fn fit_groove(
         model: super::options::FitModel::Section(chosen.model),
         groove: -1,
         rounding,
+        misfit,
     };
     (fit, shape)
 }

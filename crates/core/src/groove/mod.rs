@@ -4,6 +4,7 @@
 //! The formulas: docs/grooves.md.
 mod fit;
 mod measure;
+mod misfit;
 mod options;
 mod robust;
 mod rounding;
@@ -13,9 +14,10 @@ mod template;
 
 pub use fit::{fit_frame, fit_frame_grooves, fit_frames, view_frame, FrameView, GrooveRows};
 pub use measure::SECTION_CRITERIA;
+pub use misfit::{BottomResidual, MisfitPrior};
 pub use options::{
-    FitCriteria, FitModel, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, GrooveStatus, RoundingRule,
-    TemplateKind, TANH_CRITERIA,
+    FitCriteria, FitModel, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, GrooveStatus, MisfitRule,
+    RoundingRule, TemplateKind, TANH_CRITERIA,
 };
 pub use rounding::{pooled_stride, RoundingCurve, RoundingPosterior, RoundingPrior, MIN_POOLED, POOLED_FRAMES};
 pub use section::{Beams, Pieces, SectionModel};

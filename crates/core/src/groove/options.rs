@@ -291,6 +291,47 @@ pub struct GrooveOptions {
     pub limits: GrooveLimits,
     /// How a V's tip rounding is settled ([`RoundingRule`]).
     pub rounding: RoundingRule,
+    /// How the misfit of the chosen section at the bottom enters the depth's error
+    /// ([`MisfitRule`]).
+    pub misfit: MisfitRule,
+}
+
+/// How the misfit of a section at its groove's bottom, which one frame cannot tell from its
+/// noise, enters the depth's standard error (docs/grooves.md, step 11; [`super::misfit`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum MisfitRule {
+    /// Its variance pooled over the call's frames per model chosen (from every k-th frame, as
+    /// the rounding prior); a model chosen in fewer than [`super::misfit::MIN_POOLED`] of them
+    /// is left as it is.
+    #[default]
+    Pooled,
+    /// None: the errors of the models alone.
+    None,
+    /// These variances (a pooled call's, to measure its parts or one frame alike).
+    Given(super::MisfitPrior),
+}
+
+impl MisfitRule {
+    /// "pooled" or "none" (given variances have no name).
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "pooled" => Ok(Self::Pooled),
+            "none" => Ok(Self::None),
+            other => Err(Error::invalid(
+                "misfit",
+                format!("expected \"pooled\", \"none\" or variances by model name (mm²), got {other:?}"),
+            )),
+        }
+    }
+
+    /// The name [`MisfitRule::parse`] reads; "given" for given variances.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Pooled => "pooled",
+            Self::None => "none",
+            Self::Given(_) => "given",
+        }
+    }
 }
 
 /// How a V's tip rounding, which one frame's readings cannot tell from a sharp tip, is
@@ -348,6 +389,7 @@ impl Default for GrooveOptions {
             select: GrooveSelect::Deepest,
             limits: GrooveLimits::default(),
             rounding: RoundingRule::Pooled,
+            misfit: MisfitRule::Pooled,
         }
     }
 }
@@ -388,6 +430,16 @@ impl GrooveOptions {
             }
             if !(p.r_max.is_finite() && p.r_max >= 0.0) {
                 return Err(Error::invalid("rounding", format!("r_max must be a radius >= 0 mm, got {}", p.r_max)));
+            }
+        }
+        if let MisfitRule::Given(m) = self.misfit {
+            for (model, v) in SectionModel::ALL.iter().zip(m.variance) {
+                if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+                    return Err(Error::invalid(
+                        "misfit",
+                        format!("the variance of {:?} must be >= 0 mm², got {v}", model.name()),
+                    ));
+                }
             }
         }
         self.criteria.check()
@@ -445,6 +497,9 @@ pub struct GrooveFit {
     /// A V's χ² profile over its tip radius (V's and round V's of the default call), for the
     /// prior the call pools over its frames.
     pub rounding: Option<super::rounding::RoundingCurve>,
+    /// The chosen section's residual at the bottom (section models, where no rounding curve
+    /// settles the depth), for the misfit the call pools over its frames.
+    pub misfit: Option<super::misfit::BottomResidual>,
 }
 
 impl GrooveFit {
@@ -477,6 +532,7 @@ impl GrooveFit {
         model: FitModel::None,
         groove: -1,
         rounding: None,
+        misfit: None,
     };
 
     /// The depth of a V with a rounding profile as its posterior under `prior` says (its
@@ -484,6 +540,14 @@ impl GrooveFit {
     pub fn settle_rounding(&mut self, prior: &super::RoundingPrior) {
         if let Some(p) = self.rounding.and_then(|c| c.posterior(prior)) {
             (self.depth, self.se_depth) = (p.depth, p.se_depth);
+        }
+    }
+
+    /// The depth's standard error with the misfit `prior` gives its bottom residual (unchanged
+    /// without one).
+    pub fn settle_misfit(&mut self, prior: &super::MisfitPrior) {
+        if let Some(b) = self.misfit {
+            self.se_depth = (self.se_depth * self.se_depth + b.depth_variance(prior)).sqrt();
         }
     }
 

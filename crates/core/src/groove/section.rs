@@ -259,7 +259,7 @@ impl Pieces {
     /// Where an abscissa of the unstretched section lies on the section (the identity but
     /// for the elliptic U).
     #[inline(always)]
-    fn stretched(&self, u: f64) -> f64 {
+    pub(super) fn stretched(&self, u: f64) -> f64 {
         if self.k == 1.0 {
             u
         } else {

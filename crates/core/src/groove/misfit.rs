@@ -1,0 +1,204 @@
+//! The misfit of the chosen section at a groove's bottom, pooled over the frames of one call
+//! (docs/grooves.md, step 11).
+//!
+//! The standard errors are those of the models fitted. A section none of them holds (a bowl
+//! with curved flanks, a beam's profile) is measured as the nearest model's, and that model's
+//! bias is not in them: on parabolic bowls ±2·se had held the depth in 59 % of frames. To first
+//! order the depth's bias is the systematic residual at the bottom (the true section is the
+//! fit plus it, and the depth is read at the bottom's minimum), which one frame estimates
+//! about as noisily as the bias itself. The frames of one scan share a tool, so across them
+//! the misfit is a variance the call can estimate: each frame keeps the residual a quadratic
+//! gives at its bottom and that residual's noise variance ([`BottomResidual`]); per model
+//! chosen, the call estimates the variance τ² of the true residuals (a random-effects
+//! variance, median-based so that a few failed frames do not set it), and each frame's depth
+//! variance takes its residual's posterior second moment under N(0, τ²). Where the models
+//! hold the section τ² is 0 and nothing changes.
+//!
+//! Why not a crate: a median-matching bisection over a few thousand pairs, and a 3 × 3 solve.
+
+use super::section::SectionModel;
+
+/// Fewest frames of one model the misfit variance is estimated from; below, that model's
+/// frames keep their errors as they are.
+pub const MIN_POOLED: usize = 30;
+
+/// The readings the bottom's residual is read from: within this many reading pitches of the
+/// bottom (a quadratic over nine readings: wide enough to be steady, narrow enough to follow
+/// a bottom's curvature that the model lacks).
+const REACH_PITCHES: f64 = 4.0;
+
+/// Fewest readings for the quadratic (three parameters).
+const MIN_READINGS: usize = 5;
+
+/// The median of χ² with one degree of freedom.
+const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_7;
+
+/// One fit's residual at its bottom (readings minus the section, along the beam, from a
+/// quadratic through the residuals near it), its noise variance (mm²), and the model fitted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BottomResidual {
+    pub model: SectionModel,
+    pub residual: f64,
+    pub variance: f64,
+}
+
+/// The variance of the true bottom residuals, per section model (mm², by
+/// [`SectionModel::index`]; None: not estimated, the model's frames unchanged).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MisfitPrior {
+    pub variance: [Option<f64>; 5],
+}
+
+impl BottomResidual {
+    /// The residual at `bottom` of a quadratic fitted to the `residuals` of the readings at
+    /// `u` within [`REACH_PITCHES`] of it, with its variance under noise `sigma`; None with
+    /// fewer than [`MIN_READINGS`] there.
+    pub(super) fn at(
+        model: SectionModel,
+        u: &[f64],
+        residual: impl Fn(usize) -> f64,
+        bottom: f64,
+        pitch: f64,
+        sigma: f64,
+    ) -> Option<Self> {
+        let reach = REACH_PITCHES * pitch;
+        let (mut a, mut b, mut m) = (nalgebra::Matrix3::<f64>::zeros(), nalgebra::Vector3::<f64>::zeros(), 0);
+        for (i, &ui) in u.iter().enumerate() {
+            let du = ui - bottom;
+            if du.abs() <= reach {
+                // Scaled by the reach, so that the normal equations stay well conditioned.
+                let t = du / reach;
+                let row = nalgebra::Vector3::new(1.0, t, t * t);
+                a += row * row.transpose();
+                b += row * residual(i);
+                m += 1;
+            }
+        }
+        if m < MIN_READINGS {
+            return None;
+        }
+        let inv = a.try_inverse()?;
+        let coef = inv * b;
+        let variance = sigma * sigma * inv[(0, 0)];
+        (coef[0].is_finite() && variance.is_finite() && variance > 0.0).then_some(BottomResidual {
+            model,
+            residual: coef[0],
+            variance,
+        })
+    }
+
+    /// The depth variance the misfit adds under `prior`: the posterior second moment of the
+    /// true residual, B²·r² + B·v with B = τ²/(τ² + v) (0 where τ² is 0 or not estimated).
+    pub fn depth_variance(&self, prior: &MisfitPrior) -> f64 {
+        match prior.variance[self.model.index()] {
+            Some(tau2) if tau2 > 0.0 => {
+                let b = tau2 / (tau2 + self.variance);
+                b * b * self.residual * self.residual + b * self.variance
+            }
+            _ => 0.0,
+        }
+    }
+}
+
+impl MisfitPrior {
+    /// The misfit variance of each model over these residuals: per model with at least
+    /// [`MIN_POOLED`] of them, the τ² ≥ 0 at which the median of r²/(v + τ²) is χ²₁'s median
+    /// (0 where it is below that already: the residuals are the noise's).
+    pub fn pooled(residuals: &[BottomResidual]) -> Self {
+        let mut prior = MisfitPrior::default();
+        for model in SectionModel::ALL {
+            let pairs: Vec<(f64, f64)> =
+                residuals.iter().filter(|r| r.model == model).map(|r| (r.residual * r.residual, r.variance)).collect();
+            if pairs.len() >= MIN_POOLED {
+                prior.variance[model.index()] = Some(misfit_variance(&pairs));
+            }
+        }
+        prior
+    }
+}
+
+/// The τ² of [`MisfitPrior::pooled`] for pairs (r², v): bisection, since the median of
+/// r²/(v + τ²) falls as τ² grows.
+fn misfit_variance(pairs: &[(f64, f64)]) -> f64 {
+    let mut scratch: Vec<f64> = Vec::with_capacity(pairs.len());
+    let mut median_at = |tau2: f64| {
+        scratch.clear();
+        scratch.extend(pairs.iter().map(|&(r2, v)| r2 / (v + tau2)));
+        let mid = scratch.len() / 2;
+        *scratch.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    if median_at(0.0) <= CHI2_1_MEDIAN {
+        return 0.0;
+    }
+    // At τ² = max r² / median every ratio is below the median sought.
+    let (mut lo, mut hi) = (0.0, pairs.iter().map(|p| p.0).fold(0.0, f64::max) / CHI2_1_MEDIAN);
+    // Forty halvings: τ² to a 10⁻¹² of its bracket, far finer than its own spread.
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if median_at(mid) > CHI2_1_MEDIAN {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::{gauss, lcg};
+
+    fn residuals(n: usize, sd: f64, tau: f64, seed: &mut u64) -> Vec<BottomResidual> {
+        (0..n)
+            .map(|_| {
+                let v = sd * sd * (0.5 + lcg(seed));
+                BottomResidual {
+                    model: SectionModel::U,
+                    residual: tau * gauss(seed) + v.sqrt() * gauss(seed),
+                    variance: v,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn noise_alone_pools_to_no_misfit() {
+        let mut seed = 5;
+        let prior = MisfitPrior::pooled(&residuals(4000, 0.002, 0.0, &mut seed));
+        let tau2 = prior.variance[SectionModel::U.index()].unwrap();
+        // The sample median scatters by about 4 % at 4000: τ² within a tenth of v, mostly 0.
+        assert!(tau2 < 0.1 * 0.002f64.powi(2), "{tau2}");
+        assert_eq!(prior.variance[SectionModel::V.index()], None);
+    }
+
+    #[test]
+    fn a_systematic_misfit_pools_to_its_variance() {
+        let mut seed = 6;
+        let tau = 0.004;
+        let prior = MisfitPrior::pooled(&residuals(4000, 0.002, tau, &mut seed));
+        let tau2 = prior.variance[SectionModel::U.index()].unwrap();
+        assert!((tau2.sqrt() / tau - 1.0).abs() < 0.1, "{} against {tau}", tau2.sqrt());
+        // A frame's added variance: its residual's posterior second moment.
+        let r = BottomResidual { model: SectionModel::U, residual: 0.006, variance: 0.002f64.powi(2) };
+        let b = tau2 / (tau2 + r.variance);
+        assert!((r.depth_variance(&prior) - (b * b * 0.006f64.powi(2) + b * r.variance)).abs() < 1e-18);
+        // Fewer frames than MIN_POOLED: not estimated.
+        let few = MisfitPrior::pooled(&residuals(MIN_POOLED - 1, 0.002, tau, &mut seed));
+        assert_eq!(few.variance[SectionModel::U.index()], None);
+        assert_eq!(r.depth_variance(&few), 0.0);
+    }
+
+    #[test]
+    fn the_bottom_residual_is_the_quadratic_through_the_residuals() {
+        // Residuals 1 + 2t + 3t² (t in mm) at a 25 µm pitch: the quadratic's value at the
+        // bottom is 1, exactly, and its variance that of the intercept.
+        let u: Vec<f64> = (0..40).map(|i| (i as f64 - 20.0) * 0.025).collect();
+        let r = BottomResidual::at(SectionModel::Round, &u, |i| 1.0 + 2.0 * u[i] + 3.0 * u[i] * u[i], 0.0, 0.025, 0.01)
+            .unwrap();
+        assert!((r.residual - 1.0).abs() < 1e-12, "{r:?}");
+        // Nine readings within four pitches; a quadratic's intercept variance exceeds σ²/9.
+        assert!(r.variance > 1e-4 / 9.0 && r.variance < 1e-4, "{r:?}");
+        assert!(BottomResidual::at(SectionModel::Round, &u[..3], |_| 0.0, 0.0, 0.025, 0.01).is_none());
+    }
+}
