@@ -220,16 +220,10 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Groov
             rows.fits.extend(fits);
         }
     }
+    let stride = pooled_stride(z.len() / n) as u32;
     rows.rounding_prior = match options.rounding {
         RoundingRule::Pooled => {
-            let stride = pooled_stride(z.len() / n) as u32;
-            let curves: Vec<RoundingCurve> = rows
-                .frame
-                .iter()
-                .zip(&rows.fits)
-                .filter(|(f, _)| *f % stride == 0)
-                .filter_map(|(_, g)| g.rounding)
-                .collect();
+            let curves: Vec<RoundingCurve> = pooled_fits(&rows, stride).filter_map(|g| g.rounding).collect();
             RoundingPrior::pooled(&curves)
         }
         RoundingRule::Frame => None,
@@ -241,14 +235,7 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Groov
     // The misfit after the rounding: a depth the rounding settles has no bottom residual.
     rows.misfit = match options.misfit {
         MisfitRule::Pooled => {
-            let stride = pooled_stride(z.len() / n) as u32;
-            let residuals: Vec<BottomResidual> = rows
-                .frame
-                .iter()
-                .zip(&rows.fits)
-                .filter(|(f, _)| *f % stride == 0)
-                .filter_map(|(_, g)| g.misfit)
-                .collect();
+            let residuals: Vec<BottomResidual> = pooled_fits(&rows, stride).filter_map(|g| g.misfit).collect();
             Some(MisfitPrior::pooled(&residuals))
         }
         MisfitRule::None => None,
@@ -258,6 +245,12 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Groov
         rows.fits.par_iter_mut().for_each(|f| f.settle_misfit(&prior));
     }
     Ok(rows)
+}
+
+/// What a call pools over its frames is read from every `stride`-th frame: its rows (with
+/// `GrooveSelect::All`, each of its grooves).
+fn pooled_fits(rows: &GrooveRows, stride: u32) -> impl Iterator<Item = &GrooveFit> {
+    rows.frame.iter().zip(&rows.fits).filter(move |(f, _)| **f % stride == 0).map(|(_, g)| g)
 }
 
 #[cfg(test)]
