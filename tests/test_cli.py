@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,11 +13,15 @@ from machscan.cad import read_contours, read_contours_apt, read_contours_csv, wr
 from machscan.cli import main
 from machscan.inspection import inspect_grooves
 
+# The `machscan` command of the environment under test (the one pip installed beside this
+# interpreter), not whichever one PATH finds first: on a fresh machine PATH may have none.
+MACHSCAN = str(Path(sys.executable).with_name("machscan"))
+
 
 def test_help_and_version():
     out = subprocess.run([sys.executable, "-m", "machscan", "--help"], capture_output=True, text=True, check=True)
     assert "demo" in out.stdout and "grooves" in out.stdout
-    out = subprocess.run(["machscan", "--version"], capture_output=True, text=True, check=True)
+    out = subprocess.run([MACHSCAN, "--version"], capture_output=True, text=True, check=True)
     assert machscan.__version__ in out.stdout
 
 
@@ -31,7 +36,7 @@ def test_import_loads_no_optional_dependency():
 
 
 def test_demo_prints_both_tables(tmp_path):
-    out = subprocess.run(["machscan", "demo", "--out", str(tmp_path / "d")], capture_output=True, text=True, check=True)
+    out = subprocess.run([MACHSCAN, "demo", "--out", str(tmp_path / "d")], capture_output=True, text=True, check=True)
     assert "width (mm)" in out.stdout and "error (mm)" in out.stdout and "shares of the error" in out.stdout
     assert "robust sigma" in out.stdout
     for name in ("frames.csv", "widths.csv", "contour_errors.csv", "cloud.ply"):
