@@ -10,7 +10,7 @@ median |error| and the median standard error. Frame sets:
 - shapes the generators do not make, drawn here: V's with unequal flanks (30–60° left, 45–75°
   right), trapezoids with unequal flanks, U's whose walls are drafted by up to 5° either way
   (bottom radius 0.15–0.3 mm, walls 0.05–0.2 mm), half-ellipses cut below their axis (0.5–0.7 mm
-  across, 0.18–0.26 mm semi-axis down: a section no model has), gap-and-flush profiles (a V gap with the right
+  across, 0.18–0.26 mm semi-axis down: the elliptic U holds it, the U nearly), gap-and-flush profiles (a V gap with the right
   surface 0–50 µm above or below the left: the step), and bowls ``v = −d·(1 − |2u/w|^e)``, parabolic
   (e = 2) and quartic (e = 4), 0.35–0.7 mm wide and 0.08–0.3 mm deep (curved flanks, sections
   no model has), at a 20 µm pitch with 5 µm noise; and
@@ -90,7 +90,7 @@ def other_shapes(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, 
             a_l = a_r = math.degrees(math.atan2(wall, wall * math.tan(draft)))
             truth["bottom_radius"][k] = r
         elif kind == "half_ellipse":
-            # An elliptic section cut below its axis (no model has it: a ball cutter on a tilted
+            # An elliptic section cut below its axis (the elliptic U holds it: a ball cutter on a tilted
             # axis, or a beam's profile): semi-axes a across, b down.
             a, b, cut = rng.uniform(0.25, 0.35), rng.uniform(0.18, 0.26), rng.uniform(0.0, 0.06)
             left = right = a * math.sqrt(1 - (cut / b) ** 2)

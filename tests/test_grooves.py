@@ -954,6 +954,58 @@ def test_a_bowl_no_model_holds_states_its_depth_with_the_misfit_its_frames_pool(
     assert np.median(f.se_depth[f.ok] / f0.se_depth[f.ok]) < 1.02
 
 
+def half_ellipses(n, seed, pitch=0.02, noise=0.005):
+    """Elliptic sections cut a little below their axis (semi-axes 0.25–0.35 mm across,
+    0.18–0.26 mm down, axis 0–0.06 mm above the surface), 250 readings at 20 µm, 5 µm noise,
+    tilt ±0.05 rad: frames, and the exact flank angles (degrees) and bottom radii (a²/b, mm)."""
+    from machscan.synth.frames import _topmost
+
+    rng = np.random.default_rng(seed)
+    x = (np.arange(250) - 125) * pitch
+    z, angle, radius = np.empty((n, 250)), np.empty(n), np.empty(n)
+    for k in range(n):
+        a, b, cut = rng.uniform(0.25, 0.35), rng.uniform(0.18, 0.26), rng.uniform(0.0, 0.06)
+        half = a * np.sqrt(1 - (cut / b) ** 2)
+        u = np.concatenate([[-5.0], np.linspace(-half, half, 2001), [5.0]])
+        v = cut - b * np.sqrt(np.clip(1 - (u / a) ** 2, 0, 1))
+        v[[0, -1]] = 0.0
+        angle[k], radius[k] = np.degrees(np.arctan2(b * b * half, a * a * cut)), a * a / b
+        t, xc = rng.uniform(-0.05, 0.05), rng.uniform(-0.8, 0.8)
+        c, s = np.cos(t), np.sin(t)
+        z[k] = _topmost(xc + u * c - v * s, u * s + v * c, x) + noise * rng.standard_normal(250)
+    return x, z, angle, radius
+
+
+def test_a_circle_kept_over_an_ellipse_states_the_ellipse_it_may_be():
+    # Issue #35 §3: the U is kept over the elliptic U unless the ellipse fits clearly better,
+    # so on ellipses a little wider than deep some frames are measured as circles, whose
+    # errors (k = 1 fixed) left out the stretch. Measured before the change
+    # (coverage_grooves.py, 1000 frames): ±2·se held the half-ellipses' flank angles in 90 %,
+    # radii in 90 %; on the U-chosen frames alone in about half.
+    x, z, angle, radius = half_ellipses(400, 5)
+    pooled, alone = machscan.fit_grooves(x, z), machscan.fit_grooves(x, z, misfit="none")
+    assert pooled.misfit["u:flank_angle_left"] > 1.0, pooled.misfit  # above (1°)²
+    np.testing.assert_array_equal(pooled.flank_angle_left, alone.flank_angle_left)
+    u = pooled.ok & (pooled.model == GrooveModel.U)
+    assert u.sum() >= 20, u.sum()
+    # On this set (seed 5): angles 89 → 95 % of all frames (U's 50 → 85 %), radii 88 → 96 %
+    # (U's 50 → 97 %).
+    for values, truth in (("flank_angle_left", angle), ("bottom_radius", radius)):
+        e = np.abs(getattr(pooled, values) - truth)
+        se_alone, se = getattr(alone, "se_" + values), getattr(pooled, "se_" + values)
+        held_alone, held = np.mean((e <= 2 * se_alone)[pooled.ok]), np.mean((e <= 2 * se)[pooled.ok])
+        assert held_alone < 0.91 and held >= 0.93, (values, held_alone, held)
+        assert np.mean((e <= 2 * se_alone)[u]) < 0.6 and np.mean((e <= 2 * se)[u]) >= 0.8, values
+    # Only the U's errors move.
+    np.testing.assert_array_equal(pooled.se_width[~u], alone.se_width[~u])
+    assert "U against the ellipse" in pooled.summary() and "°" in pooled.summary()
+    # Circles: the ellipse's differences are the noise's, and no U's error moves.
+    g = synth.groove_frames("u", 400, seed=2)
+    f, f0 = machscan.fit_grooves(g.x, g.z), machscan.fit_grooves(g.x, g.z, misfit="none")
+    assert all(v == 0.0 for k, v in f.misfit.items() if k.startswith("u:")), f.misfit
+    np.testing.assert_array_equal(f.se_flank_angle_left, f0.se_flank_angle_left)
+
+
 def test_a_pooled_misfit_is_the_same_in_blocks_chunks_and_one_frame():
     import dask.array as da
 
@@ -967,7 +1019,8 @@ def test_a_pooled_misfit_is_the_same_in_blocks_chunks_and_one_frame():
     chunked = machscan.dask.fit_grooves(x, da.from_array(z, chunks=(40, -1))).compute()
     for other in (blocks, given, chunked):
         assert other.misfit == whole.misfit
-        np.testing.assert_array_equal(other.se_depth, whole.se_depth)
+        for se in ("se_depth", "se_width", "se_x0", "se_flank_angle_left", "se_bottom_radius"):
+            np.testing.assert_array_equal(getattr(other, se), getattr(whole, se))
     # One frame pools nothing: given the call's misfit, the view states the call's error.
     k = int(np.flatnonzero(whole.ok & (whole.model == GrooveModel.U))[0])
     view = machscan.level_groove_frame(x, z[k], misfit=whole.misfit)
@@ -985,6 +1038,8 @@ def test_a_pooled_misfit_is_the_same_in_blocks_chunks_and_one_frame():
         ({"u": -1e-6}, "must be >= 0"),
         ({"u": np.nan}, "must be >= 0"),
         ({"bowl": 1e-6}, "no section model"),
+        ({"u:slope": 1e-6}, "no section model"),
+        ({"u:width": -1e-6}, "must be >= 0"),
         (0.5, "expected"),
         (None, "expected"),
     ],

@@ -66,9 +66,9 @@ Select = Literal["deepest", "left", "right", "nearest", "all"]
 #: own (or, as the option's value, a prior (share, r_max mm) given).
 Rounding = Literal["pooled", "frame"]
 
-#: How the misfit of the chosen section at the groove's bottom enters the depth's error: its
-#: variance pooled over the call's frames, or none (or, as the option's value, variances by
-#: model name, mm², given).
+#: How the misfit of the chosen section (at the groove's bottom; a U's against the ellipse)
+#: enters the errors: its variance pooled over the call's frames, or none (or, as the option's
+#: value, variances by name given).
 Misfit = Literal["pooled", "none"]
 
 #: Most frames a pooled rounding prior is estimated from (every k-th frame of a call).
@@ -76,6 +76,16 @@ ROUNDING_POOLED_FRAMES: int = _core.ROUNDING_POOLED_FRAMES
 
 #: The fields of :class:`GrooveFits` that are one value for the call, not a row each.
 _CALL_FIELDS = ("template", "rounding_prior", "misfit")
+
+
+def _misfit_sd(measure: str, variance: float) -> str:
+    """A pooled misfit variance of `measure` as a standard deviation with its unit."""
+    sd = variance**0.5
+    if measure.startswith("flank_angle"):
+        return f"{measure} {sd:.2f}°"
+    if measure == "area":
+        return f"{measure} {sd:.4g} mm²"
+    return f"{measure} {1000 * sd:.1f} µm"
 
 
 @dataclass(frozen=True)
@@ -173,17 +183,21 @@ class GrooveOptions:
         says which; below 30 V's, each frame's own rule). "frame": each frame on its own (the
         Akaike-weighted mean of the sharp and the round V). ``(share, r_max)``: that prior (a
         process the plant knows, or a pooled call's, to measure one frame alike).
-    misfit : "pooled", "none" or {model: variance}
-        How the misfit of the chosen section at the groove's bottom enters ``se_depth``. A
-        section no model holds (a bowl with curved flanks) is measured as the nearest model's,
-        whose bias one frame's readings barely show. "pooled": per model chosen, the variance
-        of the residual at the bottom beyond the noise, estimated over the call's frames (the
-        frames pooled for ``rounding``; a model chosen in fewer than 30 of them is left as it
-        is); each frame's ``se_depth`` takes its own residual's share of it
+    misfit : "pooled", "none" or {name: variance}
+        How the misfit of the chosen section enters the errors. A section no model holds (a
+        bowl with curved flanks) is measured as the nearest model's, whose bias one frame's
+        readings barely show; and a U is kept over the ellipse unless the ellipse fits clearly
+        better, so a section a little wider than deep is measured as a circle. "pooled":
+        estimated over the call's frames (the frames pooled for ``rounding``; from at least 30
+        of them): per model chosen, the variance of the residual at the bottom beyond the
+        noise, which each frame's ``se_depth`` takes its own residual's share of; and per
+        measure, the variance of the ellipse's value less the U's beyond what the noise gives
+        it, which each U's errors take their own difference's share of
         (:attr:`GrooveFits.misfit` says what was pooled; 0 where the models hold the section).
-        "none": the models' errors alone. ``{"u": 4e-6, ...}``: those variances, mm² (a pooled
-        call's, to measure one frame alike). V's whose depth the rounding settles are left to
-        it.
+        "none": the models' errors alone. ``{"u": 4e-6, "u:flank_angle_left": 2.5, ...}``:
+        those variances, by model name in mm², by ``"u:"`` and a measure in its unit squared (a
+        pooled call's, to measure one frame alike). V's whose depth the rounding settles are
+        left to it.
 
     Examples
     --------
@@ -229,13 +243,14 @@ class GrooveOptions:
                 ) from None
             object.__setattr__(self, "rounding", (share, r_max))
         if not isinstance(self.misfit, str):
-            # Variances by model name as (name, mm²) pairs, so that the options stay hashable;
+            # Variances by name as (name, variance) pairs, so that the options stay hashable;
             # the core checks the names and values.
             try:
                 pairs = tuple((str(k), float(v)) for k, v in dict(self.misfit).items())
             except (TypeError, ValueError):
                 raise ValueError(
-                    f'misfit: expected "pooled", "none" or variances by model name (mm²), got {self.misfit!r}'
+                    'misfit: expected "pooled", "none" or variances by name (a model in mm², "u:" and a'
+                    f" measure in its unit squared), got {self.misfit!r}"
                 ) from None
             object.__setattr__(self, "misfit", pairs)
 
@@ -323,11 +338,12 @@ class GrooveFits:
         classical ``σ̂² (JᵀJ)⁻¹``, scaled by Student's t for its m − p degrees of freedom, and
         the HC3 sandwich), the surface line's, the spread of the other models fitted by their
         Akaike weights, and for an edge between two readings the gap it may lie in
-        (``docs/grooves.md``, step 11); ``se_depth`` also the misfit the call's bottoms pool to
-        (``misfit``). value ± 2·se is meant to hold the truth 95 % of the time. On a section no
-        model holds (a bowl with curved flanks) the nearest model's bias is in ``se_depth``
-        through the pooled misfit, but not in the other errors: on parabolic and quartic bowls
-        ±2·se held the flank angles in 19–68 % of frames (``benchmarks/coverage_grooves.py``).
+        (``docs/grooves.md``, step 11); and the misfit the call pools (``misfit``: ``se_depth``
+        the bottoms', a U's errors the ellipse's). value ± 2·se is meant to hold the truth 95 %
+        of the time. On a section no model holds (a bowl with curved flanks) the nearest model's
+        bias is in ``se_depth`` through the pooled misfit, but not in the other errors: on
+        parabolic and quartic bowls ±2·se held the flank angles in 19–68 % of frames
+        (``benchmarks/coverage_grooves.py``).
     flank_angle_left, flank_angle_right : ndarray (F,)
         Angle between each flank and the surface line where they meet, degrees (90: a
         vertical wall; a circular U shallower than its radius: the arc's angle there), within
@@ -367,9 +383,13 @@ class GrooveFits:
         The prior the V's tip rounding was settled with: the share of sharp tips and the
         largest radius, mm (``rounding`` pooled or given); None: each frame's own rule.
     misfit : dict or None
-        The variance of the section's residual at the bottom beyond the noise that
-        ``se_depth`` took in, mm², by model name (``misfit`` pooled: the models chosen in at
-        least 30 of the frames pooled; or given); None: ``misfit="none"``.
+        The misfit variances the errors took in (``misfit`` pooled: from at least 30 of the
+        frames pooled; or given): by model name, the section's residual at the bottom beyond the
+        noise (in ``se_depth``), mm²; by ``"u:"`` and a measure (``"u:width"``, ``"u:depth"``,
+        ``"u:x0"``, ``"u:flank_angle_left"``, ``"u:flank_angle_right"``, ``"u:area"``,
+        ``"u:bottom_radius"``), the ellipse's value less the U's beyond the noise (in a U's
+        ``se_<measure>``), in the measure's unit squared (mm², degrees², mm⁴ for the area);
+        None: ``misfit="none"``.
     """
 
     x0: NDArray[np.float64]
@@ -462,15 +482,20 @@ class GrooveFits:
 
     def pooled_lines(self) -> list[str]:
         """What the call pooled over its frames, a line each, with units: the V tip-rounding
-        prior, and the misfit at the bottom that ``se_depth`` took in (as standard
-        deviations, by model; the models whose misfit is 0 are left out)."""
+        prior, the misfit at the bottom that ``se_depth`` took in and a U's against the
+        ellipse (as standard deviations, by model and by measure; those that are 0 are left
+        out)."""
         lines = []
         if self.rounding_prior is not None:
             share, r_max = self.rounding_prior
             lines.append(f"V tip rounding prior: {100 * share:.0f} % sharp, the rest rounded up to {1000 * r_max:.1f} µm")
         misfit = {k: v for k, v in (self.misfit or {}).items() if v > 0}
-        if misfit:
-            lines.append("bottom misfit in se_depth (sd): " + ", ".join(f"{k} {1000 * v**0.5:.1f} µm" for k, v in misfit.items()))
+        bottom = {k: v for k, v in misfit.items() if ":" not in k}
+        if bottom:
+            lines.append("bottom misfit in se_depth (sd): " + ", ".join(f"{k} {1000 * v**0.5:.1f} µm" for k, v in bottom.items()))
+        stretch = [_misfit_sd(k.removeprefix("u:"), v) for k, v in misfit.items() if k.startswith("u:")]
+        if stretch:
+            lines.append("U against the ellipse in its errors (sd): " + ", ".join(stretch))
         return lines
 
     def __repr__(self) -> str:
@@ -592,7 +617,7 @@ def settled_pools(x: ArrayLike, frames: Any, options: GrooveOptions) -> tuple[di
             rounding = sample["rounding_prior"]
             changes["rounding"] = rounding if rounding is not None else "frame"
         if options.misfit == "pooled":
-            misfit = sample["misfit"] or {}
+            misfit = sample["misfit"]
             changes["misfit"] = misfit
         options = options.with_changes(changes)
     return {"rounding_prior": rounding, "misfit": misfit}, options

@@ -5,7 +5,8 @@ use super::convert::{count, count_opt, enter, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::groove::{
     fit_frames, view_frame, FitCriteria, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, MisfitPrior, MisfitRule,
-    RoundingPrior, RoundingRule, SectionModel, TemplateKind, POOLED_FRAMES, SECTION_CRITERIA, TANH_CRITERIA,
+    RoundingPrior, RoundingRule, SectionModel, TemplateKind, POOLED_FRAMES, SECTION_CRITERIA, STRETCH_MEASURES,
+    TANH_CRITERIA,
 };
 use machscan_core::kinematics::ValidReadings;
 use pyo3::exceptions::PyValueError;
@@ -62,35 +63,37 @@ fn rounding_rule(py: Python<'_>, value: &Py<PyAny>) -> PyResult<RoundingRule> {
     )))
 }
 
-/// The `misfit` option: "pooled", "none" or variances by model name, mm² ((name, variance)
+/// The `misfit` option: "pooled", "none" or variances by model name (mm²) and by "u:" and a
+/// measure (its unit squared) ((name, variance)
 /// pairs, as `machscan.GrooveOptions` keeps a mapping).
 fn misfit_rule(py: Python<'_>, value: &Py<PyAny>) -> PyResult<MisfitRule> {
     let v = value.bind(py);
     if let Ok(name) = v.extract::<String>() {
         return MisfitRule::parse(&name).py();
     }
-    let given = || -> PyResult<MisfitPrior> {
-        let mut prior = MisfitPrior::default();
-        for (name, variance) in v.extract::<Vec<(String, f64)>>()? {
-            let Some(model) = SectionModel::ALL.iter().find(|m| m.name() == name) else {
-                let names: Vec<&str> = SectionModel::ALL.iter().map(|m| m.name()).collect();
-                return Err(PyValueError::new_err(format!(
-                    "misfit: {name:?} is no section model (expected one of {})",
-                    names.join(", ")
-                )));
-            };
-            prior.variance[model.index()] = Some(variance);
-        }
-        Ok(prior)
-    };
-    match given() {
-        Ok(prior) => Ok(MisfitRule::Given(prior)),
-        Err(e) if e.is_instance_of::<PyValueError>(py) => Err(e),
-        Err(_) => Err(PyValueError::new_err(format!(
+    let Ok(pairs) = v.extract::<Vec<(String, f64)>>() else {
+        return Err(PyValueError::new_err(format!(
             "misfit: expected \"pooled\", \"none\" or variances by model name (mm²), got {}",
             v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
-        ))),
+        )));
+    };
+    let mut prior = MisfitPrior::default();
+    for (name, variance) in pairs {
+        if let Some(k) = name.strip_prefix("u:").and_then(|m| STRETCH_MEASURES.iter().position(|s| *s == m)) {
+            prior.stretch[k] = Some(variance);
+            continue;
+        }
+        let Some(model) = SectionModel::ALL.iter().find(|m| m.name() == name) else {
+            let names: Vec<&str> = SectionModel::ALL.iter().map(|m| m.name()).collect();
+            return Err(PyValueError::new_err(format!(
+                "misfit: {name:?} is no section model (expected one of {}) nor \"u:\" and a measure ({})",
+                names.join(", "),
+                STRETCH_MEASURES.join(", ")
+            )));
+        };
+        prior.variance[model.index()] = Some(variance);
     }
+    Ok(MisfitRule::Given(prior))
 }
 
 /// Misfit variances by model name, mm² (the models they were estimated or given for); None
@@ -101,6 +104,11 @@ fn misfit_dict<'py>(py: Python<'py>, prior: Option<&MisfitPrior>) -> PyResult<Op
     for m in SectionModel::ALL {
         if let Some(v) = prior.variance[m.index()] {
             d.set_item(m.name(), v)?;
+        }
+    }
+    for (name, v) in STRETCH_MEASURES.iter().zip(prior.stretch) {
+        if let Some(v) = v {
+            d.set_item(format!("u:{name}"), v)?;
         }
     }
     Ok(Some(d))

@@ -2,7 +2,7 @@
 //! models of `measure.rs` by default, the paper's tanh template of `tanh.rs`), the frames in
 //! parallel, and the view of one frame for figures.
 use super::measure::{measure_grooves, MeasureSettings};
-use super::misfit::{BottomResidual, MisfitPrior};
+use super::misfit::{BottomResidual, MisfitPrior, StretchDifference};
 use super::options::{
     window_range, FitModel, GrooveFit, GrooveOptions, GrooveSelect, GrooveStatus, MisfitRule, RoundingRule,
     TemplateKind,
@@ -236,7 +236,8 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Groov
     rows.misfit = match options.misfit {
         MisfitRule::Pooled => {
             let residuals: Vec<BottomResidual> = pooled_fits(&rows, stride).filter_map(|g| g.misfit).collect();
-            Some(MisfitPrior::pooled(&residuals))
+            let stretch: Vec<StretchDifference> = pooled_fits(&rows, stride).filter_map(|g| g.stretch).collect();
+            Some(MisfitPrior::pooled(&residuals, &stretch))
         }
         MisfitRule::None => None,
         MisfitRule::Given(prior) => Some(prior),

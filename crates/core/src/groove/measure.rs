@@ -24,7 +24,7 @@
 //!    groove; each with a standard error that holds what the fit leaves uncertain (the
 //!    surface line, the model choice, flanks without readings, a rounding too small to see:
 //!    [`measures_with_errors`]).
-use super::misfit::BottomResidual;
+use super::misfit::{BottomResidual, StretchDifference};
 use super::options::{GrooveFit, GrooveLimits, GrooveSelect, GrooveStatus};
 use super::robust::*;
 use super::rounding::RoundingCurve;
@@ -1018,6 +1018,41 @@ fn student_factor(nu: f64) -> f64 {
     (0.5 * t_quantile(2.0, nu)).powi(2)
 }
 
+/// The ellipse against the U where one of them was chosen and both were fitted upright, for the
+/// stretch misfit the call pools ([`super::misfit`]): the U is chosen over the ellipse on
+/// more evidence than Akaike's ([`ELLIPSE_EVIDENCE`]). The variances are the classical ones
+/// of both (the difference's, were the U right, is theirs less the U's), kept above a
+/// thousandth of the U's so that a measure both fix alike has no vanishing variance.
+fn stretch_difference(
+    chosen: &ModelFit,
+    fits: &[ModelFit],
+    r: &Readings<'_>,
+    var_surface: f64,
+    pitch: f64,
+) -> Option<StretchDifference> {
+    if !matches!(chosen.model, SectionModel::U | SectionModel::Ellipse) {
+        return None;
+    }
+    // Both upright: a leaning choice's rivals are, and a U and an ellipse that lean unlike
+    // differ by the lean too (on the generators' sheared U's the pool took it for a stretch
+    // misfit). A leaning U chosen takes its upright pair's difference.
+    let upright = |model: SectionModel| {
+        if chosen.model == model && chosen.gamma == 0.0 {
+            Some(chosen)
+        } else {
+            fits.iter().find(|f| f.model == model && f.gamma == 0.0)
+        }
+    };
+    let (fu, fe) = (upright(SectionModel::U)?, upright(SectionModel::Ellipse)?);
+    let (mu, me) = (Measures::values(fu.model, &fu.q, fu.gamma), Measures::values(fe.model, &fe.q, fe.gamma));
+    let (eu, ee) = (measure_errors(fu, r, var_surface, pitch, false), measure_errors(fe, r, var_surface, pitch, false));
+    Some(StretchDifference {
+        difference: std::array::from_fn(|k| me[k] - mu[k]),
+        variance: std::array::from_fn(|k| (ee[k] * ee[k] - eu[k] * eu[k]).max(1e-3 * eu[k] * eu[k])),
+        circle_chosen: chosen.model == SectionModel::U,
+    })
+}
+
 /// The measures of the chosen fit and their standard errors. For V's, depth and bottom
 /// radius are the Akaike-weighted means of the sharp and the round-bottomed V (a tip rounded
 /// by about a reading spacing is barely visible); every standard error includes the spread of
@@ -1841,6 +1876,7 @@ fn fit_groove(
     let var_surface = lv.line_variance(x_center, sigma);
     let (measures, mut se, cov, rounding) =
         measures_with_errors(&chosen, &fits, &r, sigma, var_surface, pitch, profile.as_mut());
+    let stretch = stretch_difference(&chosen, &fits, &r, var_surface, pitch);
     let (mut measures, mut var) = (measures, se.map(|e| e * e));
     // Where the flank lines meet the surface, the readings bracket them: between the beams of
     // the last reading within `thr` of the surface and of the first one deeper, where those
@@ -2056,6 +2092,7 @@ fn fit_groove(
         groove: -1,
         rounding,
         misfit,
+        stretch,
     };
     (fit, shape)
 }

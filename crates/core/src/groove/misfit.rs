@@ -14,9 +14,18 @@
 //! variance takes its residual's posterior second moment under N(0, τ²). Where the models
 //! hold the section τ² is 0 and nothing changes.
 //!
+//! The same pooling covers the one choice made on more evidence than Akaike's: the circle (U)
+//! kept over the ellipse unless the ellipse fits clearly better. A U chosen on a section a
+//! little wider than deep is the readings shrunk to a circle; its errors, conditional on
+//! k = 1, had held a half-ellipse's flank angles and radius in 90 % of frames. Where both were
+//! fitted each frame keeps, per measure, the ellipse's value less the U's and that difference's
+//! variance were the U right (the ellipse's variance less the U's: the U is the efficient one
+//! of a nested pair, Hausman 1978) ([`StretchDifference`]); the call pools the variance of the
+//! true differences per measure, and a U chosen takes their posterior second moment.
+//!
 //! Why not a crate: a median-matching bisection over a few thousand pairs, and a 3 × 3 solve.
 
-use super::section::SectionModel;
+use super::section::{SectionModel, MEASURES};
 
 /// Fewest frames of one model the misfit variance is estimated from; below, that model's
 /// frames keep their errors as they are.
@@ -43,10 +52,49 @@ pub struct BottomResidual {
 }
 
 /// The variance of the true bottom residuals, per section model (mm², by
-/// [`SectionModel::index`]; None: not estimated, the model's frames unchanged).
+/// [`SectionModel::index`]; None: not estimated, the model's frames unchanged), and of the true
+/// differences between the ellipse's measures and the U's, per measure (by the indices of
+/// [`super::section::Measures`], in each measure's unit squared: mm², degrees², mm⁴ for the
+/// area; None: not estimated, the U's unchanged).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MisfitPrior {
     pub variance: [Option<f64>; 5],
+    pub stretch: [Option<f64>; MEASURES],
+}
+
+/// The names of the measures the stretch misfit is pooled for (by the indices of
+/// [`super::section::Measures`]), as the result's fields; given or reported as "u:<name>".
+pub const STRETCH_MEASURES: [&str; MEASURES] =
+    ["width", "depth", "x0", "flank_angle_left", "flank_angle_right", "area", "bottom_radius"];
+
+/// One frame's ellipse against its U, both fitted: per measure the ellipse's value less the
+/// U's, that difference's variance were the U right (NaN where a model lacks the measure), and
+/// whether the U was chosen (only then do its errors take the pooled variance).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StretchDifference {
+    pub difference: [f64; MEASURES],
+    pub variance: [f64; MEASURES],
+    pub circle_chosen: bool,
+}
+
+impl StretchDifference {
+    /// The variances the misfit adds to the U's measures under `prior` (B²·d² + B·v per
+    /// measure, B = τ²/(τ² + v); 0 where τ² is 0 or not estimated, or the ellipse was chosen).
+    pub fn variances(&self, prior: &MisfitPrior) -> [f64; MEASURES] {
+        std::array::from_fn(|k| match prior.stretch[k] {
+            Some(tau2) if tau2 > 0.0 && self.circle_chosen && self.difference[k].is_finite() => {
+                posterior_second_moment(self.difference[k], self.variance[k], tau2)
+            }
+            _ => 0.0,
+        })
+    }
+}
+
+/// The posterior second moment of a true value drawn from N(0, τ²) and seen as `r` with noise
+/// variance `v`: B²·r² + B·v, B = τ²/(τ² + v).
+fn posterior_second_moment(r: f64, v: f64, tau2: f64) -> f64 {
+    let b = tau2 / (tau2 + v);
+    b * b * r * r + b * v
 }
 
 impl BottomResidual {
@@ -91,10 +139,7 @@ impl BottomResidual {
     /// true residual, B²·r² + B·v with B = τ²/(τ² + v) (0 where τ² is 0 or not estimated).
     pub fn depth_variance(&self, prior: &MisfitPrior) -> f64 {
         match prior.variance[self.model.index()] {
-            Some(tau2) if tau2 > 0.0 => {
-                let b = tau2 / (tau2 + self.variance);
-                b * b * self.residual * self.residual + b * self.variance
-            }
+            Some(tau2) if tau2 > 0.0 => posterior_second_moment(self.residual, self.variance, tau2),
             _ => 0.0,
         }
     }
@@ -103,9 +148,20 @@ impl BottomResidual {
 impl MisfitPrior {
     /// The misfit variance of each model over these residuals: per model with at least
     /// [`MIN_POOLED`] of them, the τ² ≥ 0 at which the median of r²/(v + τ²) is χ²₁'s median
-    /// (0 where it is below that already: the residuals are the noise's).
-    pub fn pooled(residuals: &[BottomResidual]) -> Self {
+    /// (0 where it is below that already: the residuals are the noise's); and so per measure
+    /// over the ellipse-less-U differences, from at least [`MIN_POOLED`] frames.
+    pub fn pooled(residuals: &[BottomResidual], stretch: &[StretchDifference]) -> Self {
         let mut prior = MisfitPrior::default();
+        for k in 0..MEASURES {
+            let pairs: Vec<(f64, f64)> = stretch
+                .iter()
+                .filter(|s| s.difference[k].is_finite() && s.variance[k].is_finite() && s.variance[k] > 0.0)
+                .map(|s| (s.difference[k] * s.difference[k], s.variance[k]))
+                .collect();
+            if pairs.len() >= MIN_POOLED {
+                prior.stretch[k] = Some(misfit_variance(&pairs));
+            }
+        }
         for model in SectionModel::ALL {
             let pairs: Vec<(f64, f64)> =
                 residuals.iter().filter(|r| r.model == model).map(|r| (r.residual * r.residual, r.variance)).collect();
@@ -165,7 +221,7 @@ mod tests {
     #[test]
     fn noise_alone_pools_to_no_misfit() {
         let mut seed = 5;
-        let prior = MisfitPrior::pooled(&residuals(4000, 0.002, 0.0, &mut seed));
+        let prior = MisfitPrior::pooled(&residuals(4000, 0.002, 0.0, &mut seed), &[]);
         let tau2 = prior.variance[SectionModel::U.index()].unwrap();
         // The sample median scatters by about 4 % at 4000: τ² within a tenth of v, mostly 0.
         assert!(tau2 < 0.1 * 0.002f64.powi(2), "{tau2}");
@@ -176,7 +232,7 @@ mod tests {
     fn a_systematic_misfit_pools_to_its_variance() {
         let mut seed = 6;
         let tau = 0.004;
-        let prior = MisfitPrior::pooled(&residuals(4000, 0.002, tau, &mut seed));
+        let prior = MisfitPrior::pooled(&residuals(4000, 0.002, tau, &mut seed), &[]);
         let tau2 = prior.variance[SectionModel::U.index()].unwrap();
         assert!((tau2.sqrt() / tau - 1.0).abs() < 0.1, "{} against {tau}", tau2.sqrt());
         // A frame's added variance: its residual's posterior second moment.
@@ -184,9 +240,38 @@ mod tests {
         let b = tau2 / (tau2 + r.variance);
         assert!((r.depth_variance(&prior) - (b * b * 0.006f64.powi(2) + b * r.variance)).abs() < 1e-18);
         // Fewer frames than MIN_POOLED: not estimated.
-        let few = MisfitPrior::pooled(&residuals(MIN_POOLED - 1, 0.002, tau, &mut seed));
+        let few = MisfitPrior::pooled(&residuals(MIN_POOLED - 1, 0.002, tau, &mut seed), &[]);
         assert_eq!(few.variance[SectionModel::U.index()], None);
         assert_eq!(r.depth_variance(&few), 0.0);
+    }
+
+    #[test]
+    fn the_stretch_misfit_pools_per_measure_and_widens_only_a_chosen_circle() {
+        // Width differences with a true spread of 10 µm beyond a noise of 3 µm; angle
+        // differences of the noise alone; the bottom radius missing (NaN) on every frame.
+        let (tau, sd) = (0.010, 0.003);
+        let mut seed = 8;
+        let frames: Vec<StretchDifference> = (0..2000)
+            .map(|i| {
+                let mut difference = [f64::NAN; MEASURES];
+                let mut variance = [f64::NAN; MEASURES];
+                (difference[0], variance[0]) = (tau * gauss(&mut seed) + sd * gauss(&mut seed), sd * sd);
+                (difference[3], variance[3]) = (0.5 * gauss(&mut seed), 0.25);
+                StretchDifference { difference, variance, circle_chosen: i % 2 == 0 }
+            })
+            .collect();
+        let prior = MisfitPrior::pooled(&[], &frames);
+        assert!((prior.stretch[0].unwrap().sqrt() / tau - 1.0).abs() < 0.1, "{:?}", prior.stretch);
+        assert!(prior.stretch[3].unwrap() < 0.1 * 0.25, "{:?}", prior.stretch);
+        assert_eq!(prior.stretch[6], None);
+        assert_eq!(prior.variance, [None; 5]);
+        let (circle, ellipse) = (frames[0].variances(&prior), frames[1].variances(&prior));
+        let tau2 = prior.stretch[0].unwrap();
+        let b = tau2 / (tau2 + sd * sd);
+        let expected = b * b * frames[0].difference[0].powi(2) + b * sd * sd;
+        assert!((circle[0] - expected).abs() < 1e-18, "{circle:?}");
+        assert_eq!(circle[6], 0.0);
+        assert_eq!(ellipse, [0.0; MEASURES]);
     }
 
     #[test]

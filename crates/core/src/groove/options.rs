@@ -441,6 +441,14 @@ impl GrooveOptions {
                     ));
                 }
             }
+            for (name, v) in super::misfit::STRETCH_MEASURES.iter().zip(m.stretch) {
+                if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+                    return Err(Error::invalid(
+                        "misfit",
+                        format!("the variance of \"u:{name}\" must be >= 0, got {v}"),
+                    ));
+                }
+            }
         }
         self.criteria.check()
     }
@@ -500,6 +508,9 @@ pub struct GrooveFit {
     /// The chosen section's residual at the bottom (section models, where no rounding curve
     /// settles the depth), for the misfit the call pools over its frames.
     pub misfit: Option<super::misfit::BottomResidual>,
+    /// The ellipse's measures against the U's (where one was chosen and both fitted), for the
+    /// stretch misfit the call pools.
+    pub stretch: Option<super::misfit::StretchDifference>,
 }
 
 impl GrooveFit {
@@ -533,6 +544,7 @@ impl GrooveFit {
         groove: -1,
         rounding: None,
         misfit: None,
+        stretch: None,
     };
 
     /// The depth of a V with a rounding profile as its posterior under `prior` says (its
@@ -543,11 +555,35 @@ impl GrooveFit {
         }
     }
 
-    /// The depth's standard error with the misfit `prior` gives its bottom residual (unchanged
-    /// without one).
+    /// The standard errors with the misfit `prior`: the depth's with what it gives the bottom
+    /// residual, a U's measures' with what it gives their differences from the ellipse's
+    /// (unchanged without them).
     pub fn settle_misfit(&mut self, prior: &super::MisfitPrior) {
+        let widen = |se: &mut f64, variance: f64| *se = (*se * *se + variance).sqrt();
         if let Some(b) = self.misfit {
-            self.se_depth = (self.se_depth * self.se_depth + b.depth_variance(prior)).sqrt();
+            widen(&mut self.se_depth, b.depth_variance(prior));
+        }
+        if let Some(s) = self.stretch {
+            use super::section::*;
+            let v = s.variances(prior);
+            widen(&mut self.se_width, v[WIDTH]);
+            widen(&mut self.se_depth, v[DEPTH]);
+            // The center's variance is along the surface line: x0's nearly all of it.
+            widen(&mut self.se_x0, v[CENTER]);
+            // An angle is no more uncertain than uniform over what a flank may take (as the
+            // fit's own errors are held).
+            let (lo, hi) = flank_angle_bounds();
+            let uniform = (hi - lo) / 12f64.sqrt();
+            for (se, v) in
+                [(&mut self.se_flank_angle_left, v[ANGLE_LEFT]), (&mut self.se_flank_angle_right, v[ANGLE_RIGHT])]
+            {
+                if *se < uniform {
+                    widen(se, v);
+                    *se = se.min(uniform);
+                }
+            }
+            widen(&mut self.se_area, v[AREA]);
+            widen(&mut self.se_bottom_radius, v[RADIUS]);
         }
     }
 
