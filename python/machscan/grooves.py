@@ -78,14 +78,14 @@ ROUNDING_POOLED_FRAMES: int = _core.ROUNDING_POOLED_FRAMES
 _CALL_FIELDS = ("template", "rounding_prior", "misfit")
 
 
-def _misfit_sd(measure: str, variance: float) -> str:
-    """A pooled misfit variance of `measure` as a standard deviation with its unit."""
+def _stretch_misfit(measure: str, bias: float, variance: float) -> str:
+    """A measure's pooled ellipse-less-U difference, its mean and standard deviation, with units."""
     sd = variance**0.5
     if measure.startswith("flank_angle"):
-        return f"{measure} {sd:.2f}°"
+        return f"{measure} {bias:+.2f}° ± {sd:.2f}°"
     if measure == "area":
-        return f"{measure} {sd:.4g} mm²"
-    return f"{measure} {1000 * sd:.1f} µm"
+        return f"{measure} {bias:+.3g} ± {sd:.3g} mm²"
+    return f"{measure} {1000 * bias:+.1f} ± {1000 * sd:.1f} µm"
 
 
 @dataclass(frozen=True)
@@ -191,13 +191,13 @@ class GrooveOptions:
         estimated over the call's frames (the frames pooled for ``rounding``; from at least 30
         of them): per model chosen, the variance of the residual at the bottom beyond the
         noise, which each frame's ``se_depth`` takes its own residual's share of; and per
-        measure, the variance of the ellipse's value less the U's beyond what the noise gives
-        it, which each U's errors take their own difference's share of
+        measure, the mean of the ellipse's value less the U's and their variance beyond what
+        the noise gives them, which each U's errors take their own difference's share of
         (:attr:`GrooveFits.misfit` says what was pooled; 0 where the models hold the section).
-        "none": the models' errors alone. ``{"u": 4e-6, "u:flank_angle_left": 2.5, ...}``:
-        those variances, by model name in mm², by ``"u:"`` and a measure in its unit squared (a
-        pooled call's, to measure one frame alike). V's whose depth the rounding settles are
-        left to it.
+        "none": the models' errors alone. ``{"u": 4e-6, "u:flank_angle_left": 2.5,
+        "u:flank_angle_left:bias": -3.1, ...}``: those, by model name in mm², by ``"u:"`` and a
+        measure in its unit squared, with ``":bias"`` in its unit (a pooled call's, to measure
+        one frame alike). V's whose depth the rounding settles are left to it.
 
     Examples
     --------
@@ -387,9 +387,10 @@ class GrooveFits:
         frames pooled; or given): by model name, the section's residual at the bottom beyond the
         noise (in ``se_depth``), mm²; by ``"u:"`` and a measure (``"u:width"``, ``"u:depth"``,
         ``"u:x0"``, ``"u:flank_angle_left"``, ``"u:flank_angle_right"``, ``"u:area"``,
-        ``"u:bottom_radius"``), the ellipse's value less the U's beyond the noise (in a U's
-        ``se_<measure>``), in the measure's unit squared (mm², degrees², mm⁴ for the area);
-        None: ``misfit="none"``.
+        ``"u:bottom_radius"``), the variance of the ellipse's value less the U's beyond the
+        noise, in the measure's unit squared (mm², degrees², mm⁴ for the area), and with
+        ``":bias"`` their mean, in its unit (0 where within two of its standard errors of 0),
+        both in a U's ``se_<measure>``; None: ``misfit="none"``.
     """
 
     x0: NDArray[np.float64]
@@ -482,20 +483,24 @@ class GrooveFits:
 
     def pooled_lines(self) -> list[str]:
         """What the call pooled over its frames, a line each, with units: the V tip-rounding
-        prior, the misfit at the bottom that ``se_depth`` took in and a U's against the
-        ellipse (as standard deviations, by model and by measure; those that are 0 are left
-        out)."""
+        prior, the misfit at the bottom that ``se_depth`` took in (standard deviations by
+        model) and a U's against the ellipse (mean ± standard deviation by measure); those
+        that are 0 are left out."""
         lines = []
         if self.rounding_prior is not None:
             share, r_max = self.rounding_prior
             lines.append(f"V tip rounding prior: {100 * share:.0f} % sharp, the rest rounded up to {1000 * r_max:.1f} µm")
-        misfit = {k: v for k, v in (self.misfit or {}).items() if v > 0}
-        bottom = {k: v for k, v in misfit.items() if ":" not in k}
+        misfit = self.misfit or {}
+        bottom = {k: v for k, v in misfit.items() if ":" not in k and v > 0}
         if bottom:
             lines.append("bottom misfit in se_depth (sd): " + ", ".join(f"{k} {1000 * v**0.5:.1f} µm" for k, v in bottom.items()))
-        stretch = [_misfit_sd(k.removeprefix("u:"), v) for k, v in misfit.items() if k.startswith("u:")]
+        stretch = []
+        for key in (k for k in misfit if k.startswith("u:") and not k.endswith(":bias")):
+            variance, bias = misfit[key], misfit.get(key + ":bias", 0.0)
+            if variance > 0 or bias != 0:
+                stretch.append(_stretch_misfit(key.removeprefix("u:"), bias, variance))
         if stretch:
-            lines.append("U against the ellipse in its errors (sd): " + ", ".join(stretch))
+            lines.append("U against the ellipse in its errors: " + ", ".join(stretch))
         return lines
 
     def __repr__(self) -> str:

@@ -5,8 +5,8 @@ use super::convert::{count, count_opt, enter, to_numpy, Dim, F64Array};
 use super::error::IntoPy;
 use machscan_core::groove::{
     fit_frames, view_frame, FitCriteria, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, MisfitPrior, MisfitRule,
-    RoundingPrior, RoundingRule, SectionModel, TemplateKind, POOLED_FRAMES, SECTION_CRITERIA, STRETCH_MEASURES,
-    TANH_CRITERIA,
+    RoundingPrior, RoundingRule, SectionModel, StretchMisfit, TemplateKind, POOLED_FRAMES, SECTION_CRITERIA,
+    STRETCH_MEASURES, TANH_CRITERIA,
 };
 use machscan_core::kinematics::ValidReadings;
 use pyo3::exceptions::PyValueError;
@@ -79,14 +79,19 @@ fn misfit_rule(py: Python<'_>, value: &Py<PyAny>) -> PyResult<MisfitRule> {
     };
     let mut prior = MisfitPrior::default();
     for (name, variance) in pairs {
-        if let Some(k) = name.strip_prefix("u:").and_then(|m| STRETCH_MEASURES.iter().position(|s| *s == m)) {
-            prior.stretch[k] = Some(variance);
+        // "u:<measure>" its variance, "u:<measure>:bias" its mean (either alone: the other 0).
+        let stretch = name.strip_prefix("u:").map(|m| m.strip_suffix(":bias").map_or((m, false), |m| (m, true)));
+        if let Some((k, bias)) =
+            stretch.and_then(|(m, bias)| Some((STRETCH_MEASURES.iter().position(|s| *s == m)?, bias)))
+        {
+            let s = prior.stretch[k].get_or_insert_with(StretchMisfit::default);
+            *(if bias { &mut s.bias } else { &mut s.variance }) = variance;
             continue;
         }
         let Some(model) = SectionModel::ALL.iter().find(|m| m.name() == name) else {
             let names: Vec<&str> = SectionModel::ALL.iter().map(|m| m.name()).collect();
             return Err(PyValueError::new_err(format!(
-                "misfit: {name:?} is no section model (expected one of {}) nor \"u:\" and a measure ({})",
+                "misfit: {name:?} is no section model (expected one of {}) nor \"u:\" and a measure ({}), with \":bias\" or without",
                 names.join(", "),
                 STRETCH_MEASURES.join(", ")
             )));
@@ -106,9 +111,10 @@ fn misfit_dict<'py>(py: Python<'py>, prior: Option<&MisfitPrior>) -> PyResult<Op
             d.set_item(m.name(), v)?;
         }
     }
-    for (name, v) in STRETCH_MEASURES.iter().zip(prior.stretch) {
-        if let Some(v) = v {
-            d.set_item(format!("u:{name}"), v)?;
+    for (name, s) in STRETCH_MEASURES.iter().zip(prior.stretch) {
+        if let Some(s) = s {
+            d.set_item(format!("u:{name}"), s.variance)?;
+            d.set_item(format!("u:{name}:bias"), s.bias)?;
         }
     }
     Ok(Some(d))

@@ -286,8 +286,9 @@ def _groove_arguments(p: argparse.ArgumentParser) -> None:
         "--misfit",
         choices=get_args(Misfit),
         default=default.groove.misfit,
-        help="the section's misfit at the groove's bottom in the depth's standard error: its variance pooled over "
-        "the scan's frames, or none (the models' errors alone) (default: %(default)s)",
+        help="the misfit one frame cannot show, in the standard errors (the section's at the groove's bottom in the "
+        "depth's, a U's against the ellipse in its measures'): pooled over the scan's frames, or none (the models' "
+        "errors alone) (default: %(default)s)",
     )
     p.add_argument("--index", type=int, default=default.groove.index, help="with --select left/right: which one (0: outermost)")
     p.add_argument("--near", type=float, default=default.groove.near, help="with --select nearest: x in the line, mm")

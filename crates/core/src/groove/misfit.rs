@@ -20,8 +20,10 @@
 //! k = 1, had held a half-ellipse's flank angles and radius in 90 % of frames. Where both were
 //! fitted each frame keeps, per measure, the ellipse's value less the U's and that difference's
 //! variance were the U right (the ellipse's variance less the U's: the U is the efficient one
-//! of a nested pair, Hausman 1978) ([`StretchDifference`]); the call pools the variance of the
-//! true differences per measure, and a U chosen takes their posterior second moment.
+//! of a nested pair, Hausman 1978) ([`StretchDifference`]); the call pools, per measure, the
+//! true differences' mean (a bias: a ball cutter crossed obliquely is always wider than deep,
+//! and each frame's difference, within its noise, had pooled to no variance) and their
+//! variance about it, and a U chosen takes their posterior second moment.
 //!
 //! Why not a crate: a median-matching bisection over a few thousand pairs, and a 3 × 3 solve.
 
@@ -52,14 +54,22 @@ pub struct BottomResidual {
 }
 
 /// The variance of the true bottom residuals, per section model (mm², by
-/// [`SectionModel::index`]; None: not estimated, the model's frames unchanged), and of the true
+/// [`SectionModel::index`]; None: not estimated, the model's frames unchanged), and the true
 /// differences between the ellipse's measures and the U's, per measure (by the indices of
-/// [`super::section::Measures`], in each measure's unit squared: mm², degrees², mm⁴ for the
-/// area; None: not estimated, the U's unchanged).
+/// [`super::section::Measures`]; None: not estimated, the U's unchanged).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MisfitPrior {
     pub variance: [Option<f64>; 5],
-    pub stretch: [Option<f64>; MEASURES],
+    pub stretch: [Option<StretchMisfit>; MEASURES],
+}
+
+/// The true ellipse-less-U differences of one measure over a call: their mean (in the
+/// measure's unit; 0 where the pooled median is within two of its standard errors of 0) and
+/// their variance about it (the unit squared: mm², degrees², mm⁴ for the area).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StretchMisfit {
+    pub bias: f64,
+    pub variance: f64,
 }
 
 /// The names of the measures the stretch misfit is pooled for (by the indices of
@@ -78,23 +88,18 @@ pub struct StretchDifference {
 }
 
 impl StretchDifference {
-    /// The variances the misfit adds to the U's measures under `prior` (B²·d² + B·v per
-    /// measure, B = τ²/(τ² + v); 0 where τ² is 0 or not estimated, or the ellipse was chosen).
+    /// The variances the misfit adds to the U's measures under `prior`: per measure the true
+    /// difference's posterior second moment under N(μ, τ²), (μ + B·(d − μ))² + B·v with
+    /// B = τ²/(τ² + v); 0 where not estimated, or where the ellipse was chosen.
     pub fn variances(&self, prior: &MisfitPrior) -> [f64; MEASURES] {
         std::array::from_fn(|k| match prior.stretch[k] {
-            Some(tau2) if tau2 > 0.0 && self.circle_chosen && self.difference[k].is_finite() => {
-                posterior_second_moment(self.difference[k], self.variance[k], tau2)
+            Some(s) if self.circle_chosen && self.difference[k].is_finite() && self.variance[k] > 0.0 => {
+                let b = s.variance / (s.variance + self.variance[k]);
+                (s.bias + b * (self.difference[k] - s.bias)).powi(2) + b * self.variance[k]
             }
             _ => 0.0,
         })
     }
-}
-
-/// The posterior second moment of a true value drawn from N(0, τ²) and seen as `r` with noise
-/// variance `v`: B²·r² + B·v, B = τ²/(τ² + v).
-fn posterior_second_moment(r: f64, v: f64, tau2: f64) -> f64 {
-    let b = tau2 / (tau2 + v);
-    b * b * r * r + b * v
 }
 
 impl BottomResidual {
@@ -139,7 +144,10 @@ impl BottomResidual {
     /// true residual, B²·r² + B·v with B = τ²/(τ² + v) (0 where τ² is 0 or not estimated).
     pub fn depth_variance(&self, prior: &MisfitPrior) -> f64 {
         match prior.variance[self.model.index()] {
-            Some(tau2) if tau2 > 0.0 => posterior_second_moment(self.residual, self.variance, tau2),
+            Some(tau2) if tau2 > 0.0 => {
+                let b = tau2 / (tau2 + self.variance);
+                b * b * self.residual * self.residual + b * self.variance
+            }
             _ => 0.0,
         }
     }
@@ -148,18 +156,21 @@ impl BottomResidual {
 impl MisfitPrior {
     /// The misfit variance of each model over these residuals: per model with at least
     /// [`MIN_POOLED`] of them, the τ² ≥ 0 at which the median of r²/(v + τ²) is χ²₁'s median
-    /// (0 where it is below that already: the residuals are the noise's); and so per measure
-    /// over the ellipse-less-U differences, from at least [`MIN_POOLED`] frames.
+    /// (0 where it is below that already: the residuals are the noise's); and per measure over
+    /// the ellipse-less-U differences from at least [`MIN_POOLED`] frames, their mean (the
+    /// median, where it is two of its standard errors from 0) and τ² about it alike.
     pub fn pooled(residuals: &[BottomResidual], stretch: &[StretchDifference]) -> Self {
         let mut prior = MisfitPrior::default();
         for k in 0..MEASURES {
             let pairs: Vec<(f64, f64)> = stretch
                 .iter()
                 .filter(|s| s.difference[k].is_finite() && s.variance[k].is_finite() && s.variance[k] > 0.0)
-                .map(|s| (s.difference[k] * s.difference[k], s.variance[k]))
+                .map(|s| (s.difference[k], s.variance[k]))
                 .collect();
             if pairs.len() >= MIN_POOLED {
-                prior.stretch[k] = Some(misfit_variance(&pairs));
+                let bias = pooled_bias(pairs.iter().map(|p| p.0).collect());
+                let centred: Vec<(f64, f64)> = pairs.iter().map(|&(d, v)| ((d - bias).powi(2), v)).collect();
+                prior.stretch[k] = Some(StretchMisfit { bias, variance: misfit_variance(&centred) });
             }
         }
         for model in SectionModel::ALL {
@@ -170,6 +181,25 @@ impl MisfitPrior {
             }
         }
         prior
+    }
+}
+
+/// The median of `d`, where it is at least two of its standard errors from 0, else 0. Its
+/// standard error: the normal's √(π/2)·σ/√n, σ from the median absolute deviation (1.4826·MAD),
+/// so that a few failed frames set neither.
+fn pooled_bias(mut d: Vec<f64>) -> f64 {
+    let median = |d: &mut Vec<f64>| {
+        let mid = d.len() / 2;
+        *d.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    let m = median(&mut d);
+    let n = d.len() as f64;
+    let mut spread: Vec<f64> = d.iter().map(|x| (x - m).abs()).collect();
+    let se = (std::f64::consts::PI / 2.0).sqrt() * 1.4826 * median(&mut spread) / n.sqrt();
+    if m.abs() >= 2.0 * se {
+        m
+    } else {
+        0.0
     }
 }
 
@@ -261,17 +291,31 @@ mod tests {
             })
             .collect();
         let prior = MisfitPrior::pooled(&[], &frames);
-        assert!((prior.stretch[0].unwrap().sqrt() / tau - 1.0).abs() < 0.1, "{:?}", prior.stretch);
-        assert!(prior.stretch[3].unwrap() < 0.1 * 0.25, "{:?}", prior.stretch);
+        let (width, angle) = (prior.stretch[0].unwrap(), prior.stretch[3].unwrap());
+        assert!((width.variance.sqrt() / tau - 1.0).abs() < 0.1 && width.bias == 0.0, "{width:?}");
+        assert!(angle.variance < 0.1 * 0.25 && angle.bias == 0.0, "{angle:?}");
         assert_eq!(prior.stretch[6], None);
         assert_eq!(prior.variance, [None; 5]);
         let (circle, ellipse) = (frames[0].variances(&prior), frames[1].variances(&prior));
-        let tau2 = prior.stretch[0].unwrap();
-        let b = tau2 / (tau2 + sd * sd);
+        let b = width.variance / (width.variance + sd * sd);
         let expected = b * b * frames[0].difference[0].powi(2) + b * sd * sd;
         assert!((circle[0] - expected).abs() < 1e-18, "{circle:?}");
         assert_eq!(circle[6], 0.0);
         assert_eq!(ellipse, [0.0; MEASURES]);
+        // A bias every frame shares, each difference within its noise: its mean is pooled (a
+        // stretch always the same way: an oblique crossing), not a variance, and a U takes it.
+        let shifted: Vec<StretchDifference> = frames
+            .iter()
+            .map(|f| {
+                let mut f = *f;
+                f.difference[3] += 0.3;
+                f
+            })
+            .collect();
+        let angle = MisfitPrior::pooled(&[], &shifted).stretch[3].unwrap();
+        assert!((angle.bias - 0.3).abs() < 0.05 && angle.variance < 0.1 * 0.25, "{angle:?}");
+        let prior = MisfitPrior { stretch: [Some(angle); MEASURES], ..MisfitPrior::default() };
+        assert!(shifted[0].variances(&prior)[3] > 0.8 * 0.3f64.powi(2));
     }
 
     #[test]

@@ -14,7 +14,7 @@ mod template;
 
 pub use fit::{fit_frame, fit_frame_grooves, fit_frames, view_frame, FrameView, GrooveRows};
 pub use measure::SECTION_CRITERIA;
-pub use misfit::{BottomResidual, MisfitPrior, StretchDifference, STRETCH_MEASURES};
+pub use misfit::{BottomResidual, MisfitPrior, StretchDifference, StretchMisfit, STRETCH_MEASURES};
 pub use options::{
     FitCriteria, FitModel, GrooveFit, GrooveLimits, GrooveOptions, GrooveSelect, GrooveStatus, MisfitRule,
     RoundingRule, TemplateKind, TANH_CRITERIA,

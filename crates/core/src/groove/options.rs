@@ -296,8 +296,12 @@ pub struct GrooveOptions {
     pub misfit: MisfitRule,
 }
 
-/// How the misfit of a section at its groove's bottom, which one frame cannot tell from its
-/// noise, enters the depth's standard error (docs/grooves.md, step 11; [`super::misfit`]).
+/// How the misfit one frame cannot tell from its noise enters the standard errors: a section's
+/// at its groove's bottom (the depth's), a U's against the ellipse (its measures')
+/// (docs/grooves.md, step 11; [`super::misfit`]).
+// The given prior is some 250 bytes, the other rules none: boxed, the options would no longer
+// be `Copy`, and they are copied once per call, not per frame.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum MisfitRule {
     /// Its variance pooled over the call's frames per model chosen (from every k-th frame, as
@@ -441,12 +445,16 @@ impl GrooveOptions {
                     ));
                 }
             }
-            for (name, v) in super::misfit::STRETCH_MEASURES.iter().zip(m.stretch) {
-                if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+            for (name, s) in super::misfit::STRETCH_MEASURES.iter().zip(m.stretch) {
+                let Some(s) = s else { continue };
+                if !(s.variance.is_finite() && s.variance >= 0.0) {
                     return Err(Error::invalid(
                         "misfit",
-                        format!("the variance of \"u:{name}\" must be >= 0, got {v}"),
+                        format!("the variance of \"u:{name}\" must be >= 0, got {}", s.variance),
                     ));
+                }
+                if !s.bias.is_finite() {
+                    return Err(Error::invalid("misfit", format!("\"u:{name}:bias\" must be finite, got {}", s.bias)));
                 }
             }
         }
