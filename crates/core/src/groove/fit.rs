@@ -235,8 +235,11 @@ pub fn fit_frames(x: &[f64], z: &[f64], options: &GrooveOptions) -> Result<Groov
     // The misfit after the rounding: a depth the rounding settles has no bottom residual.
     rows.misfit = match options.misfit {
         MisfitRule::Pooled => {
-            let residuals: Vec<BottomResidual> = pooled_fits(&rows, stride).filter_map(|g| g.misfit).collect();
-            let stretch: Vec<StretchDifference> = pooled_fits(&rows, stride).filter_map(|g| g.stretch).collect();
+            let (mut residuals, mut stretch): (Vec<BottomResidual>, Vec<StretchDifference>) = (vec![], vec![]);
+            for g in pooled_fits(&rows, stride) {
+                residuals.extend(g.misfit);
+                stretch.extend(g.stretch);
+            }
             Some(MisfitPrior::pooled(&residuals, &stretch))
         }
         MisfitRule::None => None,

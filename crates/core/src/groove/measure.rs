@@ -2011,7 +2011,7 @@ fn fit_groove(
     // measure_errors) had a linearised angle variance of up to hundreds of degrees: the angle
     // is then anywhere a flank can lean, and no more uncertain than uniform over that span.
     let (lo, hi) = super::section::flank_angle_bounds();
-    let uniform = (hi - lo).powi(2) / 12.0;
+    let uniform = super::section::uniform_angle_variance();
     // Two more flanks are as loose as that:
     // - one whose cotangent the fit pressed against a bound (an overhang, or flat or steep past
     //   what the model allows): held there, not estimated, its linearisation gave it no

@@ -27,6 +27,7 @@
 //!
 //! Why not a crate: a median-matching bisection over a few thousand pairs, and a 3 × 3 solve.
 
+use super::robust;
 use super::section::{SectionModel, MEASURES};
 
 /// Fewest frames of one model the misfit variance is estimated from; below, that model's
@@ -187,15 +188,11 @@ impl MisfitPrior {
 /// The median of `d`, where it is at least two of its standard errors from 0, else 0. Its
 /// standard error: the normal's √(π/2)·σ/√n, σ from the median absolute deviation (1.4826·MAD),
 /// so that a few failed frames set neither.
-fn pooled_bias(mut d: Vec<f64>) -> f64 {
-    let median = |d: &mut Vec<f64>| {
-        let mid = d.len() / 2;
-        *d.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
-    let m = median(&mut d);
-    let n = d.len() as f64;
-    let mut spread: Vec<f64> = d.iter().map(|x| (x - m).abs()).collect();
-    let se = (std::f64::consts::PI / 2.0).sqrt() * 1.4826 * median(&mut spread) / n.sqrt();
+fn pooled_bias(d: Vec<f64>) -> f64 {
+    let mut keys: Vec<i64> = d.iter().map(|&x| robust::key(x)).collect();
+    let m = robust::median_of_keys(&mut keys);
+    let se =
+        (std::f64::consts::PI / 2.0).sqrt() * robust::mad_sigma(d.iter().copied(), &mut keys) / (d.len() as f64).sqrt();
     if m.abs() >= 2.0 * se {
         m
     } else {
@@ -206,12 +203,11 @@ fn pooled_bias(mut d: Vec<f64>) -> f64 {
 /// The τ² of [`MisfitPrior::pooled`] for pairs (r², v): bisection, since the median of
 /// r²/(v + τ²) falls as τ² grows.
 fn misfit_variance(pairs: &[(f64, f64)]) -> f64 {
-    let mut scratch: Vec<f64> = Vec::with_capacity(pairs.len());
+    let mut keys: Vec<i64> = Vec::with_capacity(pairs.len());
     let mut median_at = |tau2: f64| {
-        scratch.clear();
-        scratch.extend(pairs.iter().map(|&(r2, v)| r2 / (v + tau2)));
-        let mid = scratch.len() / 2;
-        *scratch.select_nth_unstable_by(mid, f64::total_cmp).1
+        keys.clear();
+        keys.extend(pairs.iter().map(|&(r2, v)| robust::key(r2 / (v + tau2))));
+        robust::median_of_keys(&mut keys)
     };
     if median_at(0.0) <= CHI2_1_MEDIAN {
         return 0.0;

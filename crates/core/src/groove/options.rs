@@ -580,8 +580,7 @@ impl GrooveFit {
             widen(&mut self.se_x0, v[CENTER]);
             // An angle is no more uncertain than uniform over what a flank may take (as the
             // fit's own errors are held).
-            let (lo, hi) = flank_angle_bounds();
-            let uniform = (hi - lo) / 12f64.sqrt();
+            let uniform = uniform_angle_variance().sqrt();
             for (se, v) in
                 [(&mut self.se_flank_angle_left, v[ANGLE_LEFT]), (&mut self.se_flank_angle_right, v[ANGLE_RIGHT])]
             {
