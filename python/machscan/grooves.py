@@ -484,8 +484,9 @@ class GrooveFits:
     def pooled_lines(self) -> list[str]:
         """What the call pooled over its frames, a line each, with units: the V tip-rounding
         prior, the misfit at the bottom that ``se_depth`` took in (standard deviations by
-        model) and a U's against the ellipse (mean ± standard deviation by measure); those
-        that are 0 are left out."""
+        model; where the largest is over a third of the fits' median RMS, that no section
+        model holds these bottoms) and a U's against the ellipse (mean ± standard deviation by
+        measure); those that are 0 are left out."""
         lines = []
         if self.rounding_prior is not None:
             share, r_max = self.rounding_prior
@@ -493,7 +494,15 @@ class GrooveFits:
         misfit = self.misfit or {}
         bottom = {k: v for k, v in misfit.items() if ":" not in k and v > 0}
         if bottom:
-            lines.append("bottom misfit in se_depth (sd): " + ", ".join(f"{k} {1000 * v**0.5:.1f} µm" for k, v in bottom.items()))
+            line = "bottom misfit in se_depth (sd): " + ", ".join(f"{k} {1000 * v**0.5:.1f} µm" for k, v in bottom.items())
+            # A misfit over a third of the fits' RMS widens an error of the noise's size by more
+            # than 5 %: the section is then none of the models, and what its errors leave out
+            # (a curved wall's angle, width and radius) is said.
+            rms = self.rms[np.isfinite(self.rms)]
+            if rms.size and max(bottom.values()) ** 0.5 > float(np.median(rms)) / 3:
+                line += "; no section model holds these bottoms: flank angles, widths and radii may be off by more"
+                line += " than their errors"
+            lines.append(line)
         stretch = []
         for key in (k for k in misfit if k.startswith("u:") and not k.endswith(":bias")):
             variance, bias = misfit[key], misfit.get(key + ":bias", 0.0)
