@@ -948,14 +948,15 @@ def test_a_bowl_no_model_holds_states_its_depth_with_the_misfit_its_frames_pool(
     assert "bottom misfit in se_depth" in pooled.summary() and "µm" in pooled.summary()
     # The misfit (4.9 µm for the round V's at seed 3) is near the noise: the summary says what
     # the errors then leave out.
-    assert "no section model holds these bottoms" in pooled.summary()
+    assert "no section model holds these bottoms" in pooled.summary() and pooled.models_hold is False
+    assert alone.models_hold is None and pooled.select(pooled.ok).models_hold is False
     # Sections the models hold: the bottoms' residuals are the noise's, and no error moves by
     # more than a few percent.
     g = synth.groove_frames("u", 400, seed=2)
     f, f0 = machscan.fit_grooves(g.x, g.z), machscan.fit_grooves(g.x, g.z, misfit="none")
     assert f.misfit["u"] < 0.002**2, f.misfit  # below (2 µm)², on noise of 8 µm
     assert np.median(f.se_depth[f.ok] / f0.se_depth[f.ok]) < 1.02
-    assert "no section model holds" not in f.summary()
+    assert "no section model holds" not in f.summary() and f.models_hold is True
 
 
 def half_ellipses(n, seed, pitch=0.02, noise=0.005):

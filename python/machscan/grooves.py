@@ -437,6 +437,20 @@ class GrooveFits:
         """Frames with a result: converged, or at the iteration limit with the best found."""
         return (self.status == GrooveStatus.CONVERGED) | (self.status == GrooveStatus.MAX_ITERATIONS)
 
+    @property
+    def models_hold(self) -> bool | None:
+        """Whether the section models hold these grooves' bottoms: False where the largest
+        misfit at the bottom (:attr:`misfit`, by model) is over a third of the fits' median
+        ``rms`` — it then widens an error of the noise's size by more than 5 %, and the errors
+        of the flank angles, widths and radii leave out what it stands for (a curved wall);
+        None with ``misfit="none"`` or no fit."""
+        rms = self.rms[np.isfinite(self.rms)]
+        if self.misfit is None or rms.size == 0:
+            return None
+        bottom = [v for k, v in self.misfit.items() if ":" not in k]
+        # A misfit over a third of the RMS: sqrt(1 + 1/9) = 1.054 on an error of the noise's size.
+        return not bottom or max(bottom) ** 0.5 <= float(np.median(rms)) / 3
+
     def counts(self) -> dict[str, int]:
         """Number of frames per status."""
         return {s.name.lower(): int(np.count_nonzero(self.status == s)) for s in GrooveStatus}
@@ -484,8 +498,8 @@ class GrooveFits:
     def pooled_lines(self) -> list[str]:
         """What the call pooled over its frames, a line each, with units: the V tip-rounding
         prior, the misfit at the bottom that ``se_depth`` took in (standard deviations by
-        model; where the largest is over a third of the fits' median RMS, that no section
-        model holds these bottoms) and a U's against the ellipse (mean ± standard deviation by
+        model; where they do not hold, :attr:`models_hold`, that no section model holds these
+        bottoms) and a U's against the ellipse (mean ± standard deviation by
         measure); those that are 0 are left out."""
         lines = []
         if self.rounding_prior is not None:
@@ -495,11 +509,7 @@ class GrooveFits:
         bottom = {k: v for k, v in misfit.items() if ":" not in k and v > 0}
         if bottom:
             line = "bottom misfit in se_depth (sd): " + ", ".join(f"{k} {1000 * v**0.5:.1f} µm" for k, v in bottom.items())
-            # A misfit over a third of the fits' RMS widens an error of the noise's size by more
-            # than 5 %: the section is then none of the models, and what its errors leave out
-            # (a curved wall's angle, width and radius) is said.
-            rms = self.rms[np.isfinite(self.rms)]
-            if rms.size and max(bottom.values()) ** 0.5 > float(np.median(rms)) / 3:
+            if self.models_hold is False:
                 line += "; no section model holds these bottoms: flank angles, widths and radii may be off by more"
                 line += " than their errors"
             lines.append(line)
