@@ -950,6 +950,8 @@ def test_a_bowl_no_model_holds_states_its_depth_with_the_misfit_its_frames_pool(
     # the errors then leave out.
     assert "no section model holds these bottoms" in pooled.summary() and pooled.models_hold is False
     assert alone.models_hold is None and pooled.select(pooled.ok).models_hold is False
+    # The tanh template has no section, so no misfit: nothing tells.
+    assert machscan.fit_grooves(x, z, template="tanh").models_hold is None
     # Sections the models hold: the bottoms' residuals are the noise's, and no error moves by
     # more than a few percent.
     g = synth.groove_frames("u", 400, seed=2)

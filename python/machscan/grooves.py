@@ -443,13 +443,14 @@ class GrooveFits:
         misfit at the bottom (:attr:`misfit`, by model) is over a third of the fits' median
         ``rms`` — it then widens an error of the noise's size by more than 5 %, and the errors
         of the flank angles, widths and radii leave out what it stands for (a curved wall);
-        None with ``misfit="none"`` or no fit."""
+        None where nothing tells: ``misfit="none"``, no fit, or no model's misfit pooled (fewer
+        than 30 of its fits; V's whose depths the tip-rounding prior settles pool none)."""
         rms = self.rms[np.isfinite(self.rms)]
-        if self.misfit is None or rms.size == 0:
+        bottom = [v for k, v in (self.misfit or {}).items() if ":" not in k]
+        if not bottom or rms.size == 0:
             return None
-        bottom = [v for k, v in self.misfit.items() if ":" not in k]
         # A misfit over a third of the RMS: sqrt(1 + 1/9) = 1.054 on an error of the noise's size.
-        return not bottom or max(bottom) ** 0.5 <= float(np.median(rms)) / 3
+        return max(bottom) ** 0.5 <= float(np.median(rms)) / 3
 
     def counts(self) -> dict[str, int]:
         """Number of frames per status."""
