@@ -444,7 +444,14 @@ class GrooveFits:
         ``rms`` — it then widens an error of the noise's size by more than 5 %, and the errors
         of the flank angles, widths and radii leave out what it stands for (a curved wall);
         None where nothing tells: ``misfit="none"``, no fit, or no model's misfit pooled (fewer
-        than 30 of its fits; V's whose depths the tip-rounding prior settles pool none)."""
+        than 30 of its fits; V's whose depths the tip-rounding prior settles pool none).
+
+        Examples
+        --------
+        >>> fits = machscan.fit_grooves(x, z)
+        >>> if fits.models_hold is False:   # a curved wall: angles and widths beyond their errors
+        ...     print(fits.pooled_lines())
+        """
         rms = self.rms[np.isfinite(self.rms)]
         bottom = [v for k, v in (self.misfit or {}).items() if ":" not in k]
         if not bottom or rms.size == 0:

@@ -36,7 +36,6 @@ const T_OVERHANG: f64 = 0.15;
 pub fn flank_angle_bounds() -> (f64, f64) {
     (1.0f64.atan2(T_MAX).to_degrees(), 1.0f64.atan2(-T_OVERHANG).to_degrees())
 }
-/// A sharp V's flanks are at most this steep (cotangent): steeper is a U's wall.
 /// The variance (degrees²) of an angle uniform over [`flank_angle_bounds`]: what a flank
 /// angle is when the readings do not fix it, and so the most any flank angle's may be.
 pub fn uniform_angle_variance() -> f64 {
