@@ -2,6 +2,7 @@
 //! width, depth and center. The default measures the groove's geometry with section models
 //! (`measure`, `section`); the paper's tanh template stays available (`fit`, `template`).
 //! The formulas: docs/grooves.md.
+mod bowl;
 mod fit;
 mod measure;
 mod misfit;
@@ -12,6 +13,7 @@ mod section;
 mod tanh;
 mod template;
 
+pub use bowl::{fit_bowl, Bowl, BowlBeams, BowlFit, BowlHit, BOWL_PARAMS};
 pub use fit::{fit_frame, fit_frame_grooves, fit_frames, view_frame, FrameView, GrooveRows};
 pub use measure::SECTION_CRITERIA;
 pub use misfit::{BottomResidual, MisfitPrior, StretchDifference, StretchMisfit, STRETCH_MEASURES};
